@@ -1,0 +1,65 @@
+#include "ident/estimator_registry.h"
+
+#include <charconv>
+#include <functional>
+#include <map>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "ident/common/error.h"
+#include "ident/rls.h"
+
+namespace ident {
+namespace {
+
+using Factory = std::function<std::unique_ptr<AnyRegressionEstimator>(const EstimatorSettings&, int)>;
+
+std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int rho) {
+  IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator 'rls'", *s.dof);
+  RlsOptions options;
+  options.forgetting = s.forgetting;
+  options.prior = s.prior;
+  return std::make_unique<RegressionEstimatorModel<RecursiveLeastSquares>>("rls", rho, options);
+}
+
+const std::vector<std::pair<std::string, Factory>>& Registry() {
+  static const std::vector<std::pair<std::string, Factory>> registry = {
+      {"rls", MakeRls},
+  };
+  return registry;
+}
+
+}  // namespace
+
+EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base) {
+  const auto colon = spec.find(':');
+  base.name = std::string(spec.substr(0, colon));
+  IDENT_REQUIRE(!base.name.empty(), "estimator '{}' has no name", spec);
+  if (colon != std::string_view::npos) {
+    std::string_view arg = spec.substr(colon + 1);
+    if (arg.starts_with("k=")) arg.remove_prefix(2);
+    double value = 0;
+    const auto [ptr, ec] = std::from_chars(arg.data(), arg.data() + arg.size(), value);
+    IDENT_REQUIRE(ec == std::errc() && ptr == arg.data() + arg.size() && !arg.empty(),
+                  "estimator '{}': '{}' is not a number (use e.g. student:3)", spec, arg);
+    base.dof = value;
+  }
+  return base;
+}
+
+std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings,
+                                                                int num_parameters) {
+  for (const auto& [name, factory] : Registry())
+    if (name == settings.name) return factory(settings, num_parameters);
+  throw InvalidArgument(fmt::format("unknown estimator '{}' (known: {})", settings.name,
+                                    fmt::join(RegressionEstimatorNames(), ", ")));
+}
+
+std::vector<std::string> RegressionEstimatorNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : Registry()) names.push_back(entry.first);
+  return names;
+}
+
+}  // namespace ident

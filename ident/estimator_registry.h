@@ -1,0 +1,46 @@
+// Run-time selection of regression estimators by name.
+//
+//   "rls"                     RecursiveLeastSquares
+//   (further names are registered in estimator_registry.cc as estimators are added)
+//
+// Example:
+//   ident::EstimatorSettings s = ident::ParseEstimatorSpec("rls");
+//   s.forgetting.factor = 0.99;
+//   auto est = ident::MakeRegressionEstimator(s, /*num_parameters=*/4);   // throws on bad options
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ident/forgetting.h"
+#include "ident/regression_estimator.h"
+#include "ident/regression_prior.h"
+
+namespace ident {
+
+// Options common to the command line and the registry; each estimator reads those it knows and
+// rejects ones that make no sense for it, naming the option.
+struct EstimatorSettings {
+  std::string name = "rls";
+  ForgettingOptions forgetting;
+  std::optional<RegressionPrior> prior;  // explicit (ν(0), V(0)); otherwise the estimator's default
+  std::optional<double> dof;             // Student-t degrees of freedom k
+  int delta = 1;                         // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos)
+  bool exact = false;                    // switch off every safeguard beyond the spec's recursion
+};
+
+// Parses "name" or "name:value" / "name:k=value" (e.g. "student:3", "student:k=3") into
+// settings.name and settings.dof. Throws InvalidArgument for a malformed spec.
+EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base = {});
+
+// Builds the estimator; throws InvalidArgument naming the option for an unknown name or bad option.
+std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings,
+                                                                int num_parameters);
+
+// The registered names, in the order they are documented.
+std::vector<std::string> RegressionEstimatorNames();
+
+}  // namespace ident

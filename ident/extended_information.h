@@ -1,0 +1,144 @@
+// The normalised statistics (ν, V) shared by RLS and the Kárný–Hangos estimators, with V held in
+// L'DL form. One step of every such estimator is
+//
+//   1. forgetting:   exponential  ν̃ = λν,  Ṽ = V                                       [spec §7b]
+//                    stabilised   ν̃ = λν + (1−λ)ν_a,  Ṽ = [λνV + (1−λ)ν_a V_a]/ν̃
+//   2. ν(t) = ν̃ + 1
+//   3. innovation:   h = [y; z],  L'g = h  ⇒  ê = g_0,  ξ_z = 1 − Σ_{i≥1} g_i²/d_i,
+//                    ξ = ξ_z − ê²/d_0   (ξ = 1 − h'Ṽ⁻¹h, ξ_z = 1 − z'Ṽ_z⁻¹z)          [spec §3, §6]
+//   4. the estimator chooses β(t) (RLS: 1/ν; Kárný–Hangos: root of the weighting cubic)
+//   5. V(t) = (1−β)Ṽ + β h h'   (d ← (1−β)d, then the rank-one update with c = β, a = h)
+//
+// Read-outs: Θ̂ = L_z⁻¹ l_zy (forward substitution, cached), D_y = d_0, V_z⁻¹ (on demand).
+// Index 0 of V is y; L = [[1, 0], [l_zy, L_z]], D = diag(d_y, D_z).
+//
+// All operations after construction are allocation-free except VzInverse() and V().
+#pragma once
+
+#include <cmath>
+
+#include <Eigen/Core>
+
+#include "ident/common/error.h"
+#include "ident/ld_factor.h"
+#include "ident/regression_prior.h"
+
+namespace ident {
+
+// ξ, ξ_z and ê of one data item against Ṽ [spec §3].
+struct Innovation {
+  double xi = 0;                // 1 − h'Ṽ⁻¹h
+  double xi_z = 0;              // 1 − z'Ṽ_z⁻¹z
+  double prediction_error = 0;  // ê = y − Θ̂'z
+};
+
+// Dim = ρ+1 (the size of V) or Eigen::Dynamic.
+template <int Dim = Eigen::Dynamic>
+class ExtendedInformation {
+ public:
+  using Vector = Eigen::Matrix<double, Dim, 1>;
+  using ParamVector = Eigen::Matrix<double, (Dim == Eigen::Dynamic ? Eigen::Dynamic : Dim - 1), 1>;
+
+  explicit ExtendedInformation(const RegressionPrior& prior) { Reset(prior); }
+
+  void Reset(const RegressionPrior& prior) {
+    prior.Validate();
+    nu_ = prior.nu0;
+    V_.Factorize(prior.V0);
+    const int n = V_.size();
+    h_.resize(n);
+    g_.resize(n);
+    theta_.resize(n - 1);
+    theta_valid_ = false;
+  }
+
+  int num_parameters() const { return V_.size() - 1; }
+  double nu() const { return nu_; }
+  double Dy() const { return V_.d()(0); }
+  const LdFactor<Dim>& factor() const { return V_; }
+
+  // Step 1, exponential: ν̃ = λν (exact: V is normalised) [spec §7b].
+  void ForgetExponential(double lambda) { nu_ *= lambda; }
+
+  // Step 1, stabilised towards (ν_a, V_a): d ← (λν/ν̃)d, then one rank-one update per row of L_a
+  // with c = (1−λ)ν_a d_{a,i}/ν̃ (V_a = Σ_i d_{a,i} l_i l_i', l_i = row i of L_a). O(ρ³) [spec §7b].
+  void ForgetStabilised(double lambda, double nu_a, const LdFactor<Dim>& Va) {
+    if (lambda == 1.0) return;
+    const double nu_tilde = lambda * nu_ + (1 - lambda) * nu_a;
+    V_.ScaleD(lambda * nu_ / nu_tilde);
+    const int n = V_.size();
+    for (int i = 0; i < n; ++i) {
+      g_.setZero();
+      g_.head(i + 1) = Va.L().row(i).head(i + 1).transpose();
+      V_.RankOneUpdate((1 - lambda) * nu_a * Va.d()(i) / nu_tilde, g_);
+    }
+    nu_ = nu_tilde;
+    theta_valid_ = false;
+  }
+
+  // Step 3: stores h = [y; z] for Apply() and returns ξ, ξ_z, ê against the current (forgotten) V.
+  template <class Derived>
+  Innovation Prepare(double y, const Eigen::MatrixBase<Derived>& z) {
+    h_(0) = y;
+    h_.tail(h_.size() - 1) = z;
+    V_.SolveTransposed(h_, g_);
+    const auto& d = V_.d();
+    double zeta = 0;
+    for (Eigen::Index i = 1; i < g_.size(); ++i) zeta += g_(i) * g_(i) / d(i);
+    Innovation in;
+    in.prediction_error = g_(0);
+    in.xi_z = 1 - zeta;
+    in.xi = in.xi_z - g_(0) * g_(0) / d(0);
+    return in;
+  }
+
+  // Step 5: V ← (1−β)V + β h h' with the h of the last Prepare(); ν ← nu_new. Requires 0 < β < 1.
+  void Apply(double beta, double nu_new) {
+    V_.ScaleD(1 - beta);
+    g_ = h_;
+    V_.RankOneUpdate(beta, g_);
+    nu_ = nu_new;
+    theta_valid_ = false;
+  }
+
+  // Θ̂ = L_z⁻¹ l_zy (forward substitution, cached until the next change).
+  const ParamVector& parameters() const {
+    if (!theta_valid_) {
+      const auto& L = V_.L();
+      const Eigen::Index rho = theta_.size();
+      for (Eigen::Index i = 0; i < rho; ++i) {
+        double s = L(i + 1, 0);
+        for (Eigen::Index j = 0; j < i; ++j) s -= L(i + 1, j + 1) * theta_(j);
+        theta_(i) = s;
+      }
+      theta_valid_ = true;
+    }
+    return theta_;
+  }
+
+  // Θ̂'z without touching the cache's validity rules.
+  template <class Derived>
+  double Predict(const Eigen::MatrixBase<Derived>& z) const {
+    return parameters().dot(z);
+  }
+
+  // V_z⁻¹ = L_z⁻¹ D_z⁻¹ L_z⁻ᵀ (allocates; O(ρ³)).
+  Eigen::MatrixXd VzInverse() const {
+    const Eigen::Index rho = theta_.size();
+    const Eigen::MatrixXd Lz = V_.L().bottomRightCorner(rho, rho);
+    const Eigen::MatrixXd Linv =
+        Lz.template triangularView<Eigen::UnitLower>().solve(Eigen::MatrixXd::Identity(rho, rho));
+    return Linv * V_.d().tail(rho).cwiseInverse().asDiagonal() * Linv.transpose();
+  }
+
+  Eigen::MatrixXd V() const { return V_.Reconstruct(); }
+
+ private:
+  double nu_ = 0;
+  LdFactor<Dim> V_;
+  Vector h_, g_;
+  mutable ParamVector theta_;
+  mutable bool theta_valid_ = false;
+};
+
+}  // namespace ident

@@ -1,0 +1,86 @@
+// The common interface of ident's recursive regression estimators.
+//
+// A regression data item is d(t) = (y(t), z(t)): the output and the regressor (ρ entries).
+//
+// Compile time: the concept RegressionEstimator. Every estimator E provides
+//   StepReport E::Update(double y, z)     one sample; O(ρ²); allocation-free; never throws
+//   int        num_parameters()           ρ
+//   parameters()                          Θ̂ (ρ-vector), valid at any time
+//   Eigen::MatrixXd covariance()          covariance of Θ̂ (O(ρ³), allocates; not for the hot path)
+//   double     Predict(z)                 one-step prediction Θ̂'z
+//   double     nu(), Dy()                 sample count ν(t) and residual dispersion D_y
+//   double     noise_std()                estimated noise standard deviation (or scale)
+//   void       Reset()                    back to the prior
+//
+// Run time: AnyRegressionEstimator wraps any such E behind a virtual interface, and
+// MakeRegressionEstimator() builds one by name ("rls", "cauchy", "student:3", ...) from
+// EstimatorSettings (see estimator_registry.h).
+#pragma once
+
+#include <concepts>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include <Eigen/Core>
+
+#include "ident/common/step_report.h"
+
+namespace ident {
+
+template <class E>
+concept RegressionEstimator = requires(E& e, const E& ce, double y, const Eigen::VectorXd& z) {
+  { e.Update(y, z) } -> std::same_as<StepReport>;
+  { ce.num_parameters() } -> std::convertible_to<int>;
+  { ce.parameters() } -> std::convertible_to<Eigen::VectorXd>;
+  { ce.covariance() } -> std::convertible_to<Eigen::MatrixXd>;
+  { ce.Predict(z) } -> std::convertible_to<double>;
+  { ce.nu() } -> std::convertible_to<double>;
+  { ce.Dy() } -> std::convertible_to<double>;
+  { ce.noise_std() } -> std::convertible_to<double>;
+  { e.Reset() };
+};
+
+// Type-erased regression estimator for selection at run time.
+class AnyRegressionEstimator {
+ public:
+  virtual ~AnyRegressionEstimator() = default;
+  virtual std::string name() const = 0;
+  virtual StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) = 0;
+  virtual int num_parameters() const = 0;
+  virtual Eigen::VectorXd parameters() const = 0;
+  virtual Eigen::MatrixXd covariance() const = 0;
+  virtual double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const = 0;
+  virtual double nu() const = 0;
+  virtual double Dy() const = 0;
+  // Estimated noise standard deviation (for RLS s; for Student-t/Cauchy the scale σ ≈ √D_y).
+  virtual double noise_std() const = 0;
+  virtual void Reset() = 0;
+};
+
+// Adapter: wraps a concrete estimator E.
+template <RegressionEstimator E>
+class RegressionEstimatorModel final : public AnyRegressionEstimator {
+ public:
+  template <class... Args>
+  explicit RegressionEstimatorModel(std::string name, Args&&... args)
+      : name_(std::move(name)), e_(std::forward<Args>(args)...) {}
+  std::string name() const override { return name_; }
+  StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) override { return e_.Update(y, z); }
+  int num_parameters() const override { return e_.num_parameters(); }
+  Eigen::VectorXd parameters() const override { return e_.parameters(); }
+  Eigen::MatrixXd covariance() const override { return e_.covariance(); }
+  double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const override { return e_.Predict(z); }
+  double nu() const override { return e_.nu(); }
+  double Dy() const override { return e_.Dy(); }
+  double noise_std() const override { return e_.noise_std(); }
+  void Reset() override { e_.Reset(); }
+  E& get() { return e_; }
+  const E& get() const { return e_; }
+
+ private:
+  std::string name_;
+  E e_;
+};
+
+}  // namespace ident

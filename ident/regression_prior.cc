@@ -1,0 +1,65 @@
+#include "ident/regression_prior.h"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+
+#include "ident/common/error.h"
+#include "ident/ld_factor.h"
+
+namespace ident {
+
+RegressionPrior RegressionPrior::Diagonal(int rho, double nu0, double vy0, double vz0) {
+  IDENT_REQUIRE(rho >= 1, "number of parameters = {}; need at least 1", rho);
+  IDENT_REQUIRE(std::isfinite(vy0) && vy0 > 0, "vy0 = {}; need a positive prior output variance", vy0);
+  IDENT_REQUIRE(std::isfinite(vz0) && vz0 > 0, "vz0 = {}; need a positive prior regressor variance", vz0);
+  RegressionPrior prior;
+  prior.nu0 = nu0;
+  prior.V0 = Eigen::MatrixXd::Identity(rho + 1, rho + 1) * vz0;
+  prior.V0(0, 0) = vy0;
+  prior.Validate();
+  return prior;
+}
+
+RegressionPrior RegressionPrior::FromGuess(const Eigen::VectorXd& theta0, const Eigen::MatrixXd& P0,
+                                           double sigma0, double nu0, int delta) {
+  const int rho = static_cast<int>(theta0.size());
+  IDENT_REQUIRE(rho >= 1 && P0.rows() == rho && P0.cols() == rho,
+                "prior covariance P0 is {}x{}; need {}x{}", P0.rows(), P0.cols(), rho, rho);
+  IDENT_REQUIRE(std::isfinite(sigma0) && sigma0 > 0, "sigma0 = {}; need a positive noise scale", sigma0);
+  IDENT_REQUIRE(nu0 > rho + delta, "nu0 = {}; need nu0 > rho + delta = {}", nu0, rho + delta);
+  Eigen::LLT<Eigen::MatrixXd> llt(P0);
+  IDENT_REQUIRE(llt.info() == Eigen::Success, "prior covariance P0 is not positive definite");
+  const Eigen::MatrixXd Vz =
+      sigma0 * sigma0 * llt.solve(Eigen::MatrixXd::Identity(rho, rho)) / (nu0 - delta - rho);
+  RegressionPrior prior;
+  prior.nu0 = nu0;
+  prior.V0.resize(rho + 1, rho + 1);
+  prior.V0.bottomRightCorner(rho, rho) = 0.5 * (Vz + Vz.transpose());
+  prior.V0.bottomLeftCorner(rho, 1) = Vz * theta0;
+  prior.V0.topRightCorner(1, rho) = prior.V0.bottomLeftCorner(rho, 1).transpose();
+  prior.V0(0, 0) = sigma0 * sigma0 + theta0.dot(Vz * theta0);
+  prior.Validate();
+  return prior;
+}
+
+RegressionPrior RegressionPrior::Flat(int rho) {
+  IDENT_REQUIRE(rho >= 1, "number of parameters = {}; need at least 1", rho);
+  RegressionPrior prior;
+  prior.nu0 = 1e-12;
+  prior.V0 = Eigen::MatrixXd::Identity(rho + 1, rho + 1);
+  return prior;
+}
+
+void RegressionPrior::Validate() const {
+  IDENT_REQUIRE(std::isfinite(nu0) && nu0 > 0, "nu0 = {}; need a positive number of prior degrees", nu0);
+  IDENT_REQUIRE(V0.rows() >= 2 && V0.rows() == V0.cols(), "prior matrix V0 is {}x{}; need (rho+1)x(rho+1), rho >= 1",
+                V0.rows(), V0.cols());
+  try {
+    LdFactor<> check(V0);  // throws if V0 is not symmetric positive definite
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(fmt::format("prior {}", e.what()));  // "prior matrix V ..."
+  }
+}
+
+}  // namespace ident

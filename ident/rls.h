@@ -1,0 +1,125 @@
+// Recursive least squares on the LD-factorised extended information matrix (normalised RLS).
+//
+//   Model:  y(t) = Θ'z(t) + e(t),  e Gaussian.
+//   Step:   ν(t) = λν(t−1) + 1,  β(t) = 1/ν(t),  V(t) = (1−β)Ṽ + β h h',  h = [y; z]   [spec §7c, eq. (55)]
+//           (the unnormalised information ν(t)V(t) = λ ν(t−1)V(t−1) + h h'); stabilised forgetting
+//           as in spec §7b.
+//   Read-outs: Θ̂ = V_z⁻¹V_zy; residual sum ν D_y; noise variance s² = ν D_y/(n − ρ) with
+//           n = Σ λ^k the (discounted) sample count; Cov(Θ̂) = s² (ν V_z)⁻¹ = D_y V_z⁻¹/(n − ρ).
+//   Cost:   ~3(ρ+1)² flops per update (back substitution + rank-one update), no allocation.
+//
+// Example:
+//   ident::RecursiveLeastSquares rls(/*num_parameters=*/4, {.forgetting = {.factor = 0.99}});
+//   for (...) rls.Update(y, z);
+//   Eigen::VectorXd theta = rls.parameters();
+#pragma once
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ident/common/error.h"
+#include "ident/common/step_report.h"
+#include "ident/extended_information.h"
+#include "ident/forgetting.h"
+#include "ident/regression_prior.h"
+
+namespace ident {
+
+struct RlsOptions {
+  ForgettingOptions forgetting;
+  // (ν(0), V(0)); defaults to RegressionPrior::Flat(ρ), which reproduces batch least squares.
+  std::optional<RegressionPrior> prior;
+
+  // "" if valid for ρ parameters, else one line naming the option.
+  std::string Validate(int num_parameters) const;
+};
+
+template <int Rho = Eigen::Dynamic>
+class BasicRecursiveLeastSquares {
+  static constexpr int kDim = Rho == Eigen::Dynamic ? Eigen::Dynamic : Rho + 1;
+
+ public:
+  using ParamVector = typename ExtendedInformation<kDim>::ParamVector;
+
+  // Throws InvalidArgument naming the option if `options` is invalid.
+  explicit BasicRecursiveLeastSquares(int num_parameters, const RlsOptions& options = {})
+      : options_(Checked(num_parameters, options)),
+        prior_(options_.prior ? *options_.prior : RegressionPrior::Flat(num_parameters)),
+        stats_(prior_),
+        prior_factor_(prior_.V0) {}
+
+  // One sample. Rejects (state unchanged) a sample with a non-finite entry, a regressor of the
+  // wrong size, or one so large that the update would overflow.
+  template <class Derived>
+  StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
+    if (z.size() != num_parameters() || !std::isfinite(y) || !z.allFinite() ||
+        !std::isfinite(y * y + z.squaredNorm()))
+      return {StepStatus::kRejectedInvalid};
+    const double lambda = options_.forgetting.factor;
+    if (options_.forgetting.stabilised)
+      stats_.ForgetStabilised(lambda, prior_.nu0, prior_factor_);
+    else
+      stats_.ForgetExponential(lambda);
+    const double nu = stats_.nu() + 1;
+    const Innovation in = stats_.Prepare(y, z);
+    const double beta = 1 / nu;
+    stats_.Apply(beta, nu);
+    samples_ = lambda * samples_ + 1;
+    return {StepStatus::kUpdated, beta, nu, in.prediction_error};
+  }
+
+  int num_parameters() const { return stats_.num_parameters(); }
+  const ParamVector& parameters() const { return stats_.parameters(); }
+  template <class Derived>
+  double Predict(const Eigen::MatrixBase<Derived>& z) const {
+    return stats_.Predict(z);
+  }
+  double nu() const { return stats_.nu(); }
+  double Dy() const { return stats_.Dy(); }
+  // Discounted number of samples n = Σ λ^k.
+  double samples() const { return samples_; }
+  // s² = ν D_y/(n − ρ); NaN until n > ρ.
+  double noise_variance() const {
+    const double dof = samples_ - num_parameters();
+    return dof > 0 ? stats_.nu() * stats_.Dy() / dof : std::numeric_limits<double>::quiet_NaN();
+  }
+  double noise_std() const { return std::sqrt(noise_variance()); }
+  // Cov(Θ̂) = s² (νV_z)⁻¹ (allocates, O(ρ³)).
+  Eigen::MatrixXd covariance() const { return noise_variance() / stats_.nu() * stats_.VzInverse(); }
+  const ExtendedInformation<kDim>& statistics() const { return stats_; }
+  const RlsOptions& options() const { return options_; }
+
+  void Reset() {
+    stats_.Reset(prior_);
+    samples_ = 0;
+  }
+  // Changes λ on the fly (the next update uses it). Throws InvalidArgument if λ ∉ (0, 1].
+  void set_forgetting(double lambda) {
+    ForgettingOptions f = options_.forgetting;
+    f.factor = lambda;
+    const std::string error = f.Validate();
+    IDENT_REQUIRE(error.empty(), "{}", error);
+    options_.forgetting = f;
+  }
+
+ private:
+  static const RlsOptions& Checked(int num_parameters, const RlsOptions& options) {
+    const std::string error = options.Validate(num_parameters);
+    IDENT_REQUIRE(error.empty(), "{}", error);
+    return options;
+  }
+
+  RlsOptions options_;
+  RegressionPrior prior_;
+  ExtendedInformation<kDim> stats_;
+  LdFactor<kDim> prior_factor_;
+  double samples_ = 0;
+};
+
+using RecursiveLeastSquares = BasicRecursiveLeastSquares<Eigen::Dynamic>;
+
+}  // namespace ident

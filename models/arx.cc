@@ -1,0 +1,103 @@
+#include "models/arx.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "ident/common/error.h"
+
+namespace ident::models {
+
+ArxStructure::ArxStructure(int na, std::vector<int> nb, std::vector<int> nk)
+    : na_(na), nb_(std::move(nb)), nk_(std::move(nk)) {
+  IDENT_REQUIRE(na_ >= 0, "na = {}; need na >= 0", na_);
+  IDENT_REQUIRE(nb_.size() == nk_.size(), "nb has {} entries but nk has {}; need one per input", nb_.size(),
+                nk_.size());
+  num_parameters_ = na_;
+  t0_ = na_;
+  for (std::size_t i = 0; i < nb_.size(); ++i) {
+    IDENT_REQUIRE(nb_[i] >= 0, "nb = {} for input {}; need nb >= 0", nb_[i], i + 1);
+    IDENT_REQUIRE(nk_[i] >= 0, "nk = {} for input {}; need nk >= 0", nk_[i], i + 1);
+    num_parameters_ += nb_[i];
+    if (nb_[i] > 0) t0_ = std::max(t0_, nk_[i] + nb_[i] - 1);
+  }
+  IDENT_REQUIRE(num_parameters_ >= 1, "the model has no parameters (na = 0 and nb = 0)");
+}
+
+std::string ArxStructure::ToString() const {
+  const char* kind = na_ == 0 ? "FIR" : "ARX";
+  if (nb_.size() == 1) return fmt::format("{}({},{},{})", kind, na_, nb_[0], nk_[0]);
+  return fmt::format("{}({},[{}],[{}])", kind, na_, fmt::join(nb_, ","), fmt::join(nk_, ","));
+}
+
+std::vector<std::string> ArxStructure::ParameterNames() const {
+  std::vector<std::string> names;
+  for (int k = 1; k <= na_; ++k) names.push_back(fmt::format("a{}", k));
+  for (std::size_t i = 0; i < nb_.size(); ++i)
+    for (int k = 1; k <= nb_[i]; ++k)
+      names.push_back(nb_.size() == 1 ? fmt::format("b{}", k) : fmt::format("b{}_{}", k, i + 1));
+  return names;
+}
+
+ArxRegressor::ArxRegressor(const ArxStructure& structure) : structure_(structure) {
+  past_y_.setZero(structure_.na());
+  for (int i = 0; i < structure_.num_inputs(); ++i) past_u_.emplace_back(Eigen::VectorXd::Zero(structure_.input_history(i)));
+  Reset();
+}
+
+void ArxRegressor::Reset() {
+  past_y_.setZero();
+  for (auto& p : past_u_) p.setZero();
+  samples_ = 0;
+  outputs_ = 0;
+}
+
+bool ArxRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> z) {
+  IDENT_REQUIRE(u.size() == structure_.num_inputs(), "input sample has {} entries; the model has {} inputs",
+                u.size(), structure_.num_inputs());
+  IDENT_REQUIRE(z.size() == structure_.num_parameters(), "regressor has {} entries; the model has {} parameters",
+                z.size(), structure_.num_parameters());
+  IDENT_REQUIRE(outputs_ == samples_, "ArxRegressor::Next called twice without PushOutput");
+  for (std::size_t i = 0; i < past_u_.size(); ++i) {
+    auto& p = past_u_[i];
+    const Eigen::Index m = p.size();
+    for (Eigen::Index k = m - 1; k > 0; --k) p(k) = p(k - 1);
+    if (m > 0) p(0) = u(static_cast<Eigen::Index>(i));
+  }
+  const long t = samples_++;
+  if (t < structure_.first_regression_index()) return false;
+  Eigen::Index col = 0;
+  for (int k = 0; k < structure_.na(); ++k) z(col++) = -past_y_(k);
+  for (int i = 0; i < structure_.num_inputs(); ++i)
+    for (int k = 0; k < structure_.nb()[i]; ++k) z(col++) = past_u_[i](structure_.nk()[i] + k);
+  return true;
+}
+
+void ArxRegressor::PushOutput(double y) {
+  IDENT_REQUIRE(outputs_ + 1 == samples_, "ArxRegressor::PushOutput called without Next");
+  const Eigen::Index m = past_y_.size();
+  for (Eigen::Index k = m - 1; k > 0; --k) past_y_(k) = past_y_(k - 1);
+  if (m > 0) past_y_(0) = y;
+  ++outputs_;
+}
+
+std::vector<std::string> StaticRegression::ParameterNames() const {
+  std::vector<std::string> names;
+  if (intercept) names.push_back("intercept");
+  for (const auto& r : regressors) names.push_back(r);
+  return names;
+}
+
+void StaticRegression::Regressor(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> z) const {
+  IDENT_REQUIRE(x.size() == static_cast<Eigen::Index>(regressors.size()), "regressor sample has {} entries; need {}",
+                x.size(), regressors.size());
+  if (intercept) {
+    z(0) = 1.0;
+    z.tail(x.size()) = x;
+  } else {
+    z = x;
+  }
+}
+
+}  // namespace ident::models

@@ -1,0 +1,81 @@
+// ARX model structure and its regressor, built sample by sample from a stream.
+//
+//   y(t) + a1 y(t−1) + … + a_na y(t−na) = Σ_i [b_i1 u_i(t−nk_i) + … + b_i,nb_i u_i(t−nk_i−nb_i+1)] + e(t)
+//   θ = [a1 … a_na, b_11 … b_1,nb_1, b_21 …]      (the b-block of input 1, then input 2, …)
+//   z(t) = [−y(t−1) … −y(t−na), u_1(t−nk_1) … u_1(t−nk_1−nb_1+1), u_2(t−nk_2) …],  y(t) = θ'z(t) + e(t)
+//
+// The first regression index inside a segment (0-based) is t0 = max(na, max_i(nk_i + nb_i − 1)):
+// the first sample whose regressor needs no data from before the segment. FIR: na = 0.
+//
+// Example (ARX(2,2,3), one input):
+//   ident::models::ArxStructure arx(2, {2}, {3});
+//   ident::models::ArxRegressor reg(arx);
+//   for (t...) { if (reg.Next(u.row(t), z)) est.Update(y(t), z); reg.PushOutput(y(t)); }
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace ident::models {
+
+class ArxStructure {
+ public:
+  // Throws InvalidArgument if na < 0, an nb_i < 0, an nk_i < 0, the sizes of nb and nk differ,
+  // or there are no parameters.
+  ArxStructure(int na, std::vector<int> nb, std::vector<int> nk);
+
+  int na() const { return na_; }
+  const std::vector<int>& nb() const { return nb_; }
+  const std::vector<int>& nk() const { return nk_; }
+  int num_inputs() const { return static_cast<int>(nb_.size()); }
+  int num_parameters() const { return num_parameters_; }
+  // t0 = max(na, max_i(nk_i + nb_i − 1)), at least 0.
+  int first_regression_index() const { return t0_; }
+  // Input history needed per input: nk_i + nb_i samples (u(t−nk−nb+1) … u(t)).
+  int input_history(int i) const { return nk_[i] + nb_[i]; }
+  // "ARX(2,2,3)" or "ARX(2,[2,2],[1,1])"; "FIR(…)" for na = 0.
+  std::string ToString() const;
+  // Names of θ's entries: a1…a_na, b1…b_nb (one input) or b1_1… (several inputs).
+  std::vector<std::string> ParameterNames() const;
+
+ private:
+  int na_;
+  std::vector<int> nb_, nk_;
+  int num_parameters_ = 0;
+  int t0_ = 0;
+};
+
+// Forms z(t) from a stream of samples. Per sample t: Next(u(t), z) stores u(t) and, if t ≥ t0,
+// writes z(t) and returns true; then PushOutput(y(t)) stores the output (measured, or simulated
+// for simulation). No allocation after construction.
+class ArxRegressor {
+ public:
+  explicit ArxRegressor(const ArxStructure& structure);
+
+  void Reset();
+  // u has one entry per input.
+  bool Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> z);
+  void PushOutput(double y);
+  const ArxStructure& structure() const { return structure_; }
+
+ private:
+  ArxStructure structure_;
+  Eigen::VectorXd past_y_;                 // past_y_(k) = y(t−1−k), k < na
+  std::vector<Eigen::VectorXd> past_u_;    // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
+  long samples_ = 0;                       // samples pushed with Next()
+  long outputs_ = 0;
+};
+
+// Static linear regression y = θ'x + e with an optional intercept (first entry of θ).
+struct StaticRegression {
+  std::vector<std::string> regressors;
+  bool intercept = false;
+  int num_parameters() const { return static_cast<int>(regressors.size()) + (intercept ? 1 : 0); }
+  std::vector<std::string> ParameterNames() const;
+  // z = [1, x] or x.
+  void Regressor(const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::Ref<Eigen::VectorXd> z) const;
+};
+
+}  // namespace ident::models
