@@ -1,0 +1,38 @@
+// ident — recursive, outlier-robust system identification from the command line.
+#include <exception>
+#include <iostream>
+
+#include <CLI/CLI.hpp>
+
+#include "ident/common/error.h"
+#include "tools/commands.h"
+
+int main(int argc, char** argv) {
+  using namespace ident::tools;
+  CLI::App app{"ident: recursive, outlier-robust system identification", "ident"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "ident 0.1.0");
+  AddFitCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return kExitUsage;
+  } catch (const ident::InvalidArgument& e) {
+    std::cerr << "ident: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const ident::DataError& e) {
+    std::cerr << "ident: error: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "ident: error: " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  return kExitOk;
+}
