@@ -1,8 +1,124 @@
-// ident fit — placeholder until the fit workflow lands.
+// ident fit DATA --output y (--input u [--na --nb --nk] | --regressors x1,x2 [--intercept])
+//           [--estimator NAME ...] [--split 0.5] [--detrend mean|none] [--missing] [--trace F] [--json]
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+
+#include "ident/common/error.h"
+#include "ident/io/csv.h"
 #include "tools/commands.h"
+#include "tools/estimator_options.h"
+#include "tools/fit.h"
+#include "tools/structure_options.h"
 
 namespace ident::tools {
-void AddFitCommand(CLI::App& app) {
-  app.add_subcommand("fit", "Fit a model to recorded data with a recursive estimator");
+namespace {
+
+struct FitCommandOptions {
+  std::string data;
+  StructureCliOptions structure;
+  EstimatorCliOptions estimator;
+  double split = 0.5;
+  std::string detrend;
+  bool missing = false;
+  bool json = false;
+  std::string trace;
+};
+
+nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, double split, const std::string& detrend) {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
+  nlohmann::ordered_json j;
+  j["data"] = data;
+  j["estimator"] = r.estimator;
+  j["structure"] = r.structure;
+  j["parameter_names"] = r.parameter_names;
+  j["theta"] = std::vector<double>(r.theta.data(), r.theta.data() + r.theta.size());
+  auto& std_dev = j["theta_std"] = nlohmann::ordered_json::array();
+  for (double v : r.theta_std) std_dev.push_back(number(v));
+  j["noise_std"] = number(r.noise_std);
+  j["fit_percent"] = {{"one_step", r.validation.one_step},
+                      {"simulation", r.validation.simulation ? nlohmann::ordered_json(*r.validation.simulation)
+                                                             : nlohmann::ordered_json()}};
+  j["rms"] = {{"one_step", r.validation.rms_one_step},
+              {"simulation", r.validation.rms_simulation ? nlohmann::ordered_json(*r.validation.rms_simulation)
+                                                         : nlohmann::ordered_json()}};
+  j["samples_estimation"] = r.samples_estimation;
+  j["samples_validation"] = r.samples_validation;
+  j["updates"] = r.updates;
+  j["rejected"] = r.rejected;
+  j["nu"] = r.nu;
+  j["Dy"] = r.Dy;
+  j["split"] = split;
+  j["detrend"] = detrend;
+  return j;
 }
+
+void PrintReport(const FitResult& r, const std::string& data, const FitCommandOptions& o) {
+  fmt::print("{}: {} fitted by {} ({} detrending)\n", data, r.structure, r.estimator, o.detrend);
+  if (o.split == 1)
+    fmt::print("estimation and validation on all {} rows ({} updates", r.samples_estimation, r.updates);
+  else
+    fmt::print("estimation rows 1-{} ({} updates", r.samples_estimation, r.updates);
+  if (r.rejected) fmt::print(", {} samples rejected as missing/invalid", r.rejected);
+  fmt::print(")");
+  if (o.split != 1)
+    fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
+  fmt::print("\n\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
+  for (int i = 0; i < r.theta.size(); ++i)
+    fmt::print("  {:<12} {:>14.6g} {:>12.4g}\n", r.parameter_names[i], r.theta(i), r.theta_std(i));
+  fmt::print("\n  noise std {:.4g}\n", r.noise_std);
+  fmt::print("  validation fit: one-step {:.2f} % (RMS {:.4g})", r.validation.one_step, r.validation.rms_one_step);
+  if (r.validation.simulation)
+    fmt::print(", simulation {:.2f} % (RMS {:.4g})", *r.validation.simulation, *r.validation.rms_simulation);
+  fmt::print("\n");
+}
+
+void RunFit(const FitCommandOptions& o) {
+  const std::string path = ResolveDataPath(o.data);
+  io::DataTable table = io::ReadCsv(path, {.missing_as_nan = o.missing});
+  std::unique_ptr<DataSource> source = o.structure.MakeSource(table.names, path);
+  const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
+  std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
+  FitOptions options;
+  options.split = o.split;
+  options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
+  if (!o.trace.empty()) {
+    trace.reset(std::fopen(o.trace.c_str(), "w"));
+    if (!trace) throw DataError(fmt::format("cannot write trace file '{}'", o.trace));
+    options.trace = trace.get();
+  }
+  const FitResult result = Fit(std::move(table), *source, *estimator, options);
+  if (o.json)
+    std::cout << ToJson(result, path, o.split, o.detrend).dump(2) << "\n";
+  else
+    PrintReport(result, path, o);
+}
+
+}  // namespace
+
+void AddFitCommand(CLI::App& app) {
+  auto o = std::make_shared<FitCommandOptions>();
+  CLI::App* fit = app.add_subcommand("fit", "Fit a model to recorded data with a recursive estimator");
+  fit->add_option("DATA", o->data, "CSV file with a header, or a bundled dataset's name (e.g. dryer)")->required();
+  o->structure.AddTo(*fit);
+  o->estimator.AddTo(*fit);
+  fit->add_option("--split", o->split, "Fraction of rows used for estimation; 1 = estimate and validate on all")
+      ->capture_default_str();
+  fit->add_option("--detrend", o->detrend,
+                  "Subtract the estimation-part means (mean) or not (none); default mean, none with --intercept")
+      ->check(CLI::IsMember({"mean", "none"}));
+  fit->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");
+  fit->add_option("--trace", o->trace, "Write one CSV row per update: t,nu,beta,pred_err,theta1..,Dy");
+  fit->add_flag("--json", o->json, "Print one JSON object instead of the report");
+  fit->callback([o] {
+    if (o->detrend.empty()) o->detrend = o->structure.intercept ? "none" : "mean";
+    RunFit(*o);
+  });
+}
+
 }  // namespace ident::tools

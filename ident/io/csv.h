@@ -1,0 +1,83 @@
+// Reading recorded data from CSV files.
+//
+// Format: one header line of column names, comma-separated numeric rows, '.' decimal point,
+// LF or CRLF line ends; blank lines are ignored; a UTF-8 byte-order mark is skipped. Every problem
+// is reported as ident::DataError with one line naming the file, the line and the column:
+//   cannot open 'x.csv': No such file or directory
+//   x.csv: the file is empty
+//   x.csv: no data rows after the header
+//   x.csv:1: duplicate column name 'u' (columns 2 and 3)
+//   x.csv:7: row has 2 fields; the header has 3
+//   x.csv:7: column 3 ('y'): 'abc' is not a number
+//   x.csv:7: column 3 ('y'): 'nan' is not a finite number (pass --missing to treat NaN/Inf/empty cells as missing samples)
+//   x.csv: no column 'q' (columns: t, u, y)
+// With CsvOptions::missing_as_nan, empty cells and NaN/Inf values are stored as NaN (missing samples).
+//
+// Example:
+//   ident::io::CsvReader reader("datasets/dryer.csv");        // streams rows, constant memory
+//   Eigen::VectorXd row(reader.num_columns());
+//   while (reader.Next(row)) { ... }
+//   ident::io::DataTable table = ident::io::ReadCsv("datasets/dryer.csv");   // whole file
+#pragma once
+
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace ident::io {
+
+struct CsvOptions {
+  bool missing_as_nan = false;  // store empty/NaN/Inf cells as NaN instead of rejecting them
+};
+
+// Streams a CSV file row by row (constant memory).
+class CsvReader {
+ public:
+  // Opens the file and reads the header. Throws DataError.
+  explicit CsvReader(const std::string& path, const CsvOptions& options = {});
+
+  const std::string& path() const { return path_; }
+  const std::vector<std::string>& names() const { return names_; }
+  int num_columns() const { return static_cast<int>(names_.size()); }
+  // Index of a column by name; throws DataError listing the columns if there is none.
+  int ColumnIndex(std::string_view name) const;
+  // Reads the next data row into `row` (size num_columns()). Returns false at the end of the file
+  // (and throws DataError "no data rows after the header" if there were none). Throws DataError.
+  bool Next(Eigen::Ref<Eigen::VectorXd> row);
+  // 1-based line number of the row last returned by Next().
+  long line() const { return line_; }
+  long rows_read() const { return rows_; }
+
+ private:
+  std::string path_;
+  CsvOptions options_;
+  std::ifstream in_;
+  std::vector<std::string> names_;
+  std::string buffer_;
+  long line_ = 0;
+  long rows_ = 0;
+};
+
+// A whole record in memory: values(row, column).
+struct DataTable {
+  std::string source;  // file name, for messages
+  std::vector<std::string> names;
+  Eigen::MatrixXd values;
+
+  int num_rows() const { return static_cast<int>(values.rows()); }
+  // Throws DataError "<source>: no column 'q' (columns: t, u, y)".
+  int ColumnIndex(std::string_view name) const;
+  Eigen::VectorXd Column(std::string_view name) const { return values.col(ColumnIndex(name)); }
+};
+
+// Reads the whole file. Throws DataError.
+DataTable ReadCsv(const std::string& path, const CsvOptions& options = {});
+
+// "<source>: no column 'q' (columns: t, u, y)" (shared by CsvReader and DataTable).
+[[noreturn]] void ThrowUnknownColumn(const std::string& source, std::string_view name,
+                                     const std::vector<std::string>& names);
+
+}  // namespace ident::io

@@ -1,0 +1,104 @@
+#include "tools/data_source.h"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "ident/common/error.h"
+
+namespace ident::tools {
+namespace {
+
+int Find(const std::vector<std::string>& columns, const std::string& name, const std::string& source) {
+  for (std::size_t i = 0; i < columns.size(); ++i)
+    if (columns[i] == name) return static_cast<int>(i);
+  io::ThrowUnknownColumn(source, name, columns);
+}
+
+class ArxSource final : public DataSource {
+ public:
+  ArxSource(int output, std::vector<int> inputs, const models::ArxStructure& arx)
+      : output_(output), inputs_(std::move(inputs)), regressor_(arx), u_(inputs_.size()) {}
+  int num_parameters() const override { return regressor_.structure().num_parameters(); }
+  std::string structure() const override { return regressor_.structure().ToString(); }
+  std::vector<std::string> parameter_names() const override { return regressor_.structure().ParameterNames(); }
+  bool dynamic() const override { return true; }
+  int first_regression_index() const override { return regressor_.structure().first_regression_index(); }
+  int output_column() const override { return output_; }
+  std::vector<int> used_columns() const override {
+    std::vector<int> used = inputs_;
+    used.push_back(output_);
+    return used;
+  }
+  void Reset() override { regressor_.Reset(); }
+  bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) override {
+    for (std::size_t i = 0; i < inputs_.size(); ++i) u_(static_cast<Eigen::Index>(i)) = row(inputs_[i]);
+    return regressor_.Next(u_, z);
+  }
+  void PushOutput(double y) override { regressor_.PushOutput(y); }
+
+ private:
+  int output_;
+  std::vector<int> inputs_;
+  models::ArxRegressor regressor_;
+  Eigen::VectorXd u_;
+};
+
+class StaticSource final : public DataSource {
+ public:
+  StaticSource(int output, std::vector<int> regressors, models::StaticRegression regression)
+      : output_(output), columns_(std::move(regressors)), regression_(std::move(regression)), x_(columns_.size()) {}
+  int num_parameters() const override { return regression_.num_parameters(); }
+  std::string structure() const override {
+    return fmt::format("static({}){}", fmt::join(regression_.regressors, ","), regression_.intercept ? "+intercept" : "");
+  }
+  std::vector<std::string> parameter_names() const override { return regression_.ParameterNames(); }
+  bool dynamic() const override { return false; }
+  int first_regression_index() const override { return 0; }
+  int output_column() const override { return output_; }
+  std::vector<int> used_columns() const override {
+    std::vector<int> used = columns_;
+    used.push_back(output_);
+    return used;
+  }
+  void Reset() override {}
+  bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) override {
+    for (std::size_t i = 0; i < columns_.size(); ++i) x_(static_cast<Eigen::Index>(i)) = row(columns_[i]);
+    regression_.Regressor(x_, z);
+    return true;
+  }
+  void PushOutput(double) override {}
+
+ private:
+  int output_;
+  std::vector<int> columns_;
+  models::StaticRegression regression_;
+  Eigen::VectorXd x_;
+};
+
+}  // namespace
+
+std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& columns, const std::string& output,
+                                          const std::vector<std::string>& inputs, const models::ArxStructure& arx,
+                                          const std::string& source) {
+  IDENT_REQUIRE(static_cast<int>(inputs.size()) == arx.num_inputs(),
+                "{} input column(s) given but the orders describe {} input(s)", inputs.size(), arx.num_inputs());
+  std::vector<int> in;
+  for (const auto& name : inputs) {
+    IDENT_REQUIRE(name != output, "column '{}' is both the output and an input", name);
+    in.push_back(Find(columns, name, source));
+  }
+  return std::make_unique<ArxSource>(Find(columns, output, source), std::move(in), arx);
+}
+
+std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,
+                                             const models::StaticRegression& regression, const std::string& source) {
+  IDENT_REQUIRE(regression.num_parameters() >= 1, "static regression needs at least one regressor or --intercept");
+  std::vector<int> x;
+  for (const auto& name : regression.regressors) {
+    IDENT_REQUIRE(name != output, "column '{}' is both the output and a regressor", name);
+    x.push_back(Find(columns, name, source));
+  }
+  return std::make_unique<StaticSource>(Find(columns, output, source), std::move(x), regression);
+}
+
+}  // namespace ident::tools

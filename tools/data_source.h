@@ -1,0 +1,44 @@
+// Turning a recorded table into regression data items for a model structure (tool layer).
+//
+//   ArxSource      ARX/FIR (MISO) from an output column and input columns: z(t) as in models/arx.h;
+//                  supports simulation (feeding back the model's own output).
+//   StaticSource   static regression y = θ'x (+ intercept) from named columns.
+//
+// Both walk one segment of rows at a time: Reset() at the segment start, then per row
+// Regressor(row, z) (true if a regression happens at this row) followed by PushOutput(y).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ident/io/csv.h"
+#include "models/arx.h"
+
+namespace ident::tools {
+
+class DataSource {
+ public:
+  virtual ~DataSource() = default;
+  virtual int num_parameters() const = 0;
+  virtual std::string structure() const = 0;              // "ARX(2,2,3)", "static(x1,x2)+intercept"
+  virtual std::vector<std::string> parameter_names() const = 0;
+  virtual bool dynamic() const = 0;                       // simulation applies
+  virtual int first_regression_index() const = 0;         // t0 within a segment
+  virtual int output_column() const = 0;
+  virtual std::vector<int> used_columns() const = 0;      // every column the model reads
+  virtual void Reset() = 0;
+  virtual bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) = 0;
+  virtual void PushOutput(double y) = 0;
+};
+
+// Throws DataError for an unknown column, InvalidArgument for bad orders.
+std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& columns, const std::string& output,
+                                          const std::vector<std::string>& inputs, const models::ArxStructure& arx,
+                                          const std::string& source);
+std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,
+                                             const models::StaticRegression& regression, const std::string& source);
+
+}  // namespace ident::tools

@@ -1,0 +1,109 @@
+#include "tools/estimator_options.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <nlohmann/json.hpp>
+
+#include "ident/common/error.h"
+
+#ifndef IDENT_DATASETS_DIR
+#define IDENT_DATASETS_DIR "datasets"
+#endif
+
+namespace ident::tools {
+
+void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
+  if (with_estimator)
+    app.add_option("--estimator", estimator,
+                   fmt::format("Estimator: {} (dof as 'student:3')", fmt::join(RegressionEstimatorNames(), ", ")))
+        ->capture_default_str();
+  app.add_option("--dof", dof, "Student-t degrees of freedom k (estimator student)");
+  app.add_option("--delta", delta, "Kárný–Hangos ω-exponent convention δ (0 or 1)")->capture_default_str();
+  auto* forgetting_option =
+      app.add_option("--forgetting", forgetting, "Forgetting factor λ in (0, 1]; 1 = none")->capture_default_str();
+  app.add_flag("--stabilised", stabilised, "Stabilised forgetting towards the prior instead of exponential")
+      ->needs(forgetting_option);
+  auto* nu0_option = app.add_option("--nu0", nu0, "Prior degrees ν(0) (with --vy0, --vz0: V(0) = diag(A, B·I))");
+  auto* vy0_option = app.add_option("--vy0", vy0, "Prior V(0) output entry A");
+  auto* vz0_option = app.add_option("--vz0", vz0, "Prior V(0) regressor entries B");
+  nu0_option->needs(vy0_option, vz0_option);
+  vy0_option->needs(nu0_option, vz0_option);
+  vz0_option->needs(nu0_option, vy0_option);
+  app.add_option("--prior", prior_file, "Prior as JSON {\"nu0\": N, \"V0\": [[...]]} ((ρ+1)x(ρ+1), y first)")
+      ->excludes(nu0_option)
+      ->excludes(vy0_option)
+      ->excludes(vz0_option);
+  app.add_flag("--exact", exact, "The paper's exact recursion: switch off every safeguard beyond it");
+}
+
+EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::string& spec) const {
+  EstimatorSettings s = ParseEstimatorSpec(spec.empty() ? estimator : spec);
+  if (dof) {
+    IDENT_REQUIRE(!s.dof || *s.dof == *dof, "--dof {} contradicts estimator '{}'", *dof, spec);
+    s.dof = dof;
+  }
+  IDENT_REQUIRE(delta == 0 || delta == 1, "delta = {}; need 0 or 1", delta);
+  s.delta = delta;
+  s.forgetting.factor = forgetting;
+  s.forgetting.stabilised = stabilised;
+  s.exact = exact;
+  if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
+  if (!prior_file.empty()) s.prior = ReadPriorJson(prior_file, num_parameters);
+  const std::string error = s.forgetting.Validate();
+  IDENT_REQUIRE(error.empty(), "{}", error);
+  return s;
+}
+
+RegressionPrior ReadPriorJson(const std::string& path, int num_parameters) {
+  std::ifstream in(path);
+  if (!in) throw DataError(fmt::format("cannot open prior file '{}'", path));
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw DataError(fmt::format("{}: not valid JSON ({})", path, e.what()));
+  }
+  if (!j.is_object() || !j.contains("nu0") || !j["nu0"].is_number() || !j.contains("V0") || !j["V0"].is_array())
+    throw DataError(fmt::format("{}: need an object {{\"nu0\": N, \"V0\": [[...], ...]}}", path));
+  const int n = num_parameters + 1;
+  const auto& rows = j["V0"];
+  if (static_cast<int>(rows.size()) != n)
+    throw DataError(fmt::format("{}: V0 has {} rows; the model needs {}x{} (rho = {}, y first)", path, rows.size(), n,
+                                n, num_parameters));
+  RegressionPrior prior;
+  prior.nu0 = j["nu0"].get<double>();
+  prior.V0.resize(n, n);
+  for (int i = 0; i < n; ++i) {
+    if (!rows[i].is_array() || static_cast<int>(rows[i].size()) != n)
+      throw DataError(fmt::format("{}: V0 row {} does not have {} numbers", path, i + 1, n));
+    for (int k = 0; k < n; ++k) {
+      if (!rows[i][k].is_number()) throw DataError(fmt::format("{}: V0[{}][{}] is not a number", path, i, k));
+      prior.V0(i, k) = rows[i][k].get<double>();
+    }
+  }
+  try {
+    prior.Validate();
+  } catch (const InvalidArgument& e) {
+    throw DataError(fmt::format("{}: {}", path, e.what()));
+  }
+  return prior;
+}
+
+std::string ResolveDataPath(const std::string& name) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(name, ec) || name.find('/') != std::string::npos) return name;
+  const char* env = std::getenv("IDENT_DATASETS");
+  for (const std::string dir : {std::string(env ? env : ""), std::string(IDENT_DATASETS_DIR)}) {
+    if (dir.empty()) continue;
+    for (const std::string candidate : {dir + "/" + name, dir + "/" + name + ".csv"})
+      if (fs::is_regular_file(candidate, ec)) return candidate;
+  }
+  return name;  // the reader reports "cannot open"
+}
+
+}  // namespace ident::tools

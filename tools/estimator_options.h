@@ -1,0 +1,38 @@
+// Command-line options shared by every subcommand that builds a regression estimator
+// (ident fit, ident compare): --estimator, --dof, --delta, --forgetting, --stabilised,
+// --nu0/--vy0/--vz0, --prior FILE.json, --exact.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "ident/estimator_registry.h"
+
+namespace ident::tools {
+
+struct EstimatorCliOptions {
+  std::string estimator = "rls";
+  std::optional<double> dof;
+  int delta = 1;
+  double forgetting = 1.0;
+  bool stabilised = false;
+  std::optional<double> nu0, vy0, vz0;
+  std::string prior_file;
+  bool exact = false;
+
+  // Adds the options to `app` (`with_estimator`: also --estimator).
+  void AddTo(CLI::App& app, bool with_estimator = true);
+  // Settings for `spec` (e.g. "student:3"; empty: this->estimator) and ρ parameters.
+  // Throws InvalidArgument / DataError (prior file) with one line naming the option.
+  EstimatorSettings Resolve(int num_parameters, const std::string& spec = "") const;
+};
+
+// Reads {"nu0": N, "V0": [[...], ...]} ((ρ+1)x(ρ+1), y first). Throws DataError naming the file.
+RegressionPrior ReadPriorJson(const std::string& path, int num_parameters);
+
+// A data argument is a path, or the bare name of a bundled dataset ("dryer" → datasets/dryer.csv).
+std::string ResolveDataPath(const std::string& name);
+
+}  // namespace ident::tools

@@ -1,0 +1,77 @@
+// The `ident fit` workflow on a table in memory: split, detrend, estimate recursively, score.
+//
+// Protocol (datasets/README.md): the first ⌊split·N⌋ rows estimate, the rest validate (split = 1:
+// estimate and validate on the whole record). Detrend "mean" subtracts the estimation-part mean of
+// every column the model uses from all rows. Inside each segment regression starts at t0 (models/arx.h).
+// Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) over the scored validation samples (t ≥ t0 of the segment; ȳ their
+// mean); "one-step" uses measured past outputs, "simulation" (ARX only) feeds back the model's own
+// output after the first t0 measured samples.
+#pragma once
+
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ident/io/csv.h"
+#include "ident/regression_estimator.h"
+#include "tools/data_source.h"
+
+namespace ident::tools {
+
+enum class Detrend { kMean, kNone };
+
+struct FitOptions {
+  double split = 0.5;                 // fraction of rows for estimation, in (0, 1]
+  Detrend detrend = Detrend::kMean;
+  std::FILE* trace = nullptr;         // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
+};
+
+struct FitScores {
+  double one_step = 0;                // fit %
+  double rms_one_step = 0;
+  std::optional<double> simulation;   // fit % (dynamic models only)
+  std::optional<double> rms_simulation;
+  int scored = 0;                     // validation samples scored
+};
+
+struct FitResult {
+  std::string estimator;
+  std::string structure;
+  std::vector<std::string> parameter_names;
+  Eigen::VectorXd theta, theta_std;
+  double noise_std = 0;
+  double nu = 0, Dy = 0;
+  int samples_estimation = 0, samples_validation = 0;
+  int updates = 0, rejected = 0;      // estimator steps taken / rejected (missing or invalid samples)
+  FitScores validation;
+};
+
+// The row range [first, first + count) of a table.
+struct Segment {
+  int first = 0;
+  int count = 0;
+};
+
+// Splits and detrends `data` in place as described above and returns (estimation, validation).
+// Throws InvalidArgument if split ∉ (0, 1] or a part is too short for the structure.
+std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options);
+
+// Runs the estimator over the segment (one Update per regression), writing trace rows if asked.
+// Returns the number of updates and rejected steps. Throws InvalidArgument if the regressors of the
+// segment are constant or collinear (the model is not identifiable from them).
+std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
+                             AnyRegressionEstimator& estimator, std::FILE* trace);
+
+// One-step and (for dynamic sources) simulation scores of parameters θ on the segment.
+FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta);
+
+// PrepareData + Estimate + Score.
+FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options);
+
+// Writes the trace header: t,nu,beta,pred_err,theta1..thetaρ,Dy
+void WriteTraceHeader(std::FILE* trace, int num_parameters);
+
+}  // namespace ident::tools
