@@ -1,0 +1,53 @@
+#include "tests/support/cli.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace ident::testing {
+
+std::string TempDir() {
+  static const std::string dir = [] {
+    std::string pattern = (std::filesystem::temp_directory_path() / "ident-test-XXXXXX").string();
+    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
+    return pattern;
+  }();
+  return dir;
+}
+
+std::string WriteFile(const std::string& name, const std::string& text) {
+  const std::string path = TempDir() + "/" + name;
+  std::ofstream(path, std::ios::binary) << text;
+  return path;
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CliResult RunCli(const std::string& args) {
+#ifndef IDENT_CLI_PATH
+  throw std::runtime_error("IDENT_CLI_PATH is not defined for this test executable");
+#else
+  static int counter = 0;
+  const std::string base = TempDir() + "/run" + std::to_string(getpid()) + "_" + std::to_string(counter++);
+  const std::string command =
+      std::string("'") + IDENT_CLI_PATH + "' " + args + " > '" + base + ".out' 2> '" + base + ".err' < /dev/null";
+  const int status = std::system(command.c_str());
+  CliResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = ReadFile(base + ".out");
+  r.err = ReadFile(base + ".err");
+  return r;
+#endif
+}
+
+}  // namespace ident::testing

@@ -1,0 +1,21 @@
+// Runs the `ident` program from a test and captures its exit code, stdout and stderr.
+#pragma once
+
+#include <string>
+
+namespace ident::testing {
+
+struct CliResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// `args` is appended to the program path as is (shell syntax). Requires IDENT_CLI_PATH.
+CliResult RunCli(const std::string& args);
+
+// A fresh temporary directory for this test process; WriteFile writes `text` to dir/name and returns the path.
+std::string TempDir();
+std::string WriteFile(const std::string& name, const std::string& text);
+std::string ReadFile(const std::string& path);
+
+}  // namespace ident::testing
