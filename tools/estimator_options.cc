@@ -98,9 +98,9 @@ std::string ResolveDataPath(const std::string& name) {
   std::error_code ec;
   if (fs::exists(name, ec) || name.find('/') != std::string::npos) return name;
   const char* env = std::getenv("IDENT_DATASETS");
-  for (const std::string dir : {std::string(env ? env : ""), std::string(IDENT_DATASETS_DIR)}) {
+  for (const std::string& dir : {std::string(env ? env : ""), std::string(IDENT_DATASETS_DIR)}) {
     if (dir.empty()) continue;
-    for (const std::string candidate : {dir + "/" + name, dir + "/" + name + ".csv"})
+    for (const std::string& candidate : {dir + "/" + name, dir + "/" + name + ".csv"})
       if (fs::is_regular_file(candidate, ec)) return candidate;
   }
   return name;  // the reader reports "cannot open"

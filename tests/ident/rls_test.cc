@@ -2,6 +2,8 @@
 
 #include <random>
 
+#include <cstdio>
+
 #include <gtest/gtest.h>
 
 #include "ident/dense_rls.h"
@@ -54,6 +56,7 @@ TEST(RecursiveLeastSquares, LdFormEqualsDenseOracleOver100kUpdatesWithForgetting
       ASSERT_GT(rls.statistics().factor().d().minCoeff(), 0) << "V lost positive definiteness at t=" << t;
     }
   }
+  std::printf("[ measured ] LD vs dense over 1e5 updates: max rel. diff theta %.3g, Dy %.3g\n", worst_theta, worst_dy);
   EXPECT_LE(worst_theta, 1e-9);
   EXPECT_LE(worst_dy, 1e-9);
   EXPECT_NEAR(rls.nu(), dense.nu(), 1e-9 * dense.nu());
