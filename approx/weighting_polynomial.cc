@@ -1,0 +1,135 @@
+#include "approx/weighting_polynomial.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace ident::approx {
+namespace {
+
+// P(β) by Horner with the (scaled) coefficients.
+double EvalP(const std::array<double, 4>& mu, double beta) {
+  return ((mu[3] * beta + mu[2]) * beta + mu[1]) * beta + mu[0];
+}
+double EvalDP(const std::array<double, 4>& mu, double beta) {
+  return (3 * mu[3] * beta + 2 * mu[2]) * beta + mu[1];
+}
+
+// Root of P in (a, b) with P(a) > 0 > P(b): Newton from the midpoint, replaced by bisection whenever
+// a step leaves the current bracket; stop when |Δβ| ≤ 4e−16·β [spec §5].
+double BracketedRoot(const std::array<double, 4>& mu, double a, double b) {
+  double x = 0.5 * (a + b);
+  for (int iter = 0; iter < 400; ++iter) {
+    const double fx = EvalP(mu, x);
+    if (fx == 0) return x;
+    if (fx > 0) a = x; else b = x;  // keep P(a) > 0 > P(b)
+    const double dfx = EvalDP(mu, x);
+    double next = (dfx != 0) ? x - fx / dfx : std::numeric_limits<double>::quiet_NaN();
+    if (!(next > a && next < b)) next = 0.5 * (a + b);  // Newton left the bracket (or NaN): bisect
+    const double step = std::abs(next - x);
+    x = next;
+    if (step <= 4e-16 * x || b - a <= 4e-16 * b) break;
+  }
+  return x;
+}
+
+}  // namespace
+
+double NuHard(int rho, double k, int delta) {
+  return std::max({static_cast<double>(rho + delta - 1), (k + 3 - delta) / k, rho / (k + 1)});
+}
+
+double NuRobust(int rho, double k, int delta) { return rho + k + delta - 1; }
+
+double Beta0(const WeightingProblem& p) { return 1 / (p.nu - (p.nu - 1) * std::min(0.0, p.xi)); }
+
+double BetaHi(const WeightingProblem& p) { return (p.k + 1) / (p.k * p.nu + p.delta - 2); }
+
+std::array<double, 4> WeightingCoefficients(const WeightingProblem& p) {
+  const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho, xi = p.xi, xz = p.xi_z;
+  return {k + 1,                                                                       // μ0
+          -(k * nu + d - 1) + (nu - d - rho + 1 - k) * xi - (nu - d - rho + 2 + k) * xz,  // μ1
+          ((k - 1) * nu + 2 * d + rho - 3) * xi + ((k + 1) * nu - rho) * xz + k * xi * xz,  // μ2
+          (2 - k * nu - d) * xi * xz};                                                 // μ3
+}
+
+double LogH0(const WeightingProblem& p, double beta) {
+  const double kappa = (p.k + 1) / 2, n = p.nu - p.delta;
+  return kappa * (std::log(beta) + (p.nu - 1) * std::log1p(-beta)) - (n + 1) / 2 * std::log1p(-beta) -
+         (n - p.rho + 2) / 2 * std::log1p(-beta * p.xi) + (n - p.rho + 1) / 2 * std::log1p(-beta * p.xi_z);
+}
+
+double LogHFull(const WeightingProblem& p, double beta) {
+  const double b0 = Beta0(p);
+  if (beta >= b0) return LogH0(p, beta);
+  // β < β0: essinf = [(1−βr)^ν/(1−r)]^κ, r = min(0, ξ); LogH0 omits κ[ν log ν + (1−ν) log(ν−1)] [spec §3].
+  const double kappa = (p.k + 1) / 2, n = p.nu - p.delta, r = std::min(0.0, p.xi);
+  const double log_essinf = kappa * (p.nu * std::log1p(-beta * r) - std::log1p(-r)) -
+                            kappa * (p.nu * std::log(p.nu) + (1 - p.nu) * std::log(p.nu - 1));
+  const double log_integral = -(n + 1) / 2 * std::log1p(-beta) - (n - p.rho + 2) / 2 * std::log1p(-beta * p.xi) +
+                              (n - p.rho + 1) / 2 * std::log1p(-beta * p.xi_z);
+  return log_essinf + log_integral;
+}
+
+WeightSolution SolveWeight(const WeightingProblem& p) {
+  WeightSolution s;
+  s.beta0 = Beta0(p);
+  s.beta_hi = BetaHi(p);
+  std::array<double, 4> mu = WeightingCoefficients(p);
+  double scale = 0;
+  for (double m : mu) scale = std::max(scale, std::abs(m));
+  for (double& m : mu) m /= scale;  // does not change the roots
+
+  // Break points: β0, β_hi and the real roots of P' = μ1 + 2μ2β + 3μ3β² inside (β0, β_hi).
+  std::array<double, 4> pts{s.beta0, s.beta_hi, 0, 0};
+  int npts = 2;
+  const double A = 3 * mu[3], B = 2 * mu[2], C = mu[1];
+  auto add = [&](double x) {
+    if (x > s.beta0 && x < s.beta_hi) pts[npts++] = x;
+  };
+  if (A == 0) {
+    if (B != 0) add(-C / B);
+  } else {
+    const double disc = B * B - 4 * A * C;
+    if (disc >= 0) {
+      const double q = -(B + std::copysign(std::sqrt(disc), B)) / 2;  // stable quadratic formula
+      if (q != 0) {
+        add(q / A);
+        add(C / q);
+      }
+    }
+  }
+  for (int i = 1; i < npts; ++i)  // insertion sort of at most 4 points
+    for (int j = i; j > 0 && pts[j] < pts[j - 1]; --j) std::swap(pts[j], pts[j - 1]);
+
+  double best = std::numeric_limits<double>::quiet_NaN(), best_value = -std::numeric_limits<double>::infinity();
+  auto consider = [&](double beta) {
+    const double v = LogH0(p, beta);
+    ++s.num_maxima;
+    if (std::isnan(best) || v > best_value) {
+      best = beta;
+      best_value = v;
+    }
+  };
+  double pa = EvalP(mu, pts[0]);
+  for (int i = 0; i + 1 < npts; ++i) {
+    const double pb = EvalP(mu, pts[i + 1]);
+    if (pa > 0 && pb < 0) consider(BracketedRoot(mu, pts[i], pts[i + 1]));
+    pa = pb;
+  }
+  if (EvalP(mu, s.beta_hi) >= 0) consider(s.beta_hi);  // h = 0 (or rounding at the upper end)
+  if (std::isnan(best)) {
+    // P(β0) ≤ 0 can only come from rounding (P(β0) > 0 for ν > ν_hard): the maximum is at β0.
+    if (EvalP(mu, s.beta0) <= 0 && s.beta0 <= s.beta_hi) {
+      consider(s.beta0);
+    } else {
+      s.ok = false;
+      best = s.beta0;
+    }
+  }
+  s.beta = best;
+  return s;
+}
+
+}  // namespace ident::approx
