@@ -76,6 +76,11 @@ WeightSolution SolveWeight(const WeightingProblem& p) {
   WeightSolution s;
   s.beta0 = Beta0(p);
   s.beta_hi = BetaHi(p);
+  if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]
+    s.beta = s.beta_hi;
+    s.num_maxima = 1;
+    return s;
+  }
   std::array<double, 4> mu = WeightingCoefficients(p);
   double scale = 0;
   for (double m : mu) scale = std::max(scale, std::abs(m));
