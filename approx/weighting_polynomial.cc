@@ -18,8 +18,9 @@ double EvalDP(const std::array<double, 4>& mu, double beta) {
 
 // Root of P in (a, b) with P(a) > 0 > P(b): Newton from the midpoint, replaced by bisection whenever
 // a step leaves the current bracket; stop when |Δβ| ≤ 4e−16·β [spec §5].
-double BracketedRoot(const std::array<double, 4>& mu, double a, double b) {
-  double x = 0.5 * (a + b);
+// `guess` (if inside the bracket) is the first iterate.
+double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double guess) {
+  double x = (guess > a && guess < b) ? guess : 0.5 * (a + b);
   for (int iter = 0; iter < 400; ++iter) {
     const double fx = EvalP(mu, x);
     if (fx == 0) return x;
@@ -108,32 +109,32 @@ WeightSolution SolveWeight(const WeightingProblem& p) {
   for (int i = 1; i < npts; ++i)  // insertion sort of at most 4 points
     for (int j = i; j > 0 && pts[j] < pts[j - 1]; --j) std::swap(pts[j], pts[j - 1]);
 
-  double best = std::numeric_limits<double>::quiet_NaN(), best_value = -std::numeric_limits<double>::infinity();
-  auto consider = [&](double beta) {
-    const double v = LogH0(p, beta);
-    ++s.num_maxima;
-    if (std::isnan(best) || v > best_value) {
-      best = beta;
-      best_value = v;
-    }
-  };
+  // First Newton iterate: the large-ν limit νβ ≈ (k+1)/(k + ê²/D_y), ê²/D_y = ξ_z − ξ [spec §7a].
+  const double guess = (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi)));
+  std::array<double, 4> candidates{};
+  int nc = 0;
   double pa = EvalP(mu, pts[0]);
   for (int i = 0; i + 1 < npts; ++i) {
     const double pb = EvalP(mu, pts[i + 1]);
-    if (pa > 0 && pb < 0) consider(BracketedRoot(mu, pts[i], pts[i + 1]));
+    if (pa > 0 && pb < 0) candidates[nc++] = BracketedRoot(mu, pts[i], pts[i + 1], guess);
     pa = pb;
   }
-  if (EvalP(mu, s.beta_hi) >= 0) consider(s.beta_hi);  // h = 0 (or rounding at the upper end)
-  if (std::isnan(best)) {
+  if (EvalP(mu, s.beta_hi) >= 0) candidates[nc++] = s.beta_hi;  // h = 0 (or rounding at the upper end)
+  if (nc == 0) {
     // P(β0) ≤ 0 can only come from rounding (P(β0) > 0 for ν > ν_hard): the maximum is at β0.
-    if (EvalP(mu, s.beta0) <= 0 && s.beta0 <= s.beta_hi) {
-      consider(s.beta0);
-    } else {
-      s.ok = false;
-      best = s.beta0;
+    s.ok = EvalP(mu, s.beta0) <= 0 && s.beta0 <= s.beta_hi;
+    candidates[nc++] = s.beta0;
+  }
+  // Several local maxima: keep the one with the largest log H0 (only then is log H0 evaluated).
+  s.num_maxima = nc;
+  s.beta = candidates[0];
+  if (nc > 1) {
+    double best_value = LogH0(p, s.beta);
+    for (int i = 1; i < nc; ++i) {
+      const double v = LogH0(p, candidates[i]);
+      if (v > best_value) best_value = v, s.beta = candidates[i];
     }
   }
-  s.beta = best;
   return s;
 }
 
