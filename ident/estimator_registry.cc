@@ -33,6 +33,7 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, 
   options.delta = s.delta;
   options.forgetting = s.forgetting;
   options.prior = s.prior;
+  options.exact = s.exact;
   return std::make_unique<RegressionEstimatorModel<StudentRegression>>(name, rho, options);
 }
 

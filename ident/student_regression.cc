@@ -15,6 +15,8 @@ std::string StudentRegressionOptions::Validate(int rho) const {
   if (!(std::isfinite(dof) && dof > 0)) return fmt::format("dof = {}; need a finite k > 0", dof);
   if (delta != 0 && delta != 1) return fmt::format("delta = {}; need 0 or 1", delta);
   if (std::string e = forgetting.Validate(); !e.empty()) return e;
+  if (startup_window < 0 || startup_window == 1)
+    return fmt::format("startup_window = {}; need 0 (automatic) or at least 2 samples", startup_window);
   if (prior && prior->num_parameters() != rho)
     return fmt::format("prior V0 is {}x{}; the model needs {}x{} (rho = {}, y first)", prior->V0.rows(),
                        prior->V0.cols(), rho + 1, rho + 1, rho);

@@ -24,6 +24,7 @@
 // References: M. Kárný, K. M. Hangos, Kybernetika 24(5), 1988; [spec] shared/spec/cauchy-estimator.md.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -44,8 +45,19 @@ struct StudentRegressionOptions {
   double dof = 1.0;  // k > 0; 1 = Cauchy (the paper), large = Gaussian
   int delta = 1;     // ω-exponent convention δ ∈ {0, 1}; 1 = the paper's algorithm [spec §2.1]
   ForgettingOptions forgetting;
-  // (ν(0), V(0)). Default: ν(0) = ρ+k+δ (spec §8) and V(0) = diag(1, 1e-3·I).
+  // (ν(0), V(0)). Default (unless `exact`): the data-driven start-up prior below; with `exact`:
+  // ν(0) = ρ+k+δ (spec §8) and V(0) = diag(1, 1e-3·I).
   std::optional<RegressionPrior> prior;
+  // Only the spec's recursion: no data-driven start-up (the command line's --exact).
+  bool exact = false;
+  // Data-driven start-up (used when `prior` is unset and not `exact`): the first W samples are run
+  // with DefaultPrior() and kept; after sample W the estimator restarts from the prior
+  //   ν(0) = ρ+k+δ,  Θ0 = 0,  σ0 = s_y,  V_y(0) = s_y²,  V_z(0) = diag(s_{z_i}²)/(100·(ν0−δ−ρ)),
+  // i.e. the spec §8 recipe with P0 = diag((10·s_y/s_{z_i})²), where s = 1.4826·MAD (median absolute
+  // deviation from the median) over the window (RMS if the MAD is 0, 1 if that is 0 too), and replays
+  // the W samples. s_y over-estimates the noise scale (it includes the signal), the safe side of spec §8's
+  // hazard, and ignores up to half the window being outliers. 0 = W = max(20, 4ρ).
+  int startup_window = 0;
 
   // The default prior of spec §8 for ρ parameters: ν(0) = ρ+k+δ, V(0) = diag(1, 1e-3·I).
   RegressionPrior DefaultPrior(int num_parameters) const;
@@ -84,15 +96,38 @@ class BasicStudentRegression {
       : options_(Checked(num_parameters, options)),
         prior_(options_.prior ? *options_.prior : options_.DefaultPrior(num_parameters)),
         stats_(prior_),
-        prior_factor_(prior_.V0) {}
+        prior_factor_(prior_.V0) {
+    if (!options_.prior && !options_.exact) {
+      window_size_ = options_.startup_window > 0 ? options_.startup_window : std::max(20, 4 * num_parameters);
+      window_.resize(window_size_, num_parameters + 1);
+      scratch_.resize(window_size_);
+    }
+  }
+
+  // True while the data-driven start-up window is being collected.
+  bool in_startup() const { return window_size_ > 0 && window_count_ < window_size_; }
 
   // One sample. A sample with a non-finite entry, a regressor of the wrong size or one that would
   // overflow is rejected (state unchanged). Never throws, never allocates.
+  // During the start-up window (see StudentRegressionOptions::startup_window) the reports come from the
+  // provisional prior; the restart after sample W allocates once (prior validation).
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     if (z.size() != num_parameters() || !std::isfinite(y) || !z.allFinite() ||
         !std::isfinite(y * y + z.squaredNorm()))
       return {StepStatus::kRejectedInvalid};
+    const StepReport report = Step(y, z);
+    if (in_startup() && report.updated()) {
+      window_(window_count_, 0) = y;
+      window_.row(window_count_).tail(num_parameters()) = z.transpose();
+      if (++window_count_ == window_size_) Restart();
+    }
+    return report;
+  }
+
+ private:
+  template <class Derived>
+  StepReport Step(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     const double lambda = options_.forgetting.factor;
     const double nu_tilde =
         options_.forgetting.stabilised ? lambda * stats_.nu() + (1 - lambda) * prior_.nu0 : lambda * stats_.nu();
@@ -114,6 +149,41 @@ class BasicStudentRegression {
     return {StepStatus::kUpdated, w.beta, nu, in.prediction_error};
   }
 
+  // s = 1.4826·MAD of column c of the window (RMS if 0, else 1).
+  double RobustScale(int c) {
+    const int n = window_size_;
+    scratch_ = window_.col(c);
+    std::nth_element(scratch_.data(), scratch_.data() + n / 2, scratch_.data() + n);
+    const double med = scratch_(n / 2);
+    scratch_ = (window_.col(c).array() - med).abs();
+    std::nth_element(scratch_.data(), scratch_.data() + n / 2, scratch_.data() + n);
+    double s = 1.4826 * scratch_(n / 2);
+    if (!(s > 0)) s = std::sqrt(window_.col(c).squaredNorm() / n);
+    return s > 0 ? s : 1.0;
+  }
+
+  // The data-driven prior from the window, then replay of the window (see the options).
+  void Restart() noexcept {
+    const int rho = num_parameters();
+    const double sy = RobustScale(0);
+    const double nu0 = rho + options_.dof + options_.delta;
+    prior_.nu0 = nu0;
+    prior_.V0.setZero();
+    prior_.V0(0, 0) = sy * sy;
+    for (int i = 1; i <= rho; ++i) {
+      const double sz = RobustScale(i);
+      prior_.V0(i, i) = sz * sz / (100 * (nu0 - options_.delta - rho));
+    }
+    try {
+      stats_.Reset(prior_);
+      prior_factor_.Factorize(prior_.V0);
+    } catch (...) {  // cannot happen: V0 is diagonal with positive entries
+      return;
+    }
+    for (int t = 0; t < window_size_; ++t) Step(window_(t, 0), window_.row(t).tail(rho).transpose());
+  }
+
+ public:
   int num_parameters() const { return stats_.num_parameters(); }
   const ParamVector& parameters() const { return stats_.parameters(); }
   template <class Derived>
@@ -149,6 +219,7 @@ class BasicStudentRegression {
   const StudentRegressionOptions& options() const { return options_; }
   const RegressionPrior& prior() const { return prior_; }
 
+  // Back to the prior (the data-driven one, if the start-up window was completed).
   void Reset() {
     stats_.Reset(prior_);
     last_beta_ = std::numeric_limits<double>::quiet_NaN();
@@ -169,6 +240,9 @@ class BasicStudentRegression {
   double nu_hard_ = approx::NuHard(stats_.num_parameters(), options_.dof, options_.delta);
   double last_beta_ = std::numeric_limits<double>::quiet_NaN();
   StudentStepDetails details_;
+  int window_size_ = 0, window_count_ = 0;  // data-driven start-up (0 = off)
+  Eigen::MatrixXd window_;                  // W x (ρ+1): y, z of the first W samples
+  Eigen::VectorXd scratch_;
 };
 
 using StudentRegression = BasicStudentRegression<Eigen::Dynamic>;
