@@ -25,7 +25,9 @@ TEST(StartupPrior, IsScaleInvariantAfterTheWindow) {
     const Eigen::Vector2d z(g(rng), g(rng));
     const double y = 0.8 * z(0) - 0.3 * z(1) + e(rng);
     const double ba = a.Update(y, z).weight, bb = b.Update(c * y, Eigen::Vector2d(T.cwiseProduct(z))).weight;
-    if (t >= 20) EXPECT_NEAR(bb / ba, 1, 1e-10) << t;
+    if (t >= 20) {
+      EXPECT_NEAR(bb / ba, 1, 1e-10) << t;
+    }
   }
   EXPECT_FALSE(a.in_startup());
   EXPECT_NEAR(b.parameters()(0), c * a.parameters()(0) / T(0), 1e-9 * std::abs(c * a.parameters()(0) / T(0)));
