@@ -1,6 +1,7 @@
 #include "ident/estimator_registry.h"
 
 #include <charconv>
+#include <cmath>
 #include <functional>
 #include <map>
 
@@ -9,6 +10,7 @@
 
 #include "ident/common/error.h"
 #include "ident/rls.h"
+#include "ident/student_regression.h"
 
 namespace ident {
 namespace {
@@ -23,9 +25,35 @@ std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int 
   return std::make_unique<RegressionEstimatorModel<RecursiveLeastSquares>>("rls", rho, options);
 }
 
+// Kárný–Hangos Student-t regression with k = dof; `name` is "cauchy" (k = 1) or "student".
+std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, int rho, const std::string& name,
+                                                    double dof) {
+  StudentRegressionOptions options;
+  options.dof = dof;
+  options.delta = s.delta;
+  options.forgetting = s.forgetting;
+  options.prior = s.prior;
+  options.exact = s.exact;
+  return std::make_unique<RegressionEstimatorModel<StudentRegression>>(name, rho, options);
+}
+
+std::unique_ptr<AnyRegressionEstimator> MakeCauchy(const EstimatorSettings& s, int rho) {
+  IDENT_REQUIRE(!s.dof || *s.dof == 1, "dof = {} does not apply to estimator 'cauchy' (it is student with k = 1; "
+                "use --estimator student --dof {})", s.dof.value_or(1), s.dof.value_or(1));
+  return MakeStudent(s, rho, "cauchy", 1.0);
+}
+
+std::unique_ptr<AnyRegressionEstimator> MakeStudentT(const EstimatorSettings& s, int rho) {
+  IDENT_REQUIRE(s.dof.has_value(), "estimator 'student' needs dof (degrees of freedom k > 0: --dof 3 or student:3)");
+  IDENT_REQUIRE(std::isfinite(*s.dof) && *s.dof > 0, "dof = {}; estimator 'student' needs a finite k > 0", *s.dof);
+  return MakeStudent(s, rho, fmt::format("student:{}", *s.dof), *s.dof);
+}
+
 const std::vector<std::pair<std::string, Factory>>& Registry() {
   static const std::vector<std::pair<std::string, Factory>> registry = {
       {"rls", MakeRls},
+      {"cauchy", MakeCauchy},
+      {"student", MakeStudentT},
   };
   return registry;
 }

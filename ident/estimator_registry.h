@@ -1,6 +1,8 @@
 // Run-time selection of regression estimators by name.
 //
 //   "rls"                     RecursiveLeastSquares
+//   "cauchy"                  StudentRegression with k = 1 (Kárný–Hangos; rejects dof ≠ 1)
+//   "student" (needs dof)     StudentRegression with k = dof ("student:3" or dof = 3)
 //   (further names are registered in estimator_registry.cc as estimators are added)
 //
 // Example:

@@ -1,0 +1,141 @@
+#include "approx/weighting_polynomial.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace ident::approx {
+namespace {
+
+// P(β) by Horner with the (scaled) coefficients.
+double EvalP(const std::array<double, 4>& mu, double beta) {
+  return ((mu[3] * beta + mu[2]) * beta + mu[1]) * beta + mu[0];
+}
+double EvalDP(const std::array<double, 4>& mu, double beta) {
+  return (3 * mu[3] * beta + 2 * mu[2]) * beta + mu[1];
+}
+
+// Root of P in (a, b) with P(a) > 0 > P(b): Newton from the midpoint, replaced by bisection whenever
+// a step leaves the current bracket; stop when |Δβ| ≤ 4e−16·β [spec §5].
+// `guess` (if inside the bracket) is the first iterate.
+double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double guess) {
+  double x = (guess > a && guess < b) ? guess : 0.5 * (a + b);
+  for (int iter = 0; iter < 400; ++iter) {
+    const double fx = EvalP(mu, x);
+    if (fx == 0) return x;
+    if (fx > 0) a = x; else b = x;  // keep P(a) > 0 > P(b)
+    const double dfx = EvalDP(mu, x);
+    double next = (dfx != 0) ? x - fx / dfx : std::numeric_limits<double>::quiet_NaN();
+    if (!(next > a && next < b)) next = 0.5 * (a + b);  // Newton left the bracket (or NaN): bisect
+    const double step = std::abs(next - x);
+    x = next;
+    if (step <= 4e-16 * x || b - a <= 4e-16 * b) break;
+  }
+  return x;
+}
+
+}  // namespace
+
+double NuHard(int rho, double k, int delta) {
+  return std::max({static_cast<double>(rho + delta - 1), (k + 3 - delta) / k, rho / (k + 1)});
+}
+
+double NuRobust(int rho, double k, int delta) { return rho + k + delta - 1; }
+
+double Beta0(const WeightingProblem& p) { return 1 / (p.nu - (p.nu - 1) * std::min(0.0, p.xi)); }
+
+double BetaHi(const WeightingProblem& p) { return (p.k + 1) / (p.k * p.nu + p.delta - 2); }
+
+std::array<double, 4> WeightingCoefficients(const WeightingProblem& p) {
+  const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho, xi = p.xi, xz = p.xi_z;
+  return {k + 1,                                                                       // μ0
+          -(k * nu + d - 1) + (nu - d - rho + 1 - k) * xi - (nu - d - rho + 2 + k) * xz,  // μ1
+          ((k - 1) * nu + 2 * d + rho - 3) * xi + ((k + 1) * nu - rho) * xz + k * xi * xz,  // μ2
+          (2 - k * nu - d) * xi * xz};                                                 // μ3
+}
+
+double LogH0(const WeightingProblem& p, double beta) {
+  const double kappa = (p.k + 1) / 2, n = p.nu - p.delta;
+  return kappa * (std::log(beta) + (p.nu - 1) * std::log1p(-beta)) - (n + 1) / 2 * std::log1p(-beta) -
+         (n - p.rho + 2) / 2 * std::log1p(-beta * p.xi) + (n - p.rho + 1) / 2 * std::log1p(-beta * p.xi_z);
+}
+
+double LogHFull(const WeightingProblem& p, double beta) {
+  const double b0 = Beta0(p);
+  if (beta >= b0) return LogH0(p, beta);
+  // β < β0: essinf = [(1−βr)^ν/(1−r)]^κ, r = min(0, ξ); LogH0 omits κ[ν log ν + (1−ν) log(ν−1)] [spec §3].
+  const double kappa = (p.k + 1) / 2, n = p.nu - p.delta, r = std::min(0.0, p.xi);
+  const double log_essinf = kappa * (p.nu * std::log1p(-beta * r) - std::log1p(-r)) -
+                            kappa * (p.nu * std::log(p.nu) + (1 - p.nu) * std::log(p.nu - 1));
+  const double log_integral = -(n + 1) / 2 * std::log1p(-beta) - (n - p.rho + 2) / 2 * std::log1p(-beta * p.xi) +
+                              (n - p.rho + 1) / 2 * std::log1p(-beta * p.xi_z);
+  return log_essinf + log_integral;
+}
+
+WeightSolution SolveWeight(const WeightingProblem& p) {
+  WeightSolution s;
+  s.beta0 = Beta0(p);
+  s.beta_hi = BetaHi(p);
+  if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]
+    s.beta = s.beta_hi;
+    s.num_maxima = 1;
+    return s;
+  }
+  std::array<double, 4> mu = WeightingCoefficients(p);
+  double scale = 0;
+  for (double m : mu) scale = std::max(scale, std::abs(m));
+  for (double& m : mu) m /= scale;  // does not change the roots
+
+  // Break points: β0, β_hi and the real roots of P' = μ1 + 2μ2β + 3μ3β² inside (β0, β_hi).
+  std::array<double, 4> pts{s.beta0, s.beta_hi, 0, 0};
+  int npts = 2;
+  const double A = 3 * mu[3], B = 2 * mu[2], C = mu[1];
+  auto add = [&](double x) {
+    if (x > s.beta0 && x < s.beta_hi) pts[npts++] = x;
+  };
+  if (A == 0) {
+    if (B != 0) add(-C / B);
+  } else {
+    const double disc = B * B - 4 * A * C;
+    if (disc >= 0) {
+      const double q = -(B + std::copysign(std::sqrt(disc), B)) / 2;  // stable quadratic formula
+      if (q != 0) {
+        add(q / A);
+        add(C / q);
+      }
+    }
+  }
+  for (int i = 1; i < npts; ++i)  // insertion sort of at most 4 points
+    for (int j = i; j > 0 && pts[j] < pts[j - 1]; --j) std::swap(pts[j], pts[j - 1]);
+
+  // First Newton iterate: the large-ν limit νβ ≈ (k+1)/(k + ê²/D_y), ê²/D_y = ξ_z − ξ [spec §7a].
+  const double guess = (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi)));
+  std::array<double, 4> candidates{};
+  int nc = 0;
+  double pa = EvalP(mu, pts[0]);
+  for (int i = 0; i + 1 < npts; ++i) {
+    const double pb = EvalP(mu, pts[i + 1]);
+    if (pa > 0 && pb < 0) candidates[nc++] = BracketedRoot(mu, pts[i], pts[i + 1], guess);
+    pa = pb;
+  }
+  if (EvalP(mu, s.beta_hi) >= 0) candidates[nc++] = s.beta_hi;  // h = 0 (or rounding at the upper end)
+  if (nc == 0) {
+    // P(β0) ≤ 0 can only come from rounding (P(β0) > 0 for ν > ν_hard): the maximum is at β0.
+    s.ok = EvalP(mu, s.beta0) <= 0 && s.beta0 <= s.beta_hi;
+    candidates[nc++] = s.beta0;
+  }
+  // Several local maxima: keep the one with the largest log H0 (only then is log H0 evaluated).
+  s.num_maxima = nc;
+  s.beta = candidates[0];
+  if (nc > 1) {
+    double best_value = LogH0(p, s.beta);
+    for (int i = 1; i < nc; ++i) {
+      const double v = LogH0(p, candidates[i]);
+      if (v > best_value) best_value = v, s.beta = candidates[i];
+    }
+  }
+  return s;
+}
+
+}  // namespace ident::approx
