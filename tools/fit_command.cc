@@ -79,8 +79,8 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
 
 void RunFit(const FitCommandOptions& o) {
   const std::string path = ResolveDataPath(o.data);
-  io::DataTable table = io::ReadCsv(path, {.missing_as_nan = o.missing});
-  std::unique_ptr<DataSource> source = o.structure.MakeSource(table.names, path);
+  const io::CsvOptions csv{.missing_as_nan = o.missing};
+  std::unique_ptr<DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
   const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
   std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
   FitOptions options;
@@ -92,7 +92,7 @@ void RunFit(const FitCommandOptions& o) {
     if (!trace) throw DataError(fmt::format("cannot write trace file '{}'", o.trace));
     options.trace = trace.get();
   }
-  const FitResult result = Fit(std::move(table), *source, *estimator, options);
+  const FitResult result = FitCsvFile(path, csv, *source, *estimator, options);  // streams: constant memory
   if (o.json)
     std::cout << ToJson(result, path, o.split, o.detrend).dump(2) << "\n";
   else
