@@ -59,10 +59,11 @@ class RunningMean {
 // Recursive estimation, one row at a time (rows of one segment, in order).
 class Estimation {
  public:
-  Estimation(DataSource& source, AnyRegressionEstimator& estimator, std::FILE* trace)
+  Estimation(DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options)
       : source_(source),
         estimator_(estimator),
-        trace_(trace),
+        trace_(options.trace),
+        min_information_(options.min_regressor_information),
         z_(source.num_parameters()),
         ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())) {
     source_.Reset();
@@ -104,6 +105,11 @@ class Estimation {
                     "{}: regressor '{}' is identically zero over the estimation part (constant input "
                     "after detrending?); the model is not identifiable",
                     name, names[i]);
+    for (int i = 0; i < rho; ++i)
+      IDENT_REQUIRE(G(i, i) >= min_information_,
+                    "{}: regressor '{}' has sum of squares {:.3g} over the estimation part, too small against the "
+                    "default flat prior (values near 1e-150?); rescale the data or give a prior",
+                    name, names[i], G(i, i));
     IDENT_REQUIRE(scale.allFinite(),
                   "{}: the regressors' sum of squares overflows (values near 1e308?); rescale the data", name);
     const Eigen::MatrixXd C = scale.cwiseInverse().asDiagonal() * G * scale.cwiseInverse().asDiagonal();
@@ -119,6 +125,7 @@ class Estimation {
   DataSource& source_;
   AnyRegressionEstimator& estimator_;
   std::FILE* trace_;
+  double min_information_;
   Eigen::VectorXd z_;
   Eigen::MatrixXd ZtZ_;
   int updates_ = 0, rejected_ = 0;
@@ -196,6 +203,17 @@ class Scoring {
   FitAccumulator one_step_, simulation_;
 };
 
+std::pair<int, int> EstimateRows(const io::DataTable& data, Segment segment, DataSource& source,
+                                 AnyRegressionEstimator& estimator, const FitOptions& options) {
+  Estimation estimation(source, estimator, options);
+  Eigen::VectorXd row(data.values.cols());
+  for (int r = segment.first; r < segment.first + segment.count; ++r) {
+    row = data.values.row(r).transpose();
+    estimation.Row(row, r);
+  }
+  return estimation.Finish(data.source);
+}
+
 FitResult Summarise(const DataSource& source, const AnyRegressionEstimator& estimator, Segment estimation,
                     Segment validation) {
   FitResult result;
@@ -234,13 +252,9 @@ void WriteTraceHeader(std::FILE* trace, int num_parameters) {
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, std::FILE* trace) {
-  Estimation estimation(source, estimator, trace);
-  Eigen::VectorXd row(data.values.cols());
-  for (int r = segment.first; r < segment.first + segment.count; ++r) {
-    row = data.values.row(r).transpose();
-    estimation.Row(row, r);
-  }
-  return estimation.Finish(data.source);
+  FitOptions options;
+  options.trace = trace;
+  return EstimateRows(data, segment, source, estimator, options);
 }
 
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta) {
@@ -256,7 +270,7 @@ FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, 
 FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options) {
   const auto [estimation, validation] = PrepareData(data, source, options);
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
-  const auto [updates, rejected] = Estimate(data, estimation, source, estimator, options.trace);
+  const auto [updates, rejected] = EstimateRows(data, estimation, source, estimator, options);
   FitResult result = Summarise(source, estimator, estimation, validation);
   result.updates = updates;
   result.rejected = rejected;
@@ -315,7 +329,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
 
   // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass.
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
-  Estimation estimating(source, estimator, options.trace);
+  Estimation estimating(source, estimator, options);
   std::unique_ptr<Scoring> scoring;
   FitResult result;
   io::CsvReader reader(path, csv);

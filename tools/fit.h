@@ -35,6 +35,11 @@ struct FitOptions {
   double split = 0.5;                 // fraction of rows for estimation, in (0, 1]
   Detrend detrend = Detrend::kMean;
   std::FILE* trace = nullptr;         // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
+  // Each regressor's Σ z_i² over the estimation part must reach this, else InvalidArgument: the
+  // default flat prior carries information 1e-12 per parameter (RegressionPrior::Flat) and would bias
+  // θ̂ on data of tiny scale (values near 1e-150) by more than 1e-6 relative. 0 disables the check
+  // (the command line does so when an explicit prior is given).
+  double min_regressor_information = 1e-6;
 };
 
 struct FitScores {

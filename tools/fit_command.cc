@@ -86,6 +86,7 @@ void RunFit(const FitCommandOptions& o) {
   FitOptions options;
   options.split = o.split;
   options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  if (settings.prior) options.min_regressor_information = 0;  // the user's prior, the user's scale
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
   if (!o.trace.empty()) {
     trace.reset(std::fopen(o.trace.c_str(), "w"));
