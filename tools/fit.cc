@@ -287,15 +287,16 @@ long CountCsvDataRows(const std::string& path) {
   bool content = false;
   while (in) {
     in.read(block.data(), static_cast<std::streamsize>(block.size()));
-    const std::streamsize got = in.gcount();
-    for (std::streamsize i = 0; i < got; ++i) {
-      const char c = block[static_cast<std::size_t>(i)];
-      if (c == '\n') {
-        lines += content;
-        content = false;
-      } else if (c != ' ' && c != '\t' && c != '\r') {
-        content = true;
-      }
+    const char* p = block.data();
+    const char* const end = p + in.gcount();
+    while (p < end) {
+      const char* newline = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
+      const char* stop = newline ? newline : end;
+      for (; !content && p < stop; ++p) content = *p != ' ' && *p != '\t' && *p != '\r';
+      if (!newline) break;
+      lines += content;
+      content = false;
+      p = newline + 1;
     }
   }
   if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
