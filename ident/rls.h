@@ -135,11 +135,17 @@ class BasicRecursiveLeastSquares {
     return {StepStatus::kUpdated, beta, nu, in.prediction_error};
   }
 
-  // ν > 0 finite, every d_i ≥ d_min and finite, L and Θ̂ finite.
+  // ν > 0 finite, every d_i ≥ d_min and finite, L and Θ̂ finite. Fast path, one vectorised pass:
+  // S = Σ|L_ij| is finite iff L is (barring overflow of the sum), and forward substitution gives
+  // |Θ̂|_1 ≤ (1 + max|L_ij|)^ρ − 1 ≤ (1 + S)^ρ, so S < 2^(1000/ρ) − 1 guarantees a finite Θ̂
+  // (2^1000 < DBL_MAX) without solving. Otherwise L and Θ̂ are checked entry by entry.
   bool Healthy(double d_min) const {
     const auto& f = stats_.factor();
-    return std::isfinite(stats_.nu()) && stats_.nu() > 0 && f.d().allFinite() && f.d().minCoeff() >= d_min &&
-           f.L().allFinite() && stats_.parameters().allFinite();
+    if (!(std::isfinite(stats_.nu()) && stats_.nu() > 0 && f.d().allFinite() && f.d().minCoeff() >= d_min))
+      return false;
+    const double S = f.L().cwiseAbs().sum();
+    if (S < theta_bound_) return true;  // false for S = NaN or Inf too
+    return f.L().allFinite() && stats_.parameters().allFinite();
   }
 
   static const RlsOptions& Checked(int num_parameters, const RlsOptions& options) {
@@ -152,6 +158,8 @@ class BasicRecursiveLeastSquares {
   RegressionPrior prior_;
   ExtendedInformation<kDim> stats_;
   ExtendedInformation<kDim> backup_ = stats_;  // the state before the current step (see Update)
+  // Healthy(): S < 2^(1000/ρ) − 1  ⇔  ρ·log2(1 + S) < 1000.
+  double theta_bound_ = std::exp2(1000.0 / stats_.num_parameters()) - 1;
   LdFactor<kDim> prior_factor_;
   double samples_ = 0;
 };
