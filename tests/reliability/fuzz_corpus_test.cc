@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "fuzz/csv_property.h"
+#include "fuzz/prior_json_property.h"
 #include "fuzz/rls_property.h"
 
 namespace ident::testing {
@@ -34,6 +35,10 @@ int ReplayCorpus(const std::string& target, Property property) {
 
 TEST(FuzzCorpus, CsvReaderPropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("csv_fuzzer", &fuzz::CsvProperty), 10);
+}
+
+TEST(FuzzCorpus, PriorJsonReaderPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("prior_json_fuzzer", &fuzz::PriorJsonProperty), 9);
 }
 
 TEST(FuzzCorpus, RlsPropertiesHoldOnEveryCommittedInput) {
