@@ -1,6 +1,10 @@
 // RecursiveLeastSquares::Update on hostile samples: the state stays finite with D positive, or the
 // step is reported as rejected and leaves the state untouched (findings of fuzz/rls_fuzzer).
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <vector>
 #include <limits>
 #include <random>
 
@@ -9,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "ident/rls.h"
+#include "tests/support/alloc_counter.h"
 
 namespace ident {
 namespace {
@@ -121,6 +126,34 @@ TEST(RlsStepHealth, LargeButRepresentableSamplesGiveTheCorrectEstimate) {
     ASSERT_TRUE(rls.Update(3 * z, Eigen::Matrix<double, 1, 1>(z)).updated()) << t;
   }
   EXPECT_NEAR(rls.parameters()(0), 3.0, 1e-12);
+}
+
+// The safeguards (state copy, health check, rollback) allocate nothing: replay of the fuzz
+// reproducer (ρ = 3, λ = 0.5, raw doubles of mixed scales), which exercises the rollback.
+TEST(RlsStepHealth, SafeguardedStepsAllocateNothing) {
+  std::ifstream in("fuzz/corpus/rls_fuzzer/crash-mixed-scales-d-not-positive", std::ios::binary);
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 3u);
+  ASSERT_EQ(bytes[0] % 6, 2);  // ρ = 3
+  ASSERT_EQ(bytes[1] % 6, 4);  // λ = 0.5
+  RlsOptions options;
+  options.forgetting.factor = 0.5;
+  RecursiveLeastSquares rls(3, options);
+  std::vector<double> values((bytes.size() - 3) / 8);
+  std::memcpy(values.data(), bytes.data() + 3, values.size() * 8);
+  int failures = 0, updates = 0;
+  Eigen::Vector3d z;
+  testing::AllocationCounter counter;
+  for (std::size_t k = 0; k + 4 <= values.size(); k += 4) {
+    z << values[k + 1], values[k + 2], values[k + 3];
+    const StepReport r = rls.Update(values[k], z);
+    failures += r.status == StepStatus::kNumericalFailure;
+    updates += r.updated();
+  }
+  EXPECT_EQ(counter.allocations(), 0);
+  EXPECT_GT(updates, 0);
+  EXPECT_GT(failures, 0);  // the rollback path ran
+  EXPECT_TRUE(Healthy(rls));
 }
 
 }  // namespace
