@@ -26,6 +26,7 @@
 #include "ident/extended_information.h"
 #include "ident/forgetting.h"
 #include "ident/regression_prior.h"
+#include "ident/step_guard.h"
 
 namespace ident {
 
@@ -66,16 +67,16 @@ class BasicRecursiveLeastSquares {
     if (z.size() != num_parameters() || !std::isfinite(y) || !z.allFinite() ||
         !std::isfinite(y * y + z.squaredNorm()))
       return {StepStatus::kRejectedInvalid};
-    backup_ = stats_;
+    guard_.Save(stats_);
     double lambda = options_.forgetting.factor;
     StepReport report = Step(y, z, lambda);
-    if (lambda < 1 && !Healthy(kWindupFloor)) {
-      stats_ = backup_;
+    if (lambda < 1 && !guard_.Healthy(stats_, kWindupFloor)) {
+      guard_.Restore(stats_);
       lambda = 1;
       report = Step(y, z, lambda);
     }
-    if (!Healthy(std::numeric_limits<double>::min())) {
-      stats_ = backup_;
+    if (!guard_.Healthy(stats_)) {
+      guard_.Restore(stats_);
       report.status = StepStatus::kNumericalFailure;
       return report;
     }
@@ -135,19 +136,6 @@ class BasicRecursiveLeastSquares {
     return {StepStatus::kUpdated, beta, nu, in.prediction_error};
   }
 
-  // ν > 0 finite, every d_i ≥ d_min and finite, L and Θ̂ finite. Fast path, one vectorised pass:
-  // S = Σ|L_ij| is finite iff L is (barring overflow of the sum), and forward substitution gives
-  // |Θ̂|_1 ≤ (1 + max|L_ij|)^ρ − 1 ≤ (1 + S)^ρ, so S < 2^(1000/ρ) − 1 guarantees a finite Θ̂
-  // (2^1000 < DBL_MAX) without solving. Otherwise L and Θ̂ are checked entry by entry.
-  bool Healthy(double d_min) const {
-    const auto& f = stats_.factor();
-    if (!(std::isfinite(stats_.nu()) && stats_.nu() > 0 && f.d().allFinite() && f.d().minCoeff() >= d_min))
-      return false;
-    const double S = f.L().cwiseAbs().sum();
-    if (S < theta_bound_) return true;  // false for S = NaN or Inf too
-    return f.L().allFinite() && stats_.parameters().allFinite();
-  }
-
   static const RlsOptions& Checked(int num_parameters, const RlsOptions& options) {
     const std::string error = options.Validate(num_parameters);
     IDENT_REQUIRE(error.empty(), "{}", error);
@@ -157,9 +145,7 @@ class BasicRecursiveLeastSquares {
   RlsOptions options_;
   RegressionPrior prior_;
   ExtendedInformation<kDim> stats_;
-  ExtendedInformation<kDim> backup_ = stats_;  // the state before the current step (see Update)
-  // Healthy(): S < 2^(1000/ρ) − 1  ⇔  ρ·log2(1 + S) < 1000.
-  double theta_bound_ = std::exp2(1000.0 / stats_.num_parameters()) - 1;
+  StepGuard<kDim> guard_{stats_};  // the state before the current step (see Update)
   LdFactor<kDim> prior_factor_;
   double samples_ = 0;
 };
