@@ -20,8 +20,13 @@ if ! command -v "${CXX:-clang++}" >/dev/null; then
   echo "fuzz.sh: ${CXX:-clang++} not found (apt-get install clang libclang-rt-14-dev)" >&2
   exit 1
 fi
-CXX="${CXX:-clang++}" cmake -S "$root/fuzz" -B "$build" -G Ninja >/dev/null
-cmake --build "$build" -j"$jobs" >/dev/null
+mkdir -p "$build"
+if ! { CXX="${CXX:-clang++}" cmake -S "$root/fuzz" -B "$build" -G Ninja && cmake --build "$build" -j"$jobs"; } \
+      >"$build/build.log" 2>&1; then
+  tail -n 30 "$build/build.log" >&2
+  echo "fuzz.sh: building the fuzz targets failed (log: $build/build.log)" >&2
+  exit 1
+fi
 
 if [ "$#" -gt 0 ]; then
   targets=("$@")

@@ -315,7 +315,8 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
   const long rows = CountCsvDataRows(path);
   if (rows == 0) header.Next(row);  // throws "no data rows after the header"
   IDENT_REQUIRE(rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", path, rows);
-  const auto [estimation, validation] = Split(static_cast<int>(rows), source, options, path);
+  const std::pair<Segment, Segment> segments = Split(static_cast<int>(rows), source, options, path);
+  const Segment estimation = segments.first, validation = segments.second;  // captured below (clang 14)
 
   // Pass 2: detrending offsets (estimation-part means of the used columns, NaN = missing skipped).
   Eigen::VectorXd offset = Eigen::VectorXd::Zero(columns);
