@@ -26,6 +26,7 @@
 #include "ident/extended_information.h"
 #include "ident/forgetting.h"
 #include "ident/regression_prior.h"
+#include "ident/step_guard.h"
 
 namespace ident {
 
@@ -53,24 +54,38 @@ class BasicRecursiveLeastSquares {
         prior_factor_(prior_.V0) {}
 
   // One sample. Rejects (state unchanged) a sample with a non-finite entry, a regressor of the
-  // wrong size, or one so large that the update would overflow.
+  // wrong size, or one so large that the update would overflow (kRejectedInvalid).
+  // Safeguards (the state is copied before the step, O(ρ²), allocation-free):
+  //   windup  exponential forgetting without excitation shrinks d geometrically (d ∝ λ^t) until it
+  //           underflows; a step that would leave some d_i below kWindupFloor is taken without
+  //           forgetting (λ = 1 for this step: d then shrinks only as ν/(ν+1)), so the estimator
+  //           neither underflows nor freezes, and recovers as soon as excitation returns;
+  //   health  a step whose result has some d_i not a positive normal number, or L, Θ̂ not finite
+  //           (overflow on samples of wildly mixed scales) is undone: kNumericalFailure.
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     if (z.size() != num_parameters() || !std::isfinite(y) || !z.allFinite() ||
         !std::isfinite(y * y + z.squaredNorm()))
       return {StepStatus::kRejectedInvalid};
-    const double lambda = options_.forgetting.factor;
-    if (options_.forgetting.stabilised)
-      stats_.ForgetStabilised(lambda, prior_.nu0, prior_factor_);
-    else
-      stats_.ForgetExponential(lambda);
-    const double nu = stats_.nu() + 1;
-    const Innovation in = stats_.Prepare(y, z);
-    const double beta = 1 / nu;
-    stats_.Apply(beta, nu);
+    guard_.Save(stats_);
+    double lambda = options_.forgetting.factor;
+    StepReport report = Step(y, z, lambda);
+    if (lambda < 1 && !guard_.Healthy(stats_, kWindupFloor)) {
+      guard_.Restore(stats_);
+      lambda = 1;
+      report = Step(y, z, lambda);
+    }
+    if (!guard_.Healthy(stats_)) {
+      guard_.Restore(stats_);
+      report.status = StepStatus::kNumericalFailure;
+      return report;
+    }
     samples_ = lambda * samples_ + 1;
-    return {StepStatus::kUpdated, beta, nu, in.prediction_error};
+    return report;
   }
+
+  // Below this, d is taken to be winding up under forgetting (see Update); 2^-900 ≈ 1.2e-271.
+  static constexpr double kWindupFloor = 0x1p-900;
 
   int num_parameters() const { return stats_.num_parameters(); }
   const ParamVector& parameters() const { return stats_.parameters(); }
@@ -107,6 +122,20 @@ class BasicRecursiveLeastSquares {
   }
 
  private:
+  // Forgetting with λ, then the RLS step β = 1/ν.
+  template <class Derived>
+  StepReport Step(double y, const Eigen::MatrixBase<Derived>& z, double lambda) {
+    if (options_.forgetting.stabilised)
+      stats_.ForgetStabilised(lambda, prior_.nu0, prior_factor_);
+    else
+      stats_.ForgetExponential(lambda);
+    const double nu = stats_.nu() + 1;
+    const Innovation in = stats_.Prepare(y, z);
+    const double beta = 1 / nu;
+    stats_.Apply(beta, nu);
+    return {StepStatus::kUpdated, beta, nu, in.prediction_error};
+  }
+
   static const RlsOptions& Checked(int num_parameters, const RlsOptions& options) {
     const std::string error = options.Validate(num_parameters);
     IDENT_REQUIRE(error.empty(), "{}", error);
@@ -116,6 +145,7 @@ class BasicRecursiveLeastSquares {
   RlsOptions options_;
   RegressionPrior prior_;
   ExtendedInformation<kDim> stats_;
+  StepGuard<kDim> guard_{stats_};  // the state before the current step (see Update)
   LdFactor<kDim> prior_factor_;
   double samples_ = 0;
 };

@@ -18,6 +18,7 @@ class ArxSource final : public DataSource {
  public:
   ArxSource(int output, std::vector<int> inputs, const models::ArxStructure& arx)
       : output_(output), inputs_(std::move(inputs)), regressor_(arx), u_(inputs_.size()) {}
+  std::unique_ptr<DataSource> Clone() const override { return std::make_unique<ArxSource>(*this); }
   int num_parameters() const override { return regressor_.structure().num_parameters(); }
   std::string structure() const override { return regressor_.structure().ToString(); }
   std::vector<std::string> parameter_names() const override { return regressor_.structure().ParameterNames(); }
@@ -47,6 +48,7 @@ class StaticSource final : public DataSource {
  public:
   StaticSource(int output, std::vector<int> regressors, models::StaticRegression regression)
       : output_(output), columns_(std::move(regressors)), regression_(std::move(regression)), x_(columns_.size()) {}
+  std::unique_ptr<DataSource> Clone() const override { return std::make_unique<StaticSource>(*this); }
   int num_parameters() const override { return regression_.num_parameters(); }
   std::string structure() const override {
     return fmt::format("static({}){}", fmt::join(regression_.regressors, ","), regression_.intercept ? "+intercept" : "");

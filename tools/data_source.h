@@ -22,6 +22,8 @@ namespace ident::tools {
 class DataSource {
  public:
   virtual ~DataSource() = default;
+  // An independent copy (same structure and columns, same walking state).
+  virtual std::unique_ptr<DataSource> Clone() const = 0;
   virtual int num_parameters() const = 0;
   virtual std::string structure() const = 0;              // "ARX(2,2,3)", "static(x1,x2)+intercept"
   virtual std::vector<std::string> parameter_names() const = 0;

@@ -1,6 +1,10 @@
 #include "tools/fit.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <memory>
 
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
@@ -8,11 +12,13 @@
 #include "ident/common/error.h"
 
 namespace ident::tools {
+namespace {
 
-std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options) {
+// The estimation and validation segments of an n-row record; checks they are long enough.
+std::pair<Segment, Segment> Split(int n, const DataSource& source, const FitOptions& options,
+                                  const std::string& name) {
   IDENT_REQUIRE(std::isfinite(options.split) && options.split > 0 && options.split <= 1,
                 "split = {}; need 0 < split <= 1", options.split);
-  const int n = data.num_rows();
   const int n_est = options.split == 1 ? n : static_cast<int>(std::floor(options.split * n));
   const Segment estimation{0, n_est};
   const Segment validation = options.split == 1 ? Segment{0, n} : Segment{n_est, n - n_est};
@@ -21,20 +27,218 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
   IDENT_REQUIRE(estimation.count - t0 >= rho + 1,
                 "{}: the estimation part has {} rows; {} with {} parameters needs at least {} (lower the orders or "
                 "raise --split)",
-                data.source, estimation.count, source.structure(), rho, t0 + rho + 1);
+                name, estimation.count, source.structure(), rho, t0 + rho + 1);
   IDENT_REQUIRE(validation.count - t0 >= 2,
-                "{}: the validation part has {} rows; {} needs at least {} (lower --split)", data.source,
+                "{}: the validation part has {} rows; {} needs at least {} (lower --split)", name,
                 validation.count, source.structure(), t0 + 2);
+  return {estimation, validation};
+}
+
+// Mean of a column's non-missing values, m ← m + (v − m)/k: exact for a constant column even near
+// 1e308, where a plain sum would overflow. 0 for a column with no values.
+class RunningMean {
+ public:
+  void Add(double v) {
+    if (std::isnan(v)) return;
+    ++count_;
+    mean_ += (v - mean_) / static_cast<double>(count_);
+  }
+  double Get(const std::string& source, const std::string& column) const {
+    IDENT_REQUIRE(std::isfinite(mean_),
+                  "{}: the mean of column '{}' overflows (values near 1e308 of both signs); rescale the data or "
+                  "pass --detrend none",
+                  source, column);
+    return mean_;
+  }
+
+ private:
+  long count_ = 0;
+  double mean_ = 0;
+};
+
+// Recursive estimation, one row at a time (rows of one segment, in order).
+class Estimation {
+ public:
+  Estimation(DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options)
+      : source_(source),
+        estimator_(estimator),
+        trace_(options.trace),
+        min_information_(options.min_regressor_information),
+        z_(source.num_parameters()),
+        ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())) {
+    source_.Reset();
+  }
+
+  // `r` is the 0-based row index in the record (the trace prints r + 1).
+  void Row(const Eigen::VectorXd& row, int r) {
+    const double y = row(source_.output_column());
+    if (source_.Regressor(row, z_)) {
+      const StepReport report = estimator_.Update(y, z_);
+      if (report.updated()) {
+        ++updates_;
+        ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);
+        if (trace_) {
+          const Eigen::VectorXd theta = estimator_.parameters();
+          fmt::print(trace_, "{},{:.17g},{:.17g},{:.17g}", r + 1, report.nu, report.weight, report.prediction_error);
+          for (int i = 0; i < theta.size(); ++i) fmt::print(trace_, ",{:.17g}", theta(i));
+          fmt::print(trace_, ",{:.17g}\n", estimator_.Dy());
+        }
+      } else {
+        ++rejected_;
+      }
+    }
+    source_.PushOutput(y);
+  }
+
+  // Identifiability: every regressor must vary and none may be a combination of the others.
+  std::pair<int, int> Finish(const std::string& name) const {
+    const int rho = source_.num_parameters();
+    const std::vector<std::string> names = source_.parameter_names();
+    IDENT_REQUIRE(updates_ > 0,
+                  "{}: none of the {} samples of the estimation part could be used (all missing, or too large: "
+                  "squares beyond 1e308); rescale the data",
+                  name, rejected_);
+    const Eigen::MatrixXd G = ZtZ_.selfadjointView<Eigen::Lower>();
+    const Eigen::VectorXd scale = G.diagonal().cwiseSqrt();
+    for (int i = 0; i < rho; ++i)
+      IDENT_REQUIRE(scale(i) > 0,
+                    "{}: regressor '{}' is identically zero over the estimation part (constant input "
+                    "after detrending?); the model is not identifiable",
+                    name, names[i]);
+    for (int i = 0; i < rho; ++i)
+      IDENT_REQUIRE(G(i, i) >= min_information_,
+                    "{}: regressor '{}' has sum of squares {:.3g} over the estimation part, too small against the "
+                    "default flat prior (values near 1e-150?); rescale the data or give a prior",
+                    name, names[i], G(i, i));
+    IDENT_REQUIRE(scale.allFinite(),
+                  "{}: the regressors' sum of squares overflows (values near 1e308?); rescale the data", name);
+    const Eigen::MatrixXd C = scale.cwiseInverse().asDiagonal() * G * scale.cwiseInverse().asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
+    IDENT_REQUIRE(eig.eigenvalues()(0) > 1e-12 * rho,
+                  "{}: the regressors are collinear over the estimation part (smallest eigenvalue of their "
+                  "correlation matrix {:.3g}); the model is not identifiable",
+                  name, eig.eigenvalues()(0));
+    return {updates_, rejected_};
+  }
+
+ private:
+  DataSource& source_;
+  AnyRegressionEstimator& estimator_;
+  std::FILE* trace_;
+  double min_information_;
+  Eigen::VectorXd z_;
+  Eigen::MatrixXd ZtZ_;
+  int updates_ = 0, rejected_ = 0;
+};
+
+// Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) and RMS, accumulated in one pass (Welford for ‖y − ȳ‖²).
+class FitAccumulator {
+ public:
+  void Add(double y, double yhat) {
+    ++count_;
+    const double delta = y - mean_;
+    mean_ += delta / static_cast<double>(count_);
+    dev_ += delta * (y - mean_);
+    err_ += (y - yhat) * (y - yhat);
+  }
+  long count() const { return count_; }
+  bool finite() const { return std::isfinite(err_) && std::isfinite(dev_); }
+  double Percent() const { return 100.0 * (1.0 - std::sqrt(err_) / std::sqrt(dev_)); }
+  double Rms() const { return std::sqrt(err_ / static_cast<double>(count_)); }
+
+ private:
+  long count_ = 0;
+  double mean_ = 0, dev_ = 0, err_ = 0;
+};
+
+// One-step and simulation scoring of θ, one row at a time (rows of one segment, in order).
+class Scoring {
+ public:
+  Scoring(const DataSource& source, const Eigen::VectorXd& theta)
+      : one_step_source_(source.Clone()),
+        simulation_source_(source.Clone()),
+        theta_(theta),
+        z_(source.num_parameters()),
+        t0_(source.first_regression_index()) {
+    one_step_source_->Reset();
+    simulation_source_->Reset();
+  }
+
+  void Row(const Eigen::VectorXd& row) {
+    const double y = row(one_step_source_->output_column());
+    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) one_step_.Add(y, theta_.dot(z_));
+    one_step_source_->PushOutput(y);
+    if (simulation_source_->dynamic()) {
+      if (simulation_source_->Regressor(row, z_)) {
+        const double yhat = theta_.dot(z_);
+        if (std::isfinite(y) && std::isfinite(yhat)) simulation_.Add(y, yhat);
+        simulation_source_->PushOutput(yhat);
+      } else {
+        simulation_source_->PushOutput(row_ < t0_ ? y : std::nan(""));
+      }
+    }
+    ++row_;
+  }
+
+  FitScores Finish(const std::string& name) const {
+    IDENT_REQUIRE(one_step_.count() >= 2, "{}: fewer than 2 validation samples can be scored", name);
+    IDENT_REQUIRE(one_step_.finite(),
+                  "{}: the validation fit overflows (values or predictions near 1e308); rescale the data", name);
+    FitScores scores;
+    scores.scored = static_cast<int>(one_step_.count());
+    scores.one_step = one_step_.Percent();
+    scores.rms_one_step = one_step_.Rms();
+    if (simulation_source_->dynamic() && simulation_.count() >= 2 && simulation_.finite()) {
+      scores.simulation = simulation_.Percent();
+      scores.rms_simulation = simulation_.Rms();
+    }
+    return scores;
+  }
+
+ private:
+  std::unique_ptr<DataSource> one_step_source_, simulation_source_;
+  Eigen::VectorXd theta_, z_;
+  int t0_;
+  int row_ = 0;
+  FitAccumulator one_step_, simulation_;
+};
+
+std::pair<int, int> EstimateRows(const io::DataTable& data, Segment segment, DataSource& source,
+                                 AnyRegressionEstimator& estimator, const FitOptions& options) {
+  Estimation estimation(source, estimator, options);
+  Eigen::VectorXd row(data.values.cols());
+  for (int r = segment.first; r < segment.first + segment.count; ++r) {
+    row = data.values.row(r).transpose();
+    estimation.Row(row, r);
+  }
+  return estimation.Finish(data.source);
+}
+
+FitResult Summarise(const DataSource& source, const AnyRegressionEstimator& estimator, Segment estimation,
+                    Segment validation) {
+  FitResult result;
+  result.estimator = estimator.name();
+  result.structure = source.structure();
+  result.parameter_names = source.parameter_names();
+  result.theta = estimator.parameters();
+  result.theta_std = estimator.covariance().diagonal().cwiseMax(0).cwiseSqrt();
+  result.noise_std = estimator.noise_std();
+  result.nu = estimator.nu();
+  result.Dy = estimator.Dy();
+  result.samples_estimation = estimation.count;
+  result.samples_validation = validation.count;
+  return result;
+}
+
+}  // namespace
+
+std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options) {
+  const auto [estimation, validation] = Split(data.num_rows(), source, options, data.source);
   if (options.detrend == Detrend::kMean) {
     for (int c : source.used_columns()) {
-      double sum = 0;
-      int count = 0;
-      for (int r = 0; r < n_est; ++r)
-        if (const double v = data.values(r, c); !std::isnan(v)) {
-          sum += v;
-          ++count;
-        }
-      if (count > 0) data.values.col(c).array() -= sum / count;
+      RunningMean mean;
+      for (int r = 0; r < estimation.count; ++r) mean.Add(data.values(r, c));
+      data.values.col(c).array() -= mean.Get(data.source, data.names[c]);
     }
   }
   return {estimation, validation};
@@ -48,122 +252,136 @@ void WriteTraceHeader(std::FILE* trace, int num_parameters) {
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, std::FILE* trace) {
-  const int rho = source.num_parameters();
-  Eigen::VectorXd z(rho);
-  Eigen::MatrixXd ZtZ = Eigen::MatrixXd::Zero(rho, rho);
-  int updates = 0, rejected = 0;
-  source.Reset();
-  for (int r = segment.first; r < segment.first + segment.count; ++r) {
-    const Eigen::VectorXd row = data.values.row(r).transpose();
-    const double y = row(source.output_column());
-    if (source.Regressor(row, z)) {
-      const StepReport report = estimator.Update(y, z);
-      if (report.updated()) {
-        ++updates;
-        ZtZ.selfadjointView<Eigen::Lower>().rankUpdate(z);
-        if (trace) {
-          const Eigen::VectorXd theta = estimator.parameters();
-          fmt::print(trace, "{},{:.17g},{:.17g},{:.17g}", r + 1, report.nu, report.weight, report.prediction_error);
-          for (int i = 0; i < rho; ++i) fmt::print(trace, ",{:.17g}", theta(i));
-          fmt::print(trace, ",{:.17g}\n", estimator.Dy());
-        }
-      } else {
-        ++rejected;
-      }
-    }
-    source.PushOutput(y);
-  }
-  // Identifiability: every regressor must vary and none may be a combination of the others.
-  const std::vector<std::string> names = source.parameter_names();
-  Eigen::MatrixXd G = ZtZ.selfadjointView<Eigen::Lower>();
-  const Eigen::VectorXd scale = G.diagonal().cwiseSqrt();
-  for (int i = 0; i < rho; ++i)
-    IDENT_REQUIRE(scale(i) > 0, "{}: regressor '{}' is identically zero over the estimation part (constant input "
-                  "after detrending?); the model is not identifiable", data.source, names[i]);
-  const Eigen::MatrixXd C = scale.cwiseInverse().asDiagonal() * G * scale.cwiseInverse().asDiagonal();
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
-  IDENT_REQUIRE(eig.eigenvalues()(0) > 1e-12 * rho,
-                "{}: the regressors are collinear over the estimation part (smallest eigenvalue of their "
-                "correlation matrix {:.3g}); the model is not identifiable",
-                data.source, eig.eigenvalues()(0));
-  return {updates, rejected};
+  FitOptions options;
+  options.trace = trace;
+  return EstimateRows(data, segment, source, estimator, options);
 }
 
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta) {
-  const int rho = source.num_parameters();
-  Eigen::VectorXd z(rho);
-  auto fit = [](const std::vector<double>& y, const std::vector<double>& yhat, double& rms) {
-    double mean = 0;
-    for (double v : y) mean += v;
-    mean /= static_cast<double>(y.size());
-    double err = 0, dev = 0;
-    for (std::size_t i = 0; i < y.size(); ++i) {
-      err += (y[i] - yhat[i]) * (y[i] - yhat[i]);
-      dev += (y[i] - mean) * (y[i] - mean);
-    }
-    rms = std::sqrt(err / static_cast<double>(y.size()));
-    return 100.0 * (1.0 - std::sqrt(err) / std::sqrt(dev));
-  };
-  FitScores scores;
-  std::vector<double> y_meas, y_pred;
-  source.Reset();
+  Scoring scoring(source, theta);
+  Eigen::VectorXd row(data.values.cols());
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
-    const Eigen::VectorXd row = data.values.row(r).transpose();
-    const double y = row(source.output_column());
-    if (source.Regressor(row, z) && std::isfinite(y) && z.allFinite()) {
-      y_meas.push_back(y);
-      y_pred.push_back(theta.dot(z));
-    }
-    source.PushOutput(y);
+    row = data.values.row(r).transpose();
+    scoring.Row(row);
   }
-  IDENT_REQUIRE(y_meas.size() >= 2, "{}: fewer than 2 validation samples can be scored", data.source);
-  scores.scored = static_cast<int>(y_meas.size());
-  scores.one_step = fit(y_meas, y_pred, scores.rms_one_step);
-  if (source.dynamic()) {
-    y_meas.clear();
-    y_pred.clear();
-    source.Reset();
-    const int t0 = source.first_regression_index();
-    for (int r = segment.first; r < segment.first + segment.count; ++r) {
-      const Eigen::VectorXd row = data.values.row(r).transpose();
-      const double y = row(source.output_column());
-      if (source.Regressor(row, z)) {
-        const double yhat = theta.dot(z);
-        if (std::isfinite(y) && std::isfinite(yhat)) {
-          y_meas.push_back(y);
-          y_pred.push_back(yhat);
-        }
-        source.PushOutput(yhat);
-      } else {
-        source.PushOutput(r - segment.first < t0 ? y : std::nan(""));
-      }
-    }
-    if (y_meas.size() >= 2) {
-      double rms = 0;
-      scores.simulation = fit(y_meas, y_pred, rms);
-      scores.rms_simulation = rms;
-    }
-  }
-  return scores;
+  return scoring.Finish(data.source);
 }
 
 FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options) {
   const auto [estimation, validation] = PrepareData(data, source, options);
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
-  FitResult result;
-  std::tie(result.updates, result.rejected) = Estimate(data, estimation, source, estimator, options.trace);
-  result.estimator = estimator.name();
-  result.structure = source.structure();
-  result.parameter_names = source.parameter_names();
-  result.theta = estimator.parameters();
-  result.theta_std = estimator.covariance().diagonal().cwiseMax(0).cwiseSqrt();
-  result.noise_std = estimator.noise_std();
-  result.nu = estimator.nu();
-  result.Dy = estimator.Dy();
-  result.samples_estimation = estimation.count;
-  result.samples_validation = validation.count;
+  const auto [updates, rejected] = EstimateRows(data, estimation, source, estimator, options);
+  FitResult result = Summarise(source, estimator, estimation, validation);
+  result.updates = updates;
+  result.rejected = rejected;
   result.validation = Score(data, validation, source, result.theta);
   return result;
+}
+
+long CountCsvDataRows(const std::string& path) {
+  std::ifstream in(path, std::ios::in | std::ios::binary);
+  if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  // A line counts if it has a character other than ' ', '\t', '\r' (the reader skips the others).
+  std::vector<char> block(1 << 16);
+  long lines = 0;
+  bool content = false;
+  while (in) {
+    in.read(block.data(), static_cast<std::streamsize>(block.size()));
+    const char* p = block.data();
+    const char* const end = p + in.gcount();
+    while (p < end) {
+      const char* newline = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
+      const char* stop = newline ? newline : end;
+      for (; !content && p < stop; ++p) content = *p != ' ' && *p != '\t' && *p != '\r';
+      if (!newline) break;
+      lines += content;
+      content = false;
+      p = newline + 1;
+    }
+  }
+  if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
+  lines += content;
+  return lines > 0 ? lines - 1 : 0;  // minus the header
+}
+
+namespace {
+
+FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                        AnyRegressionEstimator& estimator, const FitOptions& options) {
+  // Pass 1: the header, then the number of rows (the rows are parsed and checked by the passes below).
+  io::CsvReader header(path, csv);
+  const int columns = header.num_columns();
+  Eigen::VectorXd row(columns);
+  const long rows = CountCsvDataRows(path);
+  if (rows == 0) header.Next(row);  // throws "no data rows after the header"
+  IDENT_REQUIRE(rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", path, rows);
+  const std::pair<Segment, Segment> segments = Split(static_cast<int>(rows), source, options, path);
+  const Segment estimation = segments.first, validation = segments.second;  // captured below (clang 14)
+
+  // Pass 2: detrending offsets (estimation-part means of the used columns, NaN = missing skipped).
+  Eigen::VectorXd offset = Eigen::VectorXd::Zero(columns);
+  if (options.detrend == Detrend::kMean) {
+    std::vector<RunningMean> means(columns);
+    io::CsvReader reader(path, csv);
+    const std::vector<int> used = source.used_columns();
+    for (int r = 0; r < estimation.count && reader.Next(row); ++r)
+      for (int c : used) means[c].Add(row(c));
+    for (int c : used) offset(c) = means[c].Get(path, header.names()[c]);
+  }
+
+  // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass.
+  if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
+  Estimation estimating(source, estimator, options);
+  std::unique_ptr<Scoring> scoring;
+  FitResult result;
+  io::CsvReader reader(path, csv);
+  int r = 0;
+  auto finish_estimation = [&] {
+    std::tie(result.updates, result.rejected) = estimating.Finish(path);
+    const int updates = result.updates, rejected = result.rejected;
+    result = Summarise(source, estimator, estimation, validation);
+    result.updates = updates;
+    result.rejected = rejected;
+    scoring = std::make_unique<Scoring>(source, result.theta);
+  };
+  while (reader.Next(row)) {
+    row -= offset;
+    if (r == estimation.count) finish_estimation();
+    if (r < estimation.count)
+      estimating.Row(row, r);
+    else
+      scoring->Row(row);
+    ++r;
+  }
+  IDENT_REQUIRE(r == rows, "{}: {} rows were counted but {} read (file changed while reading?)", path, rows, r);
+  if (!scoring) {
+    // Pass 4 (split = 1): score the whole record.
+    finish_estimation();
+    io::CsvReader again(path, csv);
+    while (again.Next(row)) {
+      row -= offset;
+      scoring->Row(row);
+    }
+  }
+  result.validation = scoring->Finish(path);
+  return result;
+}
+
+}  // namespace
+
+FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                     AnyRegressionEstimator& estimator, const FitOptions& options) {
+  try {
+    return StreamCsvFile(path, csv, source, estimator, options);
+  } catch (const InvalidArgument&) {
+    // A bad row later in the file is the real problem (e.g. a ragged row makes the record look too
+    // short): report the data error first, as reading the whole table up front would.
+    io::CsvReader reader(path, csv);
+    Eigen::VectorXd row(reader.num_columns());
+    while (reader.Next(row)) {
+    }
+    throw;
+  }
 }
 
 }  // namespace ident::tools

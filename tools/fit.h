@@ -1,4 +1,5 @@
-// The `ident fit` workflow on a table in memory: split, detrend, estimate recursively, score.
+// The `ident fit` workflow: split, detrend, estimate recursively, score — on a table in memory (Fit)
+// or streamed from a CSV file in constant memory (FitCsvFile).
 //
 // Protocol (datasets/README.md): the first ⌊split·N⌋ rows estimate, the rest validate (split = 1:
 // estimate and validate on the whole record). Detrend "mean" subtracts the estimation-part mean of
@@ -6,6 +7,13 @@
 // Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) over the scored validation samples (t ≥ t0 of the segment; ȳ their
 // mean); "one-step" uses measured past outputs, "simulation" (ARX only) feeds back the model's own
 // output after the first t0 measured samples.
+//
+// Streaming (FitCsvFile), memory independent of the number of rows:
+//   pass 1  count the data rows (non-blank lines after the header; no number parsing)
+//   pass 2  detrend "mean": the estimation-part means of the used columns (reads ⌊split·N⌋ rows)
+//   pass 3  estimate on rows 1..⌊split·N⌋, then score on the rest in the same pass (split < 1);
+//           with split = 1 a fourth pass scores the whole record.
+// It gives the same numbers as Fit(ReadCsv(path)) up to rounding in the fit-% sums.
 #pragma once
 
 #include <cstdio>
@@ -27,6 +35,11 @@ struct FitOptions {
   double split = 0.5;                 // fraction of rows for estimation, in (0, 1]
   Detrend detrend = Detrend::kMean;
   std::FILE* trace = nullptr;         // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
+  // Each regressor's Σ z_i² over the estimation part must reach this, else InvalidArgument: the
+  // default flat prior carries information 1e-12 per parameter (RegressionPrior::Flat) and would bias
+  // θ̂ on data of tiny scale (values near 1e-150) by more than 1e-6 relative. 0 disables the check
+  // (the command line does so when an explicit prior is given).
+  double min_regressor_information = 1e-6;
 };
 
 struct FitScores {
@@ -70,6 +83,15 @@ FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, 
 
 // PrepareData + Estimate + Score.
 FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options);
+
+// The same on a CSV file, streamed (see above). `source` must have been built for the file's columns.
+// Throws DataError for unreadable/bad data (file:line:column), InvalidArgument as Fit does.
+FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                     AnyRegressionEstimator& estimator, const FitOptions& options);
+
+// Number of data rows of a CSV file: non-blank lines after the first non-blank (header) line.
+// Reads the file in blocks without parsing numbers. Throws DataError if it cannot be read.
+long CountCsvDataRows(const std::string& path);
 
 // Writes the trace header: t,nu,beta,pred_err,theta1..thetaρ,Dy
 void WriteTraceHeader(std::FILE* trace, int num_parameters);

@@ -79,20 +79,21 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
 
 void RunFit(const FitCommandOptions& o) {
   const std::string path = ResolveDataPath(o.data);
-  io::DataTable table = io::ReadCsv(path, {.missing_as_nan = o.missing});
-  std::unique_ptr<DataSource> source = o.structure.MakeSource(table.names, path);
+  const io::CsvOptions csv{.missing_as_nan = o.missing};
+  std::unique_ptr<DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
   const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
   std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
   FitOptions options;
   options.split = o.split;
   options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  if (settings.prior) options.min_regressor_information = 0;  // the user's prior, the user's scale
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
   if (!o.trace.empty()) {
     trace.reset(std::fopen(o.trace.c_str(), "w"));
     if (!trace) throw DataError(fmt::format("cannot write trace file '{}'", o.trace));
     options.trace = trace.get();
   }
-  const FitResult result = Fit(std::move(table), *source, *estimator, options);
+  const FitResult result = FitCsvFile(path, csv, *source, *estimator, options);  // streams: constant memory
   if (o.json)
     std::cout << ToJson(result, path, o.split, o.detrend).dump(2) << "\n";
   else

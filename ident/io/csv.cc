@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <limits>
 
 #include <fmt/format.h>
@@ -45,11 +47,22 @@ bool IsBlank(std::string_view line) { return Trim(line).empty(); }
 CsvReader::CsvReader(const std::string& path, const CsvOptions& options) : path_(path), options_(options) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw DataError(fmt::format("cannot read '{}': it is a directory", path));
-  in_.open(path, std::ios::in | std::ios::binary);
-  if (!in_) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  in_ = std::make_unique<std::ifstream>(path, std::ios::in | std::ios::binary);
+  if (!*in_) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  ReadHeader();
+}
+
+CsvReader::CsvReader(std::unique_ptr<std::istream> in, const std::string& source, const CsvOptions& options)
+    : path_(source), options_(options), in_(std::move(in)) {
+  IDENT_REQUIRE(in_ != nullptr, "CSV input stream for '{}' is null", source);
+  ReadHeader();
+}
+
+void CsvReader::ReadHeader() {
+  const std::string& path = path_;
   // Header: the first non-blank line.
   bool got_header = false;
-  while (std::getline(in_, buffer_)) {
+  while (std::getline(*in_, buffer_)) {
     ++line_;
     if (line_ == 1 && buffer_.starts_with("\xEF\xBB\xBF")) buffer_.erase(0, 3);
     if (!IsBlank(buffer_)) {
@@ -58,7 +71,7 @@ CsvReader::CsvReader(const std::string& path, const CsvOptions& options) : path_
     }
   }
   if (!got_header) {
-    if (in_.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
+    if (in_->bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
     throw DataError(fmt::format("{}: the file is empty", path));
   }
   std::vector<std::string_view> fields;
@@ -84,7 +97,7 @@ int CsvReader::ColumnIndex(std::string_view name) const {
 bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
   IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(),
                 num_columns());
-  while (std::getline(in_, buffer_)) {
+  while (std::getline(*in_, buffer_)) {
     ++line_;
     if (IsBlank(buffer_)) continue;
     // Parse in place without allocating: walk the fields.
@@ -133,7 +146,7 @@ bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
     ++rows_;
     return true;
   }
-  if (in_.bad()) throw DataError(fmt::format("{}:{}: read error", path_, line_));
+  if (in_->bad()) throw DataError(fmt::format("{}:{}: read error", path_, line_));
   if (rows_ == 0) throw DataError(fmt::format("{}: no data rows after the header", path_));
   return false;
 }
@@ -144,10 +157,11 @@ int DataTable::ColumnIndex(std::string_view name) const {
   ThrowUnknownColumn(source, name, names);
 }
 
-DataTable ReadCsv(const std::string& path, const CsvOptions& options) {
-  CsvReader reader(path, options);
+namespace {
+
+DataTable ReadAll(CsvReader& reader) {
   DataTable table;
-  table.source = path;
+  table.source = reader.path();
   table.names = reader.names();
   const int n = reader.num_columns();
   std::vector<double> data;
@@ -156,6 +170,18 @@ DataTable ReadCsv(const std::string& path, const CsvOptions& options) {
   const Eigen::Index rows = static_cast<Eigen::Index>(data.size()) / n;
   table.values = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(data.data(), rows, n);
   return table;
+}
+
+}  // namespace
+
+DataTable ReadCsv(const std::string& path, const CsvOptions& options) {
+  CsvReader reader(path, options);
+  return ReadAll(reader);
+}
+
+DataTable ParseCsv(std::string_view text, const std::string& source, const CsvOptions& options) {
+  CsvReader reader(std::make_unique<std::istringstream>(std::string(text)), source, options);
+  return ReadAll(reader);
 }
 
 }  // namespace ident::io

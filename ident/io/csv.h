@@ -18,9 +18,11 @@
 //   Eigen::VectorXd row(reader.num_columns());
 //   while (reader.Next(row)) { ... }
 //   ident::io::DataTable table = ident::io::ReadCsv("datasets/dryer.csv");   // whole file
+//   ident::io::DataTable t = ident::io::ParseCsv("u,y\n1,2\n", "<text>");   // text in memory
 #pragma once
 
-#include <fstream>
+#include <istream>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,6 +40,8 @@ class CsvReader {
  public:
   // Opens the file and reads the header. Throws DataError.
   explicit CsvReader(const std::string& path, const CsvOptions& options = {});
+  // Reads from `in`; `source` names it in messages (as the path does for files). Throws DataError.
+  CsvReader(std::unique_ptr<std::istream> in, const std::string& source, const CsvOptions& options = {});
 
   const std::string& path() const { return path_; }
   const std::vector<std::string>& names() const { return names_; }
@@ -54,7 +58,9 @@ class CsvReader {
  private:
   std::string path_;
   CsvOptions options_;
-  std::ifstream in_;
+  void ReadHeader();
+
+  std::unique_ptr<std::istream> in_;
   std::vector<std::string> names_;
   std::string buffer_;
   long line_ = 0;
@@ -75,6 +81,8 @@ struct DataTable {
 
 // Reads the whole file. Throws DataError.
 DataTable ReadCsv(const std::string& path, const CsvOptions& options = {});
+// Parses CSV text held in memory; `source` names it in messages. Throws DataError.
+DataTable ParseCsv(std::string_view text, const std::string& source, const CsvOptions& options = {});
 
 // "<source>: no column 'q' (columns: t, u, y)" (shared by CsvReader and DataTable).
 [[noreturn]] void ThrowUnknownColumn(const std::string& source, std::string_view name,

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets under fuzz/ (clang, ASan+UBSan) and runs each one for a bounded time
+# on a copy of its committed seed corpus. Fails (exit 1) if any target finds a crash, leak, timeout
+# or property violation; the reproducer is left in $IDENT_FUZZ_OUT/<target>/ (artifact prefix).
+#
+#   .ci/fuzz.sh                      every target, 60 s each
+#   IDENT_FUZZ_SECONDS=10 .ci/fuzz.sh csv_fuzzer rls_fuzzer
+#
+# Environment: IDENT_FUZZ_SECONDS (default 60) per target, IDENT_FUZZ_BUILD (default build-fuzz),
+# IDENT_FUZZ_OUT (default $IDENT_FUZZ_BUILD/runs), CXX (default clang++), IDENT_FUZZ_JOBS (default 2).
+# Prints one summary line per target: name, executions, corpus size, result.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+seconds="${IDENT_FUZZ_SECONDS:-60}"
+build="${IDENT_FUZZ_BUILD:-$root/build-fuzz}"
+out="${IDENT_FUZZ_OUT:-$build/runs}"
+jobs="${IDENT_FUZZ_JOBS:-2}"
+
+if ! command -v "${CXX:-clang++}" >/dev/null; then
+  echo "fuzz.sh: ${CXX:-clang++} not found (apt-get install clang libclang-rt-14-dev)" >&2
+  exit 1
+fi
+mkdir -p "$build"
+if ! { CXX="${CXX:-clang++}" cmake -S "$root/fuzz" -B "$build" -G Ninja && cmake --build "$build" -j"$jobs"; } \
+      >"$build/build.log" 2>&1; then
+  tail -n 30 "$build/build.log" >&2
+  echo "fuzz.sh: building the fuzz targets failed (log: $build/build.log)" >&2
+  exit 1
+fi
+
+if [ "$#" -gt 0 ]; then
+  targets=("$@")
+else
+  targets=()
+  for src in "$root"/fuzz/*_fuzzer.cc; do targets+=("$(basename "$src" .cc)"); done
+fi
+
+failed=0
+total=0
+for t in "${targets[@]}"; do
+  work="$out/$t"
+  rm -rf "$work" && mkdir -p "$work/corpus"
+  seeds="$root/fuzz/corpus/$t"
+  [ -d "$seeds" ] && cp -r "$seeds"/. "$work/corpus/"
+  log="$work/log.txt"
+  status=ok
+  # -timeout: one input taking > 10 s is a hang; -rss_limit_mb: runaway memory is a finding.
+  if ! "$build/$t" "$work/corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+        -artifact_prefix="$work/" -print_final_stats=1 >"$log" 2>&1; then
+    status="FAILED (see $log)"
+    failed=1
+  fi
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+  total=$((total + ${execs:-0}))
+  corpus=$(ls "$work/corpus" | wc -l)
+  printf '%-24s %12s execs  corpus %5s  %s\n' "$t" "${execs:-0}" "$corpus" "$status"
+done
+printf '%-24s %12s execs  findings: %s\n' "total" "$total" "$([ $failed = 0 ] && echo none || echo YES)"
+exit $failed

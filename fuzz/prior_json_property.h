@@ -1,0 +1,46 @@
+// Property of the prior-file reader tools::ReadPriorJson (the tool layer's JSON reader; the
+// MODEL.json reader gets the same treatment once it lands) on arbitrary bytes.
+// Input: 1 byte ρ (1..4), then the file's bytes (written to a temporary file).
+// Holds if: nothing but ident::DataError is thrown, and a returned prior has ν0 > 0 finite and a
+// (ρ+1)x(ρ+1) V0 that factorises as symmetric positive definite.
+#pragma once
+
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include "ident/common/error.h"
+#include "ident/ld_factor.h"
+#include "tools/estimator_options.h"
+
+namespace ident::fuzz {
+
+inline std::string PriorJsonProperty(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return {};
+  const int rho = 1 + data[0] % 4;
+  static const std::string path = "/tmp/ident_prior_fuzz_" + std::to_string(::getpid()) + ".json";
+  if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
+    std::fwrite(data + 1, 1, size - 1, f);
+    std::fclose(f);
+  } else {
+    return {};  // cannot write the temporary file: nothing to test
+  }
+  try {
+    const RegressionPrior prior = tools::ReadPriorJson(path, rho);
+    if (!(std::isfinite(prior.nu0) && prior.nu0 > 0)) return "nu0 is positive and finite";
+    if (prior.V0.rows() != rho + 1 || prior.V0.cols() != rho + 1) return "V0 has the model's size";
+    try {
+      LdFactor<> check(prior.V0);
+    } catch (const InvalidArgument&) {
+      return "V0 is symmetric positive definite";
+    }
+  } catch (const DataError&) {
+    // the expected answer to a bad file: one line naming it
+  }
+  return {};
+}
+
+}  // namespace ident::fuzz

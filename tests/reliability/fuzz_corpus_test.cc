@@ -1,0 +1,49 @@
+// Replays every committed fuzz corpus input (fuzz/corpus/<target>/, including the reproducers of
+// past findings) through the same property checks the libFuzzer targets use, so the ordinary test
+// suite (and its ASan+UBSan build) guards against regressions without clang.
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "fuzz/csv_property.h"
+#include "fuzz/prior_json_property.h"
+#include "fuzz/rls_property.h"
+
+namespace ident::testing {
+namespace {
+
+using Property = std::string (*)(const std::uint8_t*, std::size_t);
+
+// Runs `property` on every file of fuzz/corpus/<target>; returns how many there were.
+int ReplayCorpus(const std::string& target, Property property) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path("fuzz/corpus") / target;
+  EXPECT_TRUE(fs::is_directory(dir)) << dir;
+  int count = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    std::ifstream in(entry.path(), std::ios::binary);
+    const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(property(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()), "") << entry.path();
+    ++count;
+  }
+  return count;
+}
+
+TEST(FuzzCorpus, CsvReaderPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("csv_fuzzer", &fuzz::CsvProperty), 10);
+}
+
+TEST(FuzzCorpus, PriorJsonReaderPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("prior_json_fuzzer", &fuzz::PriorJsonProperty), 9);
+}
+
+TEST(FuzzCorpus, RlsPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("rls_fuzzer", &fuzz::RlsProperty), 7);
+}
+
+}  // namespace
+}  // namespace ident::testing
