@@ -47,7 +47,8 @@ void WriteTraceHeader(std::FILE* trace, int num_parameters) {
 }
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace) {
+                             AnyRegressionEstimator& estimator, std::FILE* trace,
+                             const OutlierDecision& decision) {
   const int rho = source.num_parameters();
   Eigen::VectorXd z(rho);
   Eigen::MatrixXd ZtZ = Eigen::MatrixXd::Zero(rho, rho);
@@ -56,8 +57,15 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
     const Eigen::VectorXd row = data.values.row(r).transpose();
     const double y = row(source.output_column());
+    bool flagged = false;
+    double y_hat = std::nan(""), scale = std::nan("");
     if (source.Regressor(row, z)) {
       const StepReport report = estimator.Update(y, z);
+      flagged = decision.Flags(report);
+      if (flagged) {
+        y_hat = y - report.prediction_error;
+        scale = estimator.noise_std();
+      }
       if (report.updated()) {
         ++updates;
         ZtZ.selfadjointView<Eigen::Lower>().rankUpdate(z);
@@ -71,7 +79,7 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
         ++rejected;
       }
     }
-    source.PushOutput(y);
+    source.PushCheckedOutput(y, y_hat, scale, flagged);
   }
   // Identifiability: every regressor must vary and none may be a combination of the others.
   const std::vector<std::string> names = source.parameter_names();
@@ -151,7 +159,9 @@ FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& es
   const auto [estimation, validation] = PrepareData(data, source, options);
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
   FitResult result;
-  std::tie(result.updates, result.rejected) = Estimate(data, estimation, source, estimator, options.trace);
+  std::tie(result.updates, result.rejected) =
+      Estimate(data, estimation, source, estimator, options.trace, options.decision);
+  result.cleaned = source.cleaned();
   result.estimator = estimator.name();
   result.structure = source.structure();
   result.parameter_names = source.parameter_names();

@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 
 #include "ident/io/csv.h"
+#include "ident/outlier_decision.h"
 #include "ident/regression_estimator.h"
 #include "tools/data_source.h"
 
@@ -27,6 +28,7 @@ struct FitOptions {
   double split = 0.5;                 // fraction of rows for estimation, in (0, 1]
   Detrend detrend = Detrend::kMean;
   std::FILE* trace = nullptr;         // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
+  OutlierDecision decision;           // which updates count as outliers for regressor cleaning
 };
 
 struct FitScores {
@@ -46,6 +48,7 @@ struct FitResult {
   double nu = 0, Dy = 0;
   int samples_estimation = 0, samples_validation = 0;
   int updates = 0, rejected = 0;      // estimator steps taken / rejected (missing or invalid samples)
+  long cleaned = 0;                   // outputs cleaned in later regressors (--clean-regressors on)
   FitScores validation;
 };
 
@@ -60,10 +63,13 @@ struct Segment {
 std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options);
 
 // Runs the estimator over the segment (one Update per regression), writing trace rows if asked.
+// Each measured output is then stored for later regressors through source.PushCheckedOutput with
+// the one-step prediction, the estimator's noise scale and decision.Flags(report).
 // Returns the number of updates and rejected steps. Throws InvalidArgument if the regressors of the
 // segment are constant or collinear (the model is not identifiable from them).
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace);
+                             AnyRegressionEstimator& estimator, std::FILE* trace,
+                             const OutlierDecision& decision = {});
 
 // One-step and (for dynamic sources) simulation scores of parameters θ on the segment.
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta);

@@ -64,6 +64,7 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
   else
     fmt::print("estimation rows 1-{} ({} updates", r.samples_estimation, r.updates);
   if (r.rejected) fmt::print(", {} samples rejected as missing/invalid", r.rejected);
+  if (r.cleaned) fmt::print(", {} outputs cleaned in later regressors", r.cleaned);
   fmt::print(")");
   if (o.split != 1)
     fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
@@ -86,6 +87,7 @@ void RunFit(const FitCommandOptions& o) {
   FitOptions options;
   options.split = o.split;
   options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  options.decision = o.structure.Decision();
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
   if (!o.trace.empty()) {
     trace.reset(std::fopen(o.trace.c_str(), "w"));
