@@ -207,6 +207,7 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
     score.estimator = labels[e];
     score.theta = theta_sum[e] / options.trials;
     score.one_step = Spread::Of(one_step[e]);
+    score.one_step_per_trial = one_step[e];
     score.has_simulation = !simulation[e].empty();
     score.simulation = Spread::Of(simulation[e]);
     score.theta_distance = Spread::Of(distance[e]);

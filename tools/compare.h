@@ -61,6 +61,7 @@ struct EstimatorScore {
   std::string estimator;           // as given ("student:3")
   Eigen::VectorXd theta;           // mean over trials
   Spread one_step, simulation, theta_distance;
+  std::vector<double> one_step_per_trial;
   bool has_simulation = false;
   double ns_per_update = 0;        // median over trials
   double cleaned = 0;              // mean number of outputs cleaned in the regressors

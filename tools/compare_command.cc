@@ -17,6 +17,7 @@
 #include "tools/compare.h"
 #include "tools/dataset_index.h"
 #include "tools/estimator_options.h"
+#include "tools/gnuplot.h"
 #include "tools/structure_options.h"
 
 namespace ident::tools {
@@ -32,7 +33,24 @@ struct CompareCommandOptions {
   std::optional<double> split;
   std::string detrend;
   bool json = false, csv = false;
+  std::string plot;
 };
+
+// One-step validation fit per trial seed, one line per estimator, and the clean LS level.
+void PlotCompare(const std::string& path, const CompareResult& r, const OutlierSpec& spec) {
+  PlotPanel panel{fmt::format("{}: one-step validation fit per outlier seed", r.structure), "seed", "fit %", {}};
+  std::vector<double> seeds;
+  const std::size_t trials = r.scores.empty() ? 0 : r.scores[0].one_step_per_trial.size();
+  for (std::size_t i = 0; i < trials; ++i) seeds.push_back(static_cast<double>(spec.seed + i));
+  if (trials == 1) seeds.push_back(static_cast<double>(spec.seed) + 1);  // a visible segment for one trial
+  panel.series.push_back({"clean-data least squares", seeds, std::vector<double>(seeds.size(), r.reference.one_step)});
+  for (const EstimatorScore& s : r.scores) {
+    std::vector<double> fit = s.one_step_per_trial;
+    if (trials == 1) fit.push_back(fit[0]);
+    panel.series.push_back({s.estimator, seeds, fit});
+  }
+  RenderPlot(path, {panel});
+}
 
 nlohmann::ordered_json Number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); }
 
@@ -162,6 +180,7 @@ void RunCompare(CompareCommandOptions& o) {
   if (isatty(STDERR_FILENO)) options.progress = ProgressBar;
   const CompareResult result = Compare(std::move(table), *source, settings, o.estimators, options);
   const std::string name = dataset ? dataset->name : path;
+  if (!o.plot.empty()) PlotCompare(o.plot, result, spec);
   if (o.json)
     std::cout << ToJson(result, path, spec, o.trials, structure.clean_regressors).dump(2) << "\n";
   else if (o.csv)
@@ -192,6 +211,7 @@ void AddCompareCommand(CLI::App& app) {
   cmd->add_option("--split", o->split, "Fraction of rows used for estimation (default: the dataset's, else 0.5)");
   cmd->add_option("--detrend", o->detrend, "Subtract the estimation-part means (mean) or not (none)")
       ->check(CLI::IsMember({"mean", "none"}));
+  cmd->add_option("--plot", o->plot, "Draw the one-step fit per trial and estimator into FILE.svg or FILE.png");
   auto* json = cmd->add_flag("--json", o->json, "Print one JSON object (schema in docs/practice.md)");
   cmd->add_flag("--csv", o->csv, "Print one CSV row per estimator")->excludes(json);
   cmd->callback([o] { RunCompare(*o); });

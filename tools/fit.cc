@@ -48,7 +48,8 @@ void WriteTraceHeader(std::FILE* trace, int num_parameters) {
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, std::FILE* trace,
-                             const OutlierDecision& decision) {
+                             const OutlierDecision& decision,
+                             const std::function<void(int row, const AnyRegressionEstimator&)>& on_update) {
   const int rho = source.num_parameters();
   Eigen::VectorXd z(rho);
   Eigen::MatrixXd ZtZ = Eigen::MatrixXd::Zero(rho, rho);
@@ -69,6 +70,7 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
       if (report.updated()) {
         ++updates;
         ZtZ.selfadjointView<Eigen::Lower>().rankUpdate(z);
+        if (on_update) on_update(r, estimator);
         if (trace) {
           const Eigen::VectorXd theta = estimator.parameters();
           fmt::print(trace, "{},{:.17g},{:.17g},{:.17g}", r + 1, report.nu, report.weight, report.prediction_error);
@@ -160,7 +162,7 @@ FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& es
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
   FitResult result;
   std::tie(result.updates, result.rejected) =
-      Estimate(data, estimation, source, estimator, options.trace, options.decision);
+      Estimate(data, estimation, source, estimator, options.trace, options.decision, options.on_update);
   result.cleaned = source.cleaned();
   result.estimator = estimator.name();
   result.structure = source.structure();

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,8 @@ struct FitOptions {
   Detrend detrend = Detrend::kMean;
   std::FILE* trace = nullptr;         // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
   OutlierDecision decision;           // which updates count as outliers for regressor cleaning
+  // If set: called after every estimator update with the (0-based) row (e.g. for parameter plots).
+  std::function<void(int row, const AnyRegressionEstimator&)> on_update;
 };
 
 struct FitScores {
@@ -69,7 +72,8 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
 // segment are constant or collinear (the model is not identifiable from them).
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, std::FILE* trace,
-                             const OutlierDecision& decision = {});
+                             const OutlierDecision& decision = {},
+                             const std::function<void(int row, const AnyRegressionEstimator&)>& on_update = {});
 
 // One-step and (for dynamic sources) simulation scores of parameters θ on the segment.
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta);
