@@ -1,5 +1,6 @@
 // `ident compare`: seeded outlier injection, the scoring protocol, JSON/CSV schema and bad input.
 #include <cmath>
+#include <map>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -127,15 +128,41 @@ TEST(CompareCommand, DryerDefaultsAreArx223WithFivePercentOutliersOfTwentySigma)
   EXPECT_GT(rls, 80);
 }
 
+bool CauchyRegistered() {
+  const std::vector<std::string> names = RegressionEstimatorNames();
+  return std::find(names.begin(), names.end(), "cauchy") != names.end();
+}
+
+// Issue 6, item 8: on dryer with 5 % outliers of 20σ the Cauchy estimator's validation fit stays
+// within 2 points of clean-data RLS while RLS loses at least 5. Over 10 seeds, worst case.
 TEST(CompareCommand, CauchyStaysWithinTwoPointsOfCleanRlsWhileRlsLosesFive) {
-  if (RegressionEstimatorNames() == std::vector<std::string>{"rls"}) GTEST_SKIP() << "TEMPORARY until cauchy lands";
-  const nlohmann::json j = CompareJson("dryer --estimators rls,cauchy,student:3 --trials 5");
+  // TEMPORARY guard until the cauchy estimator (issue 3) is on main; to be removed then.
+  if (!CauchyRegistered()) GTEST_SKIP() << "cauchy is not registered on this branch yet";
+  const nlohmann::json j = CompareJson("dryer --estimators rls,cauchy,student:3 --trials 10");
   const double clean = j["reference"]["fit_percent"]["one_step"];
-  std::map<std::string, double> fit;
-  for (const auto& e : j["estimators"]) fit[e["estimator"]] = e["spread"]["fit_one_step"]["min"];
-  EXPECT_GE(fit["cauchy"], clean - 2);
-  EXPECT_LE(j["estimators"].back()["estimator"] == "rls" ? fit["rls"] : 1e9, clean - 5);
-  EXPECT_EQ(j["estimators"][0]["estimator"] == "rls", false);  // sorted best first: a robust one wins
+  EXPECT_NEAR(clean, 95.04, 0.005);  // datasets/README.md
+  std::map<std::string, nlohmann::json> by_name;
+  for (const auto& e : j["estimators"]) by_name[e["estimator"]] = e["spread"]["fit_one_step"];
+  EXPECT_GE(by_name["cauchy"]["min"].get<double>(), clean - 2);
+  EXPECT_LE(by_name["rls"]["max"].get<double>(), clean - 5);
+  EXPECT_EQ(j["estimators"][0]["estimator"], "cauchy");  // sorted best first
+}
+
+// Item 5: regressor cleaning is on by default because over many seeds it never made a robust
+// estimator worse in the worst case; here 10 seeds on dryer, off vs on.
+TEST(CompareCommand, RegressorCleaningImprovesCauchyOnDryer) {
+  if (!CauchyRegistered()) GTEST_SKIP() << "cauchy is not registered on this branch yet";  // TEMPORARY
+  const nlohmann::json off = CompareJson("dryer --estimators cauchy,rls --trials 10 --clean-regressors off");
+  const nlohmann::json on = CompareJson("dryer --estimators cauchy,rls --trials 10");
+  EXPECT_EQ(on["clean_regressors"], "on");
+  auto fit = [](const nlohmann::json& j, const std::string& name, const char* stat) {
+    for (const auto& e : j["estimators"])
+      if (e["estimator"] == name) return e["spread"]["fit_one_step"][stat].get<double>();
+    return std::nan("");
+  };
+  EXPECT_GT(fit(on, "cauchy", "median"), fit(off, "cauchy", "median") + 0.5);
+  EXPECT_GE(fit(on, "cauchy", "min"), fit(off, "cauchy", "min"));
+  EXPECT_EQ(fit(on, "rls", "mean"), fit(off, "rls", "mean"));  // RLS never flags: identical
 }
 
 TEST(CompareCommand, JsonSchemaHasOneObjectPerEstimator) {
