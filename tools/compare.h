@@ -7,7 +7,7 @@
 // seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the
 // untouched validation part: fit % one-step and simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and
 // time per update (the recorded update sequence replayed on a fresh estimator, timed as one block;
-// median over the first 5 trials).
+// the fastest of the first 5 trials, the one least disturbed by other processes).
 //
 // Example:
 //   OutlierSpec spec = OutlierSpec::Parse("0.05:20:1");
@@ -63,7 +63,7 @@ struct EstimatorScore {
   Spread one_step, simulation, theta_distance;
   std::vector<double> one_step_per_trial;
   bool has_simulation = false;
-  double ns_per_update = 0;        // median over trials
+  double ns_per_update = 0;        // fastest timed replay (first 5 trials)
   double cleaned = 0;              // mean number of outputs cleaned in the regressors
 };
 
