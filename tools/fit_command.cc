@@ -55,6 +55,7 @@ nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, doubl
   j["samples_validation"] = r.samples_validation;
   j["updates"] = r.updates;
   j["rejected"] = r.rejected;
+  j["cleaned"] = r.cleaned;
   j["nu"] = r.nu;
   j["Dy"] = r.Dy;
   j["split"] = split;

@@ -59,6 +59,13 @@ TEST(Structures, MisoWithDifferentDelaysPerInputRecoversAnExactLaw) {
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(theta[i], expected[i], 1e-8) << i;
 }
 
+TEST(Structures, RlsNeverFlagsSoCleaningLeavesItsFitUnchanged) {
+  const std::string args = "dryer --output y --input u --na 2 --nb 2 --nk 3";
+  const nlohmann::json on = FitJson(args), off = FitJson(args + " --clean-regressors off");
+  EXPECT_EQ(on["cleaned"], 0);
+  EXPECT_EQ(on["theta"], off["theta"]);
+}
+
 TEST(Structures, FirModelIsArxWithNaZero) {
   std::string csv = "u,y\n";
   std::vector<double> u;
