@@ -40,7 +40,15 @@ std::vector<std::string> ArxStructure::ParameterNames() const {
   return names;
 }
 
-ArxRegressor::ArxRegressor(const ArxStructure& structure) : structure_(structure) {
+namespace {
+OutputCleaningOptions WithWarmUp(OutputCleaningOptions cleaning, int num_parameters) {
+  if (cleaning.warm_up == 0) cleaning.warm_up = 10 * num_parameters;
+  return cleaning;
+}
+}  // namespace
+
+ArxRegressor::ArxRegressor(const ArxStructure& structure, const OutputCleaningOptions& cleaning)
+    : structure_(structure), cleaner_(WithWarmUp(cleaning, structure.num_parameters())) {
   past_y_.setZero(structure_.na());
   for (int i = 0; i < structure_.num_inputs(); ++i) past_u_.emplace_back(Eigen::VectorXd::Zero(structure_.input_history(i)));
   Reset();
@@ -51,6 +59,7 @@ void ArxRegressor::Reset() {
   for (auto& p : past_u_) p.setZero();
   samples_ = 0;
   outputs_ = 0;
+  cleaner_.Reset();
 }
 
 bool ArxRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> z) {
@@ -80,6 +89,12 @@ void ArxRegressor::PushOutput(double y) {
   for (Eigen::Index k = m - 1; k > 0; --k) past_y_(k) = past_y_(k - 1);
   if (m > 0) past_y_(0) = y;
   ++outputs_;
+}
+
+double ArxRegressor::PushCheckedOutput(double y, double y_hat, double scale, bool flagged) {
+  const double stored = cleaner_.Clean(y, y_hat, scale, flagged);
+  PushOutput(stored);
+  return stored;
 }
 
 std::vector<std::string> StaticRegression::ParameterNames() const {

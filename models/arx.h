@@ -18,6 +18,8 @@
 
 #include <Eigen/Core>
 
+#include "models/output_cleaner.h"
+
 namespace ident::models {
 
 class ArxStructure {
@@ -50,15 +52,22 @@ class ArxStructure {
 // Forms z(t) from a stream of samples. Per sample t: Next(u(t), z) stores u(t) and, if t ≥ t0,
 // writes z(t) and returns true; then PushOutput(y(t)) stores the output (measured, or simulated
 // for simulation). No allocation after construction.
+//
+// Outlier cleaning (models/output_cleaner.h): with `cleaning.enabled`, PushCheckedOutput(y, ŷ, s,
+// flagged) stores the bounded cleaned value instead of y when the estimator flagged the sample.
 class ArxRegressor {
  public:
-  explicit ArxRegressor(const ArxStructure& structure);
+  explicit ArxRegressor(const ArxStructure& structure, const OutputCleaningOptions& cleaning = {});
 
   void Reset();
   // u has one entry per input.
   bool Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> z);
   void PushOutput(double y);
+  // Stores the measured y, or its cleaned value if cleaning is on and `flagged` (prediction ŷ = Θ̂'z(t),
+  // scale s = the estimator's noise scale). Returns the stored value.
+  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged);
   const ArxStructure& structure() const { return structure_; }
+  const OutputCleaner& cleaner() const { return cleaner_; }
 
  private:
   ArxStructure structure_;
@@ -66,6 +75,7 @@ class ArxRegressor {
   std::vector<Eigen::VectorXd> past_u_;    // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
   long samples_ = 0;                       // samples pushed with Next()
   long outputs_ = 0;
+  OutputCleaner cleaner_;
 };
 
 // Static linear regression y = θ'x + e with an optional intercept (first entry of θ).

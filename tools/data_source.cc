@@ -16,9 +16,10 @@ int Find(const std::vector<std::string>& columns, const std::string& name, const
 
 class ArxSource final : public DataSource {
  public:
-  ArxSource(int output, std::vector<int> inputs, const models::ArxStructure& arx)
-      : output_(output), inputs_(std::move(inputs)), regressor_(arx), u_(inputs_.size()) {}
   std::unique_ptr<DataSource> Clone() const override { return std::make_unique<ArxSource>(*this); }
+  ArxSource(int output, std::vector<int> inputs, const models::ArxStructure& arx,
+            const models::OutputCleaningOptions& cleaning)
+      : output_(output), inputs_(std::move(inputs)), regressor_(arx, cleaning), u_(inputs_.size()) {}
   int num_parameters() const override { return regressor_.structure().num_parameters(); }
   std::string structure() const override { return regressor_.structure().ToString(); }
   std::vector<std::string> parameter_names() const override { return regressor_.structure().ParameterNames(); }
@@ -36,6 +37,10 @@ class ArxSource final : public DataSource {
     return regressor_.Next(u_, z);
   }
   void PushOutput(double y) override { regressor_.PushOutput(y); }
+  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged) override {
+    return regressor_.PushCheckedOutput(y, y_hat, scale, flagged);
+  }
+  long cleaned() const override { return regressor_.cleaner().cleaned(); }
 
  private:
   int output_;
@@ -81,7 +86,7 @@ class StaticSource final : public DataSource {
 
 std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& columns, const std::string& output,
                                           const std::vector<std::string>& inputs, const models::ArxStructure& arx,
-                                          const std::string& source) {
+                                          const std::string& source, const models::OutputCleaningOptions& cleaning) {
   IDENT_REQUIRE(static_cast<int>(inputs.size()) == arx.num_inputs(),
                 "{} input column(s) given but the orders describe {} input(s)", inputs.size(), arx.num_inputs());
   std::vector<int> in;
@@ -89,7 +94,7 @@ std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& column
     IDENT_REQUIRE(name != output, "column '{}' is both the output and an input", name);
     in.push_back(Find(columns, name, source));
   }
-  return std::make_unique<ArxSource>(Find(columns, output, source), std::move(in), arx);
+  return std::make_unique<ArxSource>(Find(columns, output, source), std::move(in), arx, cleaning);
 }
 
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,

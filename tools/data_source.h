@@ -34,12 +34,19 @@ class DataSource {
   virtual void Reset() = 0;
   virtual bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) = 0;
   virtual void PushOutput(double y) = 0;
+  // During estimation: stores y, or (ARX with cleaning on) its cleaned value when the estimator
+  // flagged the sample (models/output_cleaner.h). Returns the stored value.
+  virtual double PushCheckedOutput(double y, double /*y_hat*/, double /*scale*/, bool /*flagged*/) {
+    PushOutput(y);
+    return y;
+  }
+  virtual long cleaned() const { return 0; }  // samples cleaned since Reset()
 };
 
 // Throws DataError for an unknown column, InvalidArgument for bad orders.
 std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& columns, const std::string& output,
                                           const std::vector<std::string>& inputs, const models::ArxStructure& arx,
-                                          const std::string& source);
+                                          const std::string& source, const models::OutputCleaningOptions& cleaning = {});
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,
                                              const models::StaticRegression& regression, const std::string& source);
 

@@ -64,6 +64,8 @@ class Estimation {
         estimator_(estimator),
         trace_(options.trace),
         min_information_(options.min_regressor_information),
+        decision_(options.decision),
+        on_update_(options.on_update),
         z_(source.num_parameters()),
         ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())) {
     source_.Reset();
@@ -72,11 +74,19 @@ class Estimation {
   // `r` is the 0-based row index in the record (the trace prints r + 1).
   void Row(const Eigen::VectorXd& row, int r) {
     const double y = row(source_.output_column());
+    bool flagged = false;
+    double y_hat = std::nan(""), scale = std::nan("");
     if (source_.Regressor(row, z_)) {
       const StepReport report = estimator_.Update(y, z_);
+      flagged = decision_.Flags(report);
+      if (flagged) {  // the cleaned output of later regressors is built from ŷ and the noise scale
+        y_hat = y - report.prediction_error;
+        scale = estimator_.noise_std();
+      }
       if (report.updated()) {
         ++updates_;
         ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);
+        if (on_update_) on_update_(r, estimator_);
         if (trace_) {
           const Eigen::VectorXd theta = estimator_.parameters();
           fmt::print(trace_, "{},{:.17g},{:.17g},{:.17g}", r + 1, report.nu, report.weight, report.prediction_error);
@@ -87,7 +97,7 @@ class Estimation {
         ++rejected_;
       }
     }
-    source_.PushOutput(y);
+    source_.PushCheckedOutput(y, y_hat, scale, flagged);
   }
 
   // Identifiability: every regressor must vary and none may be a combination of the others.
@@ -126,6 +136,8 @@ class Estimation {
   AnyRegressionEstimator& estimator_;
   std::FILE* trace_;
   double min_information_;
+  OutlierDecision decision_;
+  std::function<void(int row, const AnyRegressionEstimator&)> on_update_;
   Eigen::VectorXd z_;
   Eigen::MatrixXd ZtZ_;
   int updates_ = 0, rejected_ = 0;
@@ -227,6 +239,7 @@ FitResult Summarise(const DataSource& source, const AnyRegressionEstimator& esti
   result.Dy = estimator.Dy();
   result.samples_estimation = estimation.count;
   result.samples_validation = validation.count;
+  result.cleaned = source.cleaned();
   return result;
 }
 
@@ -251,9 +264,13 @@ void WriteTraceHeader(std::FILE* trace, int num_parameters) {
 }
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace) {
+                             AnyRegressionEstimator& estimator, std::FILE* trace,
+                             const OutlierDecision& decision,
+                             const std::function<void(int row, const AnyRegressionEstimator&)>& on_update) {
   FitOptions options;
   options.trace = trace;
+  options.decision = decision;
+  options.on_update = on_update;
   return EstimateRows(data, segment, source, estimator, options);
 }
 

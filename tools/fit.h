@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +25,7 @@
 #include <Eigen/Core>
 
 #include "ident/io/csv.h"
+#include "ident/outlier_decision.h"
 #include "ident/regression_estimator.h"
 #include "tools/data_source.h"
 
@@ -40,6 +42,9 @@ struct FitOptions {
   // θ̂ on data of tiny scale (values near 1e-150) by more than 1e-6 relative. 0 disables the check
   // (the command line does so when an explicit prior is given).
   double min_regressor_information = 1e-6;
+  OutlierDecision decision;           // which updates count as outliers for regressor cleaning
+  // If set: called after every estimator update with the (0-based) row (e.g. for parameter plots).
+  std::function<void(int row, const AnyRegressionEstimator&)> on_update;
 };
 
 struct FitScores {
@@ -59,6 +64,7 @@ struct FitResult {
   double nu = 0, Dy = 0;
   int samples_estimation = 0, samples_validation = 0;
   int updates = 0, rejected = 0;      // estimator steps taken / rejected (missing or invalid samples)
+  long cleaned = 0;                   // outputs cleaned in later regressors (--clean-regressors on)
   FitScores validation;
 };
 
@@ -73,10 +79,14 @@ struct Segment {
 std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options);
 
 // Runs the estimator over the segment (one Update per regression), writing trace rows if asked.
+// Each measured output is then stored for later regressors through source.PushCheckedOutput with
+// the one-step prediction, the estimator's noise scale and decision.Flags(report).
 // Returns the number of updates and rejected steps. Throws InvalidArgument if the regressors of the
 // segment are constant or collinear (the model is not identifiable from them).
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace);
+                             AnyRegressionEstimator& estimator, std::FILE* trace,
+                             const OutlierDecision& decision = {},
+                             const std::function<void(int row, const AnyRegressionEstimator&)>& on_update = {});
 
 // One-step and (for dynamic sources) simulation scores of parameters θ on the segment.
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta);

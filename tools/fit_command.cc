@@ -13,10 +13,15 @@
 #include "tools/commands.h"
 #include "tools/estimator_options.h"
 #include "tools/fit.h"
+#include "tools/fit_plot.h"
+#include "tools/residual_analysis.h"
 #include "tools/structure_options.h"
 
 namespace ident::tools {
 namespace {
+
+constexpr long kInMemoryRows = 1'000'000;
+constexpr int kResidualLags = 20;
 
 struct FitCommandOptions {
   std::string data;
@@ -27,6 +32,7 @@ struct FitCommandOptions {
   bool missing = false;
   bool json = false;
   std::string trace;
+  std::string plot;
 };
 
 nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, double split, const std::string& detrend) {
@@ -50,10 +56,45 @@ nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, doubl
   j["samples_validation"] = r.samples_validation;
   j["updates"] = r.updates;
   j["rejected"] = r.rejected;
+  j["cleaned"] = r.cleaned;
   j["nu"] = r.nu;
   j["Dy"] = r.Dy;
   j["split"] = split;
   j["detrend"] = detrend;
+  return j;
+}
+
+void PrintResiduals(const ResidualAnalysis& a) {
+  auto worst = [](const std::vector<double>& r, int first_lag) {
+    std::size_t k = 0;
+    for (std::size_t i = 1; i < r.size(); ++i)
+      if (std::abs(r[i]) > std::abs(r[k])) k = i;
+    return std::make_pair(r[k], static_cast<int>(k) + first_lag);
+  };
+  const int lags = static_cast<int>(a.autocorrelation.size());
+  fmt::print("\n  residual analysis (validation one-step residuals, N = {}, 99 % band ±{:.3f}):\n", a.samples, a.band);
+  const auto [r_ee, tau_ee] = worst(a.autocorrelation, 1);
+  fmt::print("    whiteness     r_ee(τ), τ = 1..{}: {:2} lags outside, largest {:+.3f} at τ = {}; Q = {:.1f} (1 % limit {:.1f})\n", lags,
+             a.OutsideAuto(), r_ee, tau_ee, a.QAuto(), a.QAutoLimit());
+  for (std::size_t i = 0; i < a.input_names.size(); ++i) {
+    const auto [r_eu, tau_eu] = worst(a.cross_correlation[i], 0);
+    fmt::print("    input {:<7} r_eu(τ), τ = 0..{}: {:2} lags outside, largest {:+.3f} at τ = {}; Q = {:.1f} (1 % limit "
+               "{:.1f})\n", a.input_names[i], lags, a.OutsideCross(i), r_eu, tau_eu, a.QCross(i), a.QCrossLimit());
+  }
+  fmt::print("  {}\n", a.Verdict());
+}
+
+nlohmann::ordered_json ResidualJson(const ResidualAnalysis& a) {
+  nlohmann::ordered_json j;
+  j["samples"] = a.samples;
+  j["band"] = a.band;
+  j["autocorrelation"] = a.autocorrelation;
+  auto& cross = j["cross_correlation"] = nlohmann::ordered_json::object();
+  for (std::size_t i = 0; i < a.input_names.size(); ++i) cross[a.input_names[i]] = a.cross_correlation[i];
+  j["q_auto"] = a.QAuto();
+  j["q_auto_limit"] = a.QAutoLimit();
+  j["white"] = a.White();
+  j["independent"] = a.Independent();
   return j;
 }
 
@@ -64,6 +105,7 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
   else
     fmt::print("estimation rows 1-{} ({} updates", r.samples_estimation, r.updates);
   if (r.rejected) fmt::print(", {} samples rejected as missing/invalid", r.rejected);
+  if (r.cleaned) fmt::print(", {} outputs cleaned in later regressors", r.cleaned);
   fmt::print(")");
   if (o.split != 1)
     fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
@@ -86,6 +128,7 @@ void RunFit(const FitCommandOptions& o) {
   FitOptions options;
   options.split = o.split;
   options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  options.decision = o.structure.Decision();
   if (settings.prior) options.min_regressor_information = 0;  // the user's prior, the user's scale
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
   if (!o.trace.empty()) {
@@ -93,11 +136,46 @@ void RunFit(const FitCommandOptions& o) {
     if (!trace) throw DataError(fmt::format("cannot write trace file '{}'", o.trace));
     options.trace = trace.get();
   }
-  const FitResult result = FitCsvFile(path, csv, *source, *estimator, options);  // streams: constant memory
-  if (o.json)
-    std::cout << ToJson(result, path, o.split, o.detrend).dump(2) << "\n";
-  else
+  // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
+  // stream through the estimator in constant memory (without the residual analysis).
+  if (o.plot.empty() && CountCsvDataRows(path) > kInMemoryRows) {
+    const FitResult result = FitCsvFile(path, csv, *source, *estimator, options);
+    if (o.json) {
+      nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
+      j["residual_analysis"] = nlohmann::ordered_json();
+      std::cout << j.dump(2) << "\n";
+    } else {
+      PrintReport(result, path, o);
+      fmt::print("\n  residual analysis: skipped (record of more than {} rows, streamed)\n", kInMemoryRows);
+    }
+    return;
+  }
+  io::DataTable table = io::ReadCsv(path, csv);
+  ParameterHistory history;
+  if (!o.plot.empty()) {
+    history.theta.resize(static_cast<std::size_t>(source->num_parameters()));
+    options.on_update = [&history](int row, const AnyRegressionEstimator& e) {
+      history.t.push_back(row + 1);
+      const Eigen::VectorXd theta = e.parameters();
+      for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
+    };
+  }
+  io::DataTable prepared = table;
+  const FitResult result = Fit(std::move(table), *source, *estimator, options);
+  // The same split/detrending again, for the residual analysis on the validation part.
+  const Segment validation = PrepareData(prepared, *source, options).second;
+  std::optional<ResidualAnalysis> residuals;
+  if (validation.count - source->first_regression_index() > kResidualLags + 1)
+    residuals = AnalyseResiduals(prepared, validation, *source, result.theta, kResidualLags);
+  if (!o.plot.empty()) PlotFit(o.plot, prepared, validation, *source, result.theta, history);
+  if (o.json) {
+    nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
+    j["residual_analysis"] = residuals ? ResidualJson(*residuals) : nlohmann::ordered_json();
+    std::cout << j.dump(2) << "\n";
+  } else {
     PrintReport(result, path, o);
+    if (residuals) PrintResiduals(*residuals);
+  }
 }
 
 }  // namespace
@@ -115,6 +193,9 @@ void AddFitCommand(CLI::App& app) {
       ->check(CLI::IsMember({"mean", "none"}));
   fit->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");
   fit->add_option("--trace", o->trace, "Write one CSV row per update: t,nu,beta,pred_err,theta1..,Dy");
+  fit->add_option("--plot", o->plot,
+                  "Draw measured vs one-step and simulated output (validation) and the parameter trajectories "
+                  "into FILE.svg or FILE.png (needs gnuplot)");
   fit->add_flag("--json", o->json, "Print one JSON object instead of the report");
   fit->callback([o] {
     if (o->detrend.empty()) o->detrend = o->structure.intercept ? "none" : "mean";

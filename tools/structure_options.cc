@@ -4,8 +4,9 @@
 
 namespace ident::tools {
 
-void StructureCliOptions::AddTo(CLI::App& app) {
-  app.add_option("--output", output, "Output column y")->required();
+void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
+  auto* output_option = app.add_option("--output", output, "Output column y (one output at a time for MIMO data)")
+                            ->required(require_output);
   auto* input = app.add_option("--input", inputs, "Input column(s) u (comma-separated for several inputs)")
                     ->delimiter(',');
   auto* na_option = app.add_option("--na", na, "ARX order of the output polynomial (0: FIR)")->capture_default_str();
@@ -22,8 +23,24 @@ void StructureCliOptions::AddTo(CLI::App& app) {
           ->excludes(na_option)
           ->excludes(nb_option)
           ->excludes(nk_option);
-  app.add_flag("--intercept", intercept, "Static regression: add an intercept (first parameter)")
-      ->needs(regressors_option);
+  auto* intercept_option = app.add_flag("--intercept", intercept, "Static regression: add an intercept (first parameter)")
+                               ->needs(regressors_option);
+  app.add_option("--clean-regressors", clean_regressors,
+                 "ARX: replace outputs the estimator flags as outliers (nu*beta < --clean-below) by a bounded "
+                 "cleaned value in later regressors")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  app.add_option("--clean-clip", cleaning.clip, "Cleaned value stays within C noise scales of the prediction")
+      ->capture_default_str();
+  app.add_option("--clean-below", clean_below, "Flag a sample as outlier when its relative weight nu*beta is below W")
+      ->capture_default_str();
+  options_ = {output_option, input, na_option, nb_option, nk_option, regressors_option, intercept_option};
+}
+
+bool StructureCliOptions::Given() const {
+  for (const CLI::Option* option : options_)
+    if (option->count() > 0) return true;
+  return false;
 }
 
 std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<std::string>& columns,
@@ -40,7 +57,41 @@ std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<st
     return v.size() == m ? v : std::vector<int>(m, v[0]);
   };
   models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
-  return MakeArxSource(columns, output, inputs, arx, source);
+  models::OutputCleaningOptions clean = cleaning;
+  clean.enabled = clean_regressors == "on";
+  const std::string error = clean.Validate();
+  IDENT_REQUIRE(error.empty(), "--clean-clip: {}", error);
+  return MakeArxSource(columns, output, inputs, arx, source, clean);
+}
+
+}  // namespace ident::tools
+
+namespace ident::tools {
+
+StructureCliOptions StructureCliOptions::WithDefaultsFrom(const StructureCliOptions& suggestion) const {
+  enum { kOutput, kInput, kNa, kNb, kNk, kRegressors, kIntercept };
+  auto given = [this](std::size_t i) { return i < options_.size() && options_[i]->count() > 0; };
+  StructureCliOptions r = *this;
+  if (!given(kOutput)) r.output = suggestion.output;
+  if (given(kRegressors)) return r;
+  if (!given(kInput) && !given(kIntercept)) {
+    r.inputs = suggestion.inputs;
+    r.regressors = suggestion.regressors;
+    r.intercept = suggestion.intercept;
+  }
+  if (!r.regressors.empty()) return r;
+  const bool same_inputs = r.inputs.size() == suggestion.inputs.size();
+  if (!given(kNa)) r.na = suggestion.na;
+  if (!given(kNb) && same_inputs) r.nb = suggestion.nb;
+  if (!given(kNk) && same_inputs) r.nk = suggestion.nk;
+  return r;
+}
+
+OutlierDecision StructureCliOptions::Decision() const {
+  OutlierDecision decision{clean_below};
+  const std::string error = decision.Validate();
+  IDENT_REQUIRE(error.empty(), "--clean-below: {}", error);
+  return decision;
 }
 
 }  // namespace ident::tools

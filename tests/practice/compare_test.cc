@@ -1,0 +1,259 @@
+// `ident compare`: seeded outlier injection, the scoring protocol, JSON/CSV schema and bad input.
+#include <cmath>
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "ident/common/error.h"
+#include "ident/estimator_registry.h"
+#include "tests/support/cli.h"
+#include "tests/support/test_data.h"
+#include "tools/compare.h"
+
+namespace ident::testing {
+namespace {
+
+using tools::InjectOutliers;
+using tools::OutlierSpec;
+using tools::Segment;
+using tools::Spread;
+
+TEST(InjectOutliers, IsReproducibleFromItsSeedAndDiffersBetweenSeeds) {
+  const Eigen::VectorXd base = Eigen::VectorXd::LinSpaced(600, -1, 1);
+  Eigen::VectorXd a = base, b = base, c = base;
+  const auto rows_a = InjectOutliers(a, {50, 500}, 0.05, 3.0, 42);
+  const auto rows_b = InjectOutliers(b, {50, 500}, 0.05, 3.0, 42);
+  const auto rows_c = InjectOutliers(c, {50, 500}, 0.05, 3.0, 43);
+  EXPECT_EQ(rows_a, rows_b);
+  EXPECT_EQ(a, b);
+  EXPECT_NE(rows_a, rows_c);
+  ASSERT_EQ(rows_a.size(), 25u);  // ⌊0.05·500 + ½⌋
+  EXPECT_EQ(std::set<int>(rows_a.begin(), rows_a.end()).size(), 25u);  // distinct
+  int plus = 0;
+  for (int i = 0; i < 600; ++i) {
+    const double d = a(i) - base(i);
+    const bool chosen = std::binary_search(rows_a.begin(), rows_a.end(), i);
+    if (chosen) {
+      EXPECT_GE(i, 50);
+      EXPECT_LT(i, 550);
+      EXPECT_NEAR(std::abs(d), 3.0, 1e-12);
+      plus += d > 0;
+    } else {
+      EXPECT_EQ(d, 0.0) << i;
+    }
+  }
+  EXPECT_GT(plus, 3);  // random signs: both occur (P(≤ 3 of 25 positive) < 1e-4)
+  EXPECT_LT(plus, 22);
+}
+
+TEST(InjectOutliers, ChoosesEveryRowWithTheSameProbability) {
+  // 4000 seeds, 10 of 100 rows each: every row is hit Binomial(4000, 0.1) times, mean 400, sd 19;
+  // a bound of ±6 sd over 100 rows fails with probability < 1e-7.
+  std::vector<int> hits(100, 0);
+  for (std::uint64_t seed = 0; seed < 4000; ++seed) {
+    Eigen::VectorXd y = Eigen::VectorXd::Zero(100);
+    for (int r : InjectOutliers(y, {0, 100}, 0.1, 1.0, seed)) ++hits[static_cast<std::size_t>(r)];
+  }
+  for (int r = 0; r < 100; ++r) EXPECT_NEAR(hits[static_cast<std::size_t>(r)], 400, 6 * 19) << r;
+}
+
+TEST(InjectOutliers, RejectsBadArguments) {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(10);
+  EXPECT_THROW(InjectOutliers(y, {0, 10}, 1.0, 1.0, 1), InvalidArgument);
+  EXPECT_THROW(InjectOutliers(y, {0, 10}, -0.1, 1.0, 1), InvalidArgument);
+  EXPECT_THROW(InjectOutliers(y, {0, 10}, 0.1, std::nan(""), 1), InvalidArgument);
+  EXPECT_THROW(InjectOutliers(y, {5, 10}, 0.1, 1.0, 1), InvalidArgument);
+}
+
+TEST(OutlierSpec, ParsesRateSizeAndSeed) {
+  const OutlierSpec a = OutlierSpec::Parse("0.05:20");
+  EXPECT_EQ(a.rate, 0.05);
+  EXPECT_EQ(a.size, 20);
+  EXPECT_EQ(a.seed, 1u);
+  const OutlierSpec b = OutlierSpec::Parse("0.1:7.5:12345");
+  EXPECT_EQ(b.seed, 12345u);
+  EXPECT_EQ(OutlierSpec::Parse("none").rate, 0);
+  for (const char* bad : {"", "0.05", "0.05:", "x:20", "0.05:20:1:2", "1:20", "-0.1:20", "0.05:-1", "0.05:20:1.5",
+                          "0.05:20:-3", "0.05:inf"})
+    EXPECT_THROW(OutlierSpec::Parse(bad), InvalidArgument) << bad;
+}
+
+TEST(Spread, MatchesTheDefinitions) {
+  const Spread s = Spread::Of({4, 1, 3, 2});
+  EXPECT_DOUBLE_EQ(s.mean, 2.5);
+  EXPECT_DOUBLE_EQ(s.std, std::sqrt(5.0 / 3.0));
+  EXPECT_DOUBLE_EQ(s.min, 1);
+  EXPECT_DOUBLE_EQ(s.median, 2.5);
+  EXPECT_DOUBLE_EQ(s.max, 4);
+  EXPECT_DOUBLE_EQ(Spread::Of({7, 1, 3}).median, 3);
+  EXPECT_DOUBLE_EQ(Spread::Of({7}).std, 0);
+}
+
+nlohmann::json CompareJson(const std::string& args) {
+  const CliResult r = RunCli("compare " + args + " --json");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << "stderr is not a terminal: no progress bar expected, got: " << r.err;
+  return nlohmann::json::parse(r.out);
+}
+
+TEST(CompareCommand, WithoutOutliersRlsIsTheCleanLeastSquaresBaseline) {
+  const nlohmann::json j = CompareJson("dryer --estimators rls --outliers none");
+  // datasets/README.md baseline (numpy least squares), independent of our code.
+  EXPECT_NEAR(j["reference"]["fit_percent"]["one_step"].get<double>(), 95.04, 0.005);
+  EXPECT_NEAR(j["reference"]["fit_percent"]["simulation"].get<double>(), 85.57, 0.005);
+  const std::vector<double> readme = {-1.27654, 0.396711, 0.0651903, 0.0451792};
+  const std::vector<double> theta_ls = j["reference"]["theta"];
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(theta_ls[i], readme[i], 5e-6 * std::abs(readme[i]));
+  const auto& rls = j["estimators"][0];
+  EXPECT_NEAR(rls["fit_percent"]["one_step"].get<double>(), 95.04, 0.005);
+  EXPECT_LT(rls["theta_distance"].get<double>(), 1e-9);
+  EXPECT_EQ(j["outliers"]["per_trial"], 0);
+}
+
+TEST(CompareCommand, DryerDefaultsAreArx223WithFivePercentOutliersOfTwentySigma) {
+  const nlohmann::json j = CompareJson("dryer --estimators rls");
+  EXPECT_EQ(j["structure"], "ARX(2,2,3)");
+  EXPECT_EQ(j["outliers"]["rate"], 0.05);
+  EXPECT_EQ(j["outliers"]["size"], 20);
+  EXPECT_EQ(j["outliers"]["per_trial"], 25);
+  EXPECT_EQ(j["estimation_rows"], (std::vector<int>{1, 500}));
+  EXPECT_EQ(j["validation_rows"], (std::vector<int>{501, 1000}));
+  // σ = the clean LS residual std: validation RMS 0.0407 in the README, estimation part close to it.
+  EXPECT_NEAR(j["outliers"]["sigma"].get<double>(), 0.041, 0.003);
+  // RLS loses at least 5 points of one-step fit (the issue's reference implementation: 87-88 %).
+  const double rls = j["estimators"][0]["fit_percent"]["one_step"];
+  EXPECT_LT(rls, 95.04 - 5);
+  EXPECT_GT(rls, 80);
+}
+
+bool CauchyRegistered() {
+  const std::vector<std::string> names = RegressionEstimatorNames();
+  return std::find(names.begin(), names.end(), "cauchy") != names.end();
+}
+
+// Issue 6, item 8: on dryer with 5 % outliers of 20σ the Cauchy estimator's validation fit stays
+// within 2 points of clean-data RLS while RLS loses at least 5. Over 10 seeds, worst case.
+TEST(CompareCommand, CauchyStaysWithinTwoPointsOfCleanRlsWhileRlsLosesFive) {
+  // TEMPORARY guard until the cauchy estimator (issue 3) is on main; to be removed then.
+  if (!CauchyRegistered()) GTEST_SKIP() << "cauchy is not registered on this branch yet";
+  const nlohmann::json j = CompareJson("dryer --estimators rls,cauchy,student:3 --trials 10");
+  const double clean = j["reference"]["fit_percent"]["one_step"];
+  EXPECT_NEAR(clean, 95.04, 0.005);  // datasets/README.md
+  std::map<std::string, nlohmann::json> by_name;
+  for (const auto& e : j["estimators"]) by_name[e["estimator"]] = e["spread"]["fit_one_step"];
+  EXPECT_GE(by_name["cauchy"]["mean"].get<double>(), clean - 2);
+  EXPECT_GE(by_name["cauchy"]["median"].get<double>(), clean - 2);
+  EXPECT_LE(by_name["rls"]["max"].get<double>(), clean - 5);
+  EXPECT_EQ(j["estimators"][0]["estimator"], "cauchy");  // sorted best first
+}
+
+// Item 5: regressor cleaning is on by default because over many seeds it never made a robust
+// estimator worse in the worst case; here 10 seeds on dryer, off vs on.
+TEST(CompareCommand, RegressorCleaningImprovesCauchyOnDryer) {
+  if (!CauchyRegistered()) GTEST_SKIP() << "cauchy is not registered on this branch yet";  // TEMPORARY
+  const nlohmann::json off = CompareJson("dryer --estimators cauchy,rls --trials 10 --clean-regressors off");
+  const nlohmann::json on = CompareJson("dryer --estimators cauchy,rls --trials 10");
+  EXPECT_EQ(on["clean_regressors"], "on");
+  auto fit = [](const nlohmann::json& j, const std::string& name, const char* stat) {
+    for (const auto& e : j["estimators"])
+      if (e["estimator"] == name) return e["spread"]["fit_one_step"][stat].get<double>();
+    return std::nan("");
+  };
+  EXPECT_GT(fit(on, "cauchy", "median"), fit(off, "cauchy", "median") + 0.5);
+  EXPECT_GE(fit(on, "cauchy", "min"), fit(off, "cauchy", "min"));
+  EXPECT_EQ(fit(on, "rls", "mean"), fit(off, "rls", "mean"));  // RLS never flags: identical
+}
+
+TEST(CompareCommand, JsonSchemaHasOneObjectPerEstimator) {
+  const nlohmann::json j = CompareJson("gas_furnace --estimators rls,rls --trials 3 --outliers 0.1:10:5");
+  for (const char* key : {"data", "structure", "parameter_names", "estimation_rows", "validation_rows", "outliers",
+                          "trials", "clean_regressors", "reference", "estimators"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["trials"], 3);
+  EXPECT_EQ(j["outliers"]["seed"], 5);
+  ASSERT_EQ(j["estimators"].size(), 2u);
+  for (const auto& e : j["estimators"]) {
+    EXPECT_EQ(e["estimator"], "rls");
+    EXPECT_EQ(e["theta"].size(), 4u);
+    EXPECT_TRUE(e["fit_percent"]["one_step"].is_number());
+    EXPECT_TRUE(e["fit_percent"]["simulation"].is_number());
+    EXPECT_TRUE(e["theta_distance"].is_number());
+    EXPECT_GT(e["ns_per_update"].get<double>(), 0);
+    const auto& s = e["spread"]["fit_one_step"];
+    EXPECT_LE(s["min"].get<double>(), s["median"].get<double>());
+    EXPECT_LE(s["median"].get<double>(), s["max"].get<double>());
+    EXPECT_NEAR(s["mean"].get<double>(), e["fit_percent"]["one_step"].get<double>(), 1e-12);
+    EXPECT_GT(s["std"].get<double>(), 0);  // three different seeds
+  }
+  // Same estimator, same seeds: identical scores.
+  EXPECT_EQ(j["estimators"][0]["theta"], j["estimators"][1]["theta"]);
+}
+
+TEST(CompareCommand, RepeatedRunsAreIdenticalApartFromTiming) {
+  nlohmann::json a = CompareJson("dryer --estimators rls --trials 2 --outliers 0.05:20:9");
+  nlohmann::json b = CompareJson("dryer --estimators rls --trials 2 --outliers 0.05:20:9");
+  a["estimators"][0].erase("ns_per_update");
+  b["estimators"][0].erase("ns_per_update");
+  EXPECT_EQ(a, b);
+}
+
+TEST(CompareCommand, TableAndCsv) {
+  const CliResult t = RunCli("compare dryer --estimators rls");
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  EXPECT_NE(t.out.find("clean-data least squares: one-step fit 95.04 %, simulation fit 85.57 %"), std::string::npos)
+      << t.out;
+  EXPECT_NE(t.out.find("25 of the 500 estimation samples"), std::string::npos) << t.out;
+  const CliResult c = RunCli("compare dryer --estimators rls --csv");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(c.out.rfind("estimator,fit_one_step,", 0), 0u) << c.out;
+  EXPECT_EQ(std::count(c.out.begin(), c.out.end(), '\n'), 2);
+  EXPECT_NE(c.out.find(",a1,a2,b1,b2\nrls,"), std::string::npos) << c.out;
+}
+
+TEST(CompareCommand, ExplicitStructureAndStaticRegression) {
+  const nlohmann::json j = CompareJson("dryer --output y --input u --na 1 --nb 1 --nk 3 --estimators rls");
+  EXPECT_EQ(j["structure"], "ARX(1,1,3)");
+  const nlohmann::json s = CompareJson("stackloss --estimators rls --outliers 0.1:5:3");
+  EXPECT_EQ(s["structure"], "static(air_flow,water_temp,acid_conc)+intercept");
+  EXPECT_TRUE(s["estimators"][0]["fit_percent"]["simulation"].is_null());
+}
+
+void ExpectBadInput(const std::string& args, const std::string& needle) {
+  const CliResult r = RunCli(args);
+  EXPECT_EQ(r.exit_code, 1) << args << "\nstderr: " << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\nstderr: " << r.err;
+  EXPECT_EQ(r.err.rfind("ident: error: ", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_TRUE(r.out.empty()) << r.out;
+}
+
+TEST(CompareCommand, BadInputExitsOneWithOneLine) {
+  ExpectBadInput("compare dryer --estimators rls,nonesuch", "unknown estimator 'nonesuch'");
+  ExpectBadInput("compare dryer --estimators rls --outliers 0.05", "--outliers '0.05': need RATE:SIZE[:SEED]");
+  ExpectBadInput("compare dryer --estimators rls --outliers 2:20", "RATE = 2; need 0 <= RATE < 1");
+  ExpectBadInput("compare dryer --estimators rls --outliers 0.05:x", "SIZE 'x' is not a number");
+  ExpectBadInput("compare dryer --estimators rls --trials 0", "--trials = 0");
+  ExpectBadInput("compare dryer --estimators rls --forgetting 2", "forgetting = 2");
+  ExpectBadInput("compare dryer --estimators rls --split 1.5", "split = 1.5");
+  ExpectBadInput("compare dryer --estimators rls --output y --input q", "no column 'q'");
+  ExpectBadInput("compare dryer --estimators rls --clean-below 1.5", "--clean-below");
+  ExpectBadInput("compare dryer --estimators rls --clean-clip -1 --clean-regressors on", "clip = -1");
+  ExpectBadInput("compare /nonexistent.csv --estimators rls --output y --input u", "cannot open '/nonexistent.csv'");
+  const std::string csv = WriteFile("plain.csv", "t,u,y\n0,1,2\n1,2,3\n");
+  ExpectBadInput("compare " + csv + " --estimators rls", "is not a bundled dataset with a suggested structure");
+  ExpectBadInput("compare gas_furnace --estimators rls --na 60 --nb 60", "the estimation part has 148 rows");
+}
+
+TEST(CompareCommand, UsageErrorsExitTwo) {
+  EXPECT_EQ(RunCli("compare").exit_code, 2);
+  EXPECT_EQ(RunCli("compare dryer --bogus").exit_code, 2);
+  EXPECT_EQ(RunCli("compare dryer --json --csv").exit_code, 2);
+  EXPECT_EQ(RunCli("compare dryer --clean-regressors maybe").exit_code, 2);
+  EXPECT_EQ(RunCli("compare dryer --trials x").exit_code, 2);
+  EXPECT_EQ(RunCli("compare --help").exit_code, 0);
+}
+
+}  // namespace
+}  // namespace ident::testing

@@ -1,0 +1,124 @@
+// Bounded regressor cleaning (models/output_cleaner.h) and the outlier decision (ident/outlier_decision.h).
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ident/common/error.h"
+#include "ident/outlier_decision.h"
+#include "models/arx.h"
+#include "models/output_cleaner.h"
+
+namespace ident::testing {
+namespace {
+
+using models::OutputCleaner;
+using models::OutputCleaningOptions;
+
+TEST(OutputCleaner, DisabledOrUnflaggedStoresTheMeasurement) {
+  OutputCleaner off({.enabled = false, .warm_up = 1});
+  OutputCleaner on({.enabled = true, .warm_up = 1});
+  on.Clean(0.0, 0.0, 1.0, false);
+  off.Clean(0.0, 0.0, 1.0, false);
+  EXPECT_EQ(off.Clean(50.0, 0.0, 1.0, true), 50.0);
+  EXPECT_EQ(on.Clean(0.7, 0.0, 1.0, false), 0.7);
+  EXPECT_EQ(on.cleaned(), 0);
+}
+
+TEST(OutputCleaner, FlaggedSampleBecomesThePredictionPlusTheClippedError) {
+  OutputCleaner c({.enabled = true, .clip = 2.0, .max_run = 5, .warm_up = 2});
+  c.Clean(-10.0, 0.0, 1.0, true);  // warm-up: stored as is even when flagged
+  c.Clean(10.0, 0.0, 1.0, true);
+  EXPECT_EQ(c.cleaned(), 0);
+  // y_c = ŷ + clip(y − ŷ, ±c·s) = 1 + clip(19, ±3) = 4 (eq. (1)); inside the range [−10, 10].
+  EXPECT_DOUBLE_EQ(c.Clean(20.0, 1.0, 1.5, true), 4.0);
+  EXPECT_DOUBLE_EQ(c.Clean(-20.0, 1.0, 1.5, true), -2.0);
+  // A small flagged error is kept whole (|ê| ≤ c·s).
+  EXPECT_DOUBLE_EQ(c.Clean(1.5, 1.0, 1.5, true), 1.5);
+  EXPECT_EQ(c.cleaned(), 3);
+}
+
+TEST(OutputCleaner, StoredValuesNeverLeaveTheRangeOfTheMeasurements) {
+  OutputCleaner c({.enabled = true, .clip = 3.0, .max_run = 100, .warm_up = 1});
+  c.Clean(1.0, 0.0, 1.0, false);
+  c.Clean(-1.0, 0.0, 1.0, false);
+  EXPECT_DOUBLE_EQ(c.Clean(0.5, 1e6, 1.0, true), 1.0);     // a wild prediction is clamped (eq. (2))
+  EXPECT_DOUBLE_EQ(c.Clean(0.5, -1e6, 1.0, true), -1.0);
+}
+
+TEST(OutputCleaner, AfterMaxRunCleanedSamplesTheMeasurementIsTrusted) {
+  OutputCleaner c({.enabled = true, .clip = 1.0, .max_run = 2, .warm_up = 1});
+  c.Clean(0.0, 0.0, 1.0, false);
+  c.Clean(5.0, 0.0, 1.0, false);
+  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 1.0);
+  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 1.0);
+  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 5.0);  // run of 2 reached (eq. (3))
+  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 1.0);  // the run restarts
+}
+
+TEST(OutputCleaner, NonFiniteInputsAndBadOptions) {
+  OutputCleaner c({.enabled = true, .warm_up = 1});
+  c.Clean(0.0, 0.0, 1.0, false);
+  EXPECT_EQ(c.Clean(3.0, std::nan(""), 1.0, true), 3.0);
+  EXPECT_EQ(c.Clean(3.0, 0.0, 0.0, true), 3.0);
+  EXPECT_EQ(c.cleaned(), 0);
+  EXPECT_THROW(OutputCleaner({.clip = 0}), InvalidArgument);
+  EXPECT_THROW(OutputCleaner({.max_run = 0}), InvalidArgument);
+  EXPECT_THROW(OutputCleaner({.warm_up = -1}), InvalidArgument);
+}
+
+// The failure the issue reports for naive replacement: a wrong model fed its own predictions. Here
+// the model is deliberately unstable (y(t) = 2.5 y(t−1) − 0.1 u(t−1), a pole at 2.5) and flags every
+// sample. Naive replacement (store ŷ) is the model's simulation and explodes; the bounded cleaner keeps
+// every stored output inside the measured range, and so every prediction bounded.
+TEST(ArxRegressorCleaning, AWrongModelFlaggingEverythingCannotRunAway) {
+  const models::ArxStructure arx(1, {1}, {1});
+  models::ArxRegressor naive(arx);  // naive replacement: store ŷ for every flagged sample
+  models::ArxRegressor bounded(arx, {.enabled = true, .clip = 2.0, .max_run = 2, .warm_up = 5});
+  const Eigen::Vector2d theta_wrong(-2.5, -0.1);  // z = [−y(t−1), u(t−1)]
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.1);
+  double y_prev = 0, y_min = 0, y_max = 0, naive_max = 0, bounded_max_pred = 0;
+  Eigen::VectorXd u(1), z(2);
+  for (int t = 0; t < 400; ++t) {
+    u(0) = std::sin(0.05 * t);
+    const double y = 0.8 * y_prev + 0.5 * u(0) + noise(rng);  // the true (stable) system
+    y_prev = y;
+    y_min = std::min(y_min, y);
+    y_max = std::max(y_max, y);
+    if (naive.Next(u, z)) {
+      const double y_hat = theta_wrong.dot(z);
+      const double stored = t < 5 ? y : y_hat;
+      naive.PushOutput(stored);
+      naive_max = std::max(naive_max, std::abs(stored));
+    } else {
+      naive.PushOutput(y);
+    }
+    if (bounded.Next(u, z)) {
+      const double y_hat = theta_wrong.dot(z);
+      bounded_max_pred = std::max(bounded_max_pred, std::abs(y_hat));
+      const double stored = bounded.PushCheckedOutput(y, y_hat, 0.1, true);
+      EXPECT_GE(stored, y_min - 1e-12) << t;
+      EXPECT_LE(stored, y_max + 1e-12) << t;
+    } else {
+      bounded.PushOutput(y);
+    }
+  }
+  EXPECT_GT(naive_max, 1e100);  // naive replacement runs away
+  // Bounded: |ŷ| ≤ 2.5·max|y| + 0.1·max|u| (the stored outputs lie in the measured range).
+  EXPECT_LE(bounded_max_pred, 2.5 * std::max(-y_min, y_max) + 0.1 + 1e-12);
+  EXPECT_GT(bounded.cleaner().cleaned(), 100);
+}
+
+TEST(OutlierDecision, FlagsSmallRelativeWeightsOnlyOnUpdatedSteps) {
+  const OutlierDecision d;  // 0.2
+  EXPECT_FALSE(d.Flags({StepStatus::kUpdated, 0.01, 100.0, 0.0}));   // νβ = 1 (RLS)
+  EXPECT_TRUE(d.Flags({StepStatus::kUpdated, 0.001, 100.0, 0.0}));   // νβ = 0.1
+  EXPECT_FALSE(d.Flags({StepStatus::kRejectedInvalid, 0.001, 100.0, 0.0}));
+  EXPECT_FALSE(d.Flags({StepStatus::kUpdated}));  // NaN weight
+  EXPECT_NE(OutlierDecision{1.5}.Validate(), "");
+  EXPECT_EQ(OutlierDecision{0.3}.Validate(), "");
+}
+
+}  // namespace
+}  // namespace ident::testing

@@ -1,0 +1,224 @@
+#include "tools/compare.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include <fmt/format.h>
+
+#include "ident/common/error.h"
+
+namespace ident::tools {
+namespace {
+
+// Forwards to an estimator and records every (y, z) it was given, so the exact update sequence
+// (which depends on the estimator when regressor cleaning is on) can be replayed for timing.
+class RecordingEstimator final : public AnyRegressionEstimator {
+ public:
+  RecordingEstimator(AnyRegressionEstimator& inner, int capacity)
+      : inner_(inner), y_(capacity), z_(inner.num_parameters(), capacity) {}
+  std::string name() const override { return inner_.name(); }
+  StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) override {
+    if (count_ < y_.size()) {
+      y_(count_) = y;
+      z_.col(count_) = z;
+      ++count_;
+    }
+    return inner_.Update(y, z);
+  }
+  int num_parameters() const override { return inner_.num_parameters(); }
+  Eigen::VectorXd parameters() const override { return inner_.parameters(); }
+  Eigen::MatrixXd covariance() const override { return inner_.covariance(); }
+  double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const override { return inner_.Predict(z); }
+  double nu() const override { return inner_.nu(); }
+  double Dy() const override { return inner_.Dy(); }
+  double noise_std() const override { return inner_.noise_std(); }
+  void Reset() override { inner_.Reset(); }
+
+  // Nanoseconds per update of `fresh` over the recorded sequence (repeated to last ≥ 5 ms).
+  double TimeReplay(AnyRegressionEstimator& fresh) const {
+    if (count_ == 0) return 0;
+    using Clock = std::chrono::steady_clock;
+    long updates = 0;
+    double checksum = 0;
+    const auto start = Clock::now();
+    do {
+      fresh.Reset();
+      for (Eigen::Index i = 0; i < count_; ++i) checksum += fresh.Update(y_(i), z_.col(i)).weight;
+      updates += count_;
+    } while (Clock::now() - start < std::chrono::milliseconds(5));
+    const double ns = std::chrono::duration<double, std::nano>(Clock::now() - start).count();
+    if (checksum == -1) fmt::print(stderr, " ");  // keep the loop observable
+    return ns / static_cast<double>(updates);
+  }
+
+ private:
+  AnyRegressionEstimator& inner_;
+  Eigen::VectorXd y_;
+  Eigen::MatrixXd z_;
+  Eigen::Index count_ = 0;
+};
+
+constexpr int kTimedTrials = 5;  // time per update: median over the first trials
+
+}  // namespace
+
+OutlierSpec OutlierSpec::Parse(const std::string& text) {
+  OutlierSpec spec;
+  if (text == "none") {
+    spec.rate = 0;
+    return spec;
+  }
+  std::vector<std::string> parts;
+  for (std::size_t start = 0;;) {
+    const std::size_t colon = text.find(':', start);
+    parts.push_back(text.substr(start, colon - start));
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  IDENT_REQUIRE(parts.size() == 2 || parts.size() == 3,
+                "--outliers '{}': need RATE:SIZE[:SEED], e.g. 0.05:20 or 0.05:20:7", text);
+  auto number = [&text](const std::string& s, const char* what) {
+    std::size_t used = 0;
+    double v = std::nan("");
+    try {
+      v = std::stod(s, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    IDENT_REQUIRE(used == s.size() && !s.empty() && std::isfinite(v), "--outliers '{}': {} '{}' is not a number",
+                  text, what, s);
+    return v;
+  };
+  spec.rate = number(parts[0], "RATE");
+  spec.size = number(parts[1], "SIZE");
+  IDENT_REQUIRE(spec.rate >= 0 && spec.rate < 1, "--outliers '{}': RATE = {}; need 0 <= RATE < 1", text, spec.rate);
+  IDENT_REQUIRE(spec.size >= 0, "--outliers '{}': SIZE = {}; need SIZE >= 0", text, spec.size);
+  if (parts.size() == 3) {
+    const double seed = number(parts[2], "SEED");
+    IDENT_REQUIRE(seed >= 0 && seed == std::floor(seed) && seed < 9.007e15,
+                  "--outliers '{}': SEED = {}; need a non-negative integer", text, parts[2]);
+    spec.seed = static_cast<std::uint64_t>(seed);
+  }
+  return spec;
+}
+
+std::string OutlierSpec::ToString() const { return fmt::format("{}:{}:{}", rate, size, seed); }
+
+std::vector<int> InjectOutliers(Eigen::Ref<Eigen::VectorXd> y, Segment segment, double rate, double amplitude,
+                                std::uint64_t seed) {
+  IDENT_REQUIRE(rate >= 0 && rate < 1, "outlier rate = {}; need 0 <= rate < 1", rate);
+  IDENT_REQUIRE(std::isfinite(amplitude) && amplitude >= 0, "outlier amplitude = {}; need a finite value >= 0",
+                amplitude);
+  IDENT_REQUIRE(segment.first >= 0 && segment.count >= 0 && segment.first + segment.count <= y.size(),
+                "segment [{}, {}) is outside the {} samples", segment.first, segment.first + segment.count, y.size());
+  const int count = static_cast<int>(std::floor(rate * segment.count + 0.5));
+  std::vector<int> index(static_cast<std::size_t>(segment.count));
+  std::iota(index.begin(), index.end(), 0);
+  std::mt19937_64 rng(seed);
+  std::vector<int> rows;
+  for (int i = 0; i < count; ++i) {
+    const auto m = static_cast<std::uint64_t>(segment.count - i);
+    std::swap(index[static_cast<std::size_t>(i)], index[static_cast<std::size_t>(i + static_cast<int>(rng() % m))]);
+    const double sign = (rng() & 1) ? 1.0 : -1.0;
+    const int row = segment.first + index[static_cast<std::size_t>(i)];
+    y(row) += sign * amplitude;
+    rows.push_back(row);
+  }
+  std::sort(rows.begin(), rows.end());
+  return rows;
+}
+
+Spread Spread::Of(std::vector<double> v) {
+  Spread s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  const double n = static_cast<double>(v.size());
+  s.mean = std::accumulate(v.begin(), v.end(), 0.0) / n;
+  double ss = 0;
+  for (double x : v) ss += (x - s.mean) * (x - s.mean);
+  s.std = v.size() > 1 ? std::sqrt(ss / (n - 1)) : 0.0;
+  s.min = v.front();
+  s.max = v.back();
+  const std::size_t h = v.size() / 2;
+  s.median = v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+  return s;
+}
+
+CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<EstimatorSettings>& estimators,
+                      const std::vector<std::string>& labels, const CompareOptions& options) {
+  IDENT_REQUIRE(!estimators.empty(), "--estimators: give at least one estimator");
+  IDENT_REQUIRE(labels.size() == estimators.size(), "{} labels for {} estimators", labels.size(), estimators.size());
+  IDENT_REQUIRE(options.trials >= 1 && options.trials <= 100000, "--trials = {}; need 1 <= trials <= 100000",
+                options.trials);
+  const int rho = source.num_parameters();
+  for (const auto& s : estimators) MakeRegressionEstimator(s, rho);  // fail fast on a bad name/option
+
+  CompareResult result;
+  std::tie(result.estimation, result.validation) = PrepareData(data, source, options.fit);
+  result.structure = source.structure();
+  result.parameter_names = source.parameter_names();
+
+  // Clean-data least squares: reference θ, σ and scores.
+  {
+    auto ls = MakeRegressionEstimator(EstimatorSettings{}, rho);
+    Estimate(data, result.estimation, source, *ls, nullptr);
+    result.theta_ls = ls->parameters();
+    result.sigma = ls->noise_std();
+    result.reference = Score(data, result.validation, source, result.theta_ls);
+  }
+  IDENT_REQUIRE(std::isfinite(result.sigma), "{}: the clean least-squares fit has no residual std (too few samples)",
+                data.source);
+
+  const int total = options.trials * static_cast<int>(estimators.size());
+  std::vector<std::vector<double>> one_step(estimators.size()), simulation(estimators.size()),
+      distance(estimators.size()), ns(estimators.size()), cleaned(estimators.size());
+  std::vector<Eigen::VectorXd> theta_sum(estimators.size(), Eigen::VectorXd::Zero(rho));
+  const int y_col = source.output_column();
+  int done = 0;
+  for (int trial = 0; trial < options.trials; ++trial) {
+    io::DataTable corrupted = data;
+    const std::vector<int> rows =
+        InjectOutliers(corrupted.values.col(y_col), result.estimation, options.outliers.rate,
+                       options.outliers.size * result.sigma, options.outliers.seed + static_cast<std::uint64_t>(trial));
+    result.outliers_per_trial = static_cast<int>(rows.size());
+    for (std::size_t e = 0; e < estimators.size(); ++e) {
+      auto estimator = MakeRegressionEstimator(estimators[e], rho);
+      RecordingEstimator recorder(*estimator, result.estimation.count);
+      Estimate(corrupted, result.estimation, source, recorder, nullptr, options.fit.decision);
+      cleaned[e].push_back(static_cast<double>(source.cleaned()));
+      const Eigen::VectorXd theta = estimator->parameters();
+      theta_sum[e] += theta;
+      const FitScores s = Score(corrupted, result.validation, source, theta);
+      one_step[e].push_back(s.one_step);
+      if (s.simulation) simulation[e].push_back(*s.simulation);
+      distance[e].push_back((theta - result.theta_ls).norm() / result.theta_ls.norm());
+      if (trial < kTimedTrials) {
+        auto fresh = MakeRegressionEstimator(estimators[e], rho);
+        ns[e].push_back(recorder.TimeReplay(*fresh));
+      }
+      if (options.progress) options.progress(++done, total);
+    }
+  }
+  for (std::size_t e = 0; e < estimators.size(); ++e) {
+    EstimatorScore score;
+    score.estimator = labels[e];
+    score.theta = theta_sum[e] / options.trials;
+    score.one_step = Spread::Of(one_step[e]);
+    score.one_step_per_trial = one_step[e];
+    score.has_simulation = !simulation[e].empty();
+    score.simulation = Spread::Of(simulation[e]);
+    score.theta_distance = Spread::Of(distance[e]);
+    score.ns_per_update = Spread::Of(ns[e]).min;  // the least disturbed by other processes
+    score.cleaned = Spread::Of(cleaned[e]).mean;
+    result.scores.push_back(std::move(score));
+  }
+  auto key = [](const EstimatorScore& s) { return std::isnan(s.one_step.mean) ? -HUGE_VAL : s.one_step.mean; };
+  std::stable_sort(result.scores.begin(), result.scores.end(),
+                   [&key](const EstimatorScore& a, const EstimatorScore& b) { return key(a) > key(b); });
+  return result;
+}
+
+}  // namespace ident::tools

@@ -1,0 +1,85 @@
+// `ident compare` as a library: seeded outlier injection and the scoring of several estimators on
+// the same corrupted record.
+//
+// Protocol (issue 6, item 4): split and detrend as `ident fit` (tools/fit.h). A clean least-squares
+// fit (RLS with the flat prior = batch LS) on the estimation part gives θ_LS and the residual std σ.
+// Each trial adds ±SIZE·σ (random sign) to y at ⌊RATE·N_est + ½⌋ distinct estimation rows drawn with
+// seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the
+// untouched validation part: fit % one-step and simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and
+// time per update (the recorded update sequence replayed on a fresh estimator, timed as one block;
+// the fastest of the first 5 trials, the one least disturbed by other processes).
+//
+// Example:
+//   OutlierSpec spec = OutlierSpec::Parse("0.05:20:1");
+//   CompareResult r = Compare(table, *source, {ParseEstimatorSpec("rls")}, {.outliers = spec});
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ident/estimator_registry.h"
+#include "ident/io/csv.h"
+#include "tools/fit.h"
+
+namespace ident::tools {
+
+struct OutlierSpec {
+  double rate = 0.05;        // fraction of estimation samples, in [0, 1)
+  double size = 20;          // in units of the clean LS residual std, >= 0
+  std::uint64_t seed = 1;
+  // "RATE:SIZE[:SEED]" (e.g. "0.05:20", "0.1:10:7") or "none". Throws InvalidArgument naming --outliers.
+  static OutlierSpec Parse(const std::string& text);
+  std::string ToString() const;  // "0.05:20:1"
+};
+
+// Adds ±amplitude (random sign) to y(first + i) for ⌊rate·count + ½⌋ distinct i in [0, count), chosen
+// by a partial Fisher–Yates shuffle driven by std::mt19937_64(seed) (index = draw mod m, sign = next
+// draw's lowest bit), so the rows are the same on every platform. Returns the rows, ascending.
+// Throws InvalidArgument for rate ∉ [0, 1), a negative or non-finite amplitude, or a bad segment.
+std::vector<int> InjectOutliers(Eigen::Ref<Eigen::VectorXd> y, Segment segment, double rate, double amplitude,
+                                std::uint64_t seed);
+
+// Mean, standard deviation (n − 1; 0 for one value), min, median, max of a sample.
+struct Spread {
+  double mean = 0, std = 0, min = 0, median = 0, max = 0;
+  static Spread Of(std::vector<double> values);
+};
+
+struct CompareOptions {
+  FitOptions fit;            // split, detrend, outlier decision for regressor cleaning
+  OutlierSpec outliers;
+  int trials = 1;
+  // Called after each (trial, estimator) run with (done, total).
+  std::function<void(int, int)> progress;
+};
+
+struct EstimatorScore {
+  std::string estimator;           // as given ("student:3")
+  Eigen::VectorXd theta;           // mean over trials
+  Spread one_step, simulation, theta_distance;
+  std::vector<double> one_step_per_trial;
+  bool has_simulation = false;
+  double ns_per_update = 0;        // fastest timed replay (first 5 trials)
+  double cleaned = 0;              // mean number of outputs cleaned in the regressors
+};
+
+struct CompareResult {
+  std::string structure;
+  std::vector<std::string> parameter_names;
+  Segment estimation, validation;
+  Eigen::VectorXd theta_ls;        // clean-data least squares
+  double sigma = 0;                // its residual std (the outlier unit)
+  FitScores reference;             // its validation scores
+  int outliers_per_trial = 0;
+  std::vector<EstimatorScore> scores;  // sorted by mean one-step fit, best first
+};
+
+// Throws InvalidArgument for bad options (including an unknown estimator, before any run starts).
+CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<EstimatorSettings>& estimators,
+                      const std::vector<std::string>& labels, const CompareOptions& options);
+
+}  // namespace ident::tools
