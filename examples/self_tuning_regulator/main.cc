@@ -14,7 +14,10 @@
 //          output variance  Var(y − y_d) (true y against the designed response Am y_d = Am(1) r(t−1)),
 //          tracking error   RMS(r − y),
 //          with and without outliers, and the ratio outliers / outlier-free. Samples t ≥ 500 only.
-//          --plot FILE.svg draws run 1 (with outliers); --csv FILE writes it.
+//          Three tables: the control law fed (1) the raw y_m, (2) y_m validated by the model (its
+//          one-step prediction replaces y_m when |y_m − ŷ| > 5σ̂), (3) validated and rejected samples
+//          withheld from the estimator with Skip(); a "true model" row gives the floor of each.
+//          --plot FILE.svg draws run 1 (with outliers, raw feedback); --csv FILE writes it.
 //
 //   ./build/examples/self_tuning_regulator [--runs 20] [--samples 5000] [--plot str.svg] [--csv str.csv]
 #include <cmath>
@@ -49,6 +52,11 @@ struct Trace {
   std::vector<double> t, r, y, y_measured, u, a1, a1_hat, b1, b1_hat;
 };
 
+// What the control law sees: the raw measurement, or a validated one — the model's one-step
+// prediction θ̂'z replaces y_m when |y_m − θ̂'z| > 5σ̂ (σ̂ = the estimator's noise_std()). kSkip also
+// withholds rejected samples from the estimator (Skip(): state untouched).
+enum class Feedback { kRaw, kValidated, kValidatedSkip };
+
 struct Metrics {
   double output_variance = 0;
   double tracking_rms = 0;
@@ -57,7 +65,7 @@ struct Metrics {
 // One closed-loop run. The plant noise and the outliers come from separate seeded streams, so every
 // estimator sees the same disturbances, and the outlier-free run the same plant noise.
 template <class Estimator>
-Metrics RunLoop(Estimator& est, unsigned seed, int samples, bool outliers, Trace* trace) {
+Metrics RunLoop(Estimator& est, unsigned seed, int samples, bool outliers, Feedback feedback, Trace* trace) {
   std::mt19937 noise_rng(seed), outlier_rng(seed + 7919), input_rng(seed + 104729);
   std::normal_distribution<double> noise(0, 0.1);
   std::uniform_real_distribution<double> unit(0, 1);
@@ -84,14 +92,23 @@ Metrics RunLoop(Estimator& est, unsigned seed, int samples, bool outliers, Trace
     if (outliers && hit) o = sign * magnitude;
     const double y_measured = y + o;
     // Identification: z(t) = [−y_m(t−1), −y_m(t−2), u(t−1), u(t−2)], θ = [a1, a2, b1, b2].
+    // (ym1, ym2: the past fed-back outputs — the measured ones, or in validated modes the validated ones.)
     z << -ym1, -ym2, u1, u2;
-    est.Update(y_measured, z);
+    if constexpr (requires { est.SetTruth(Eigen::Vector4d()); }) est.SetTruth(Eigen::Vector4d(a1, a2, b1, b2));
+    const double prediction = est.parameters().dot(z);  // θ̂(t−1)'z(t)
+    const double scale = est.noise_std();
+    const bool suspect = feedback != Feedback::kRaw && t >= kWarmUp && std::abs(y_measured - prediction) > 5 * scale;
+    const double y_feedback = suspect ? prediction : y_measured;
+    if (suspect && feedback == Feedback::kValidatedSkip)
+      est.Skip();
+    else
+      est.Update(y_measured, z);
     const auto& theta = est.parameters();
     // Design (keeps the last good controller if the model is not controllable) and control.
     if (design.Design(theta.head(2), theta.tail(2)) == ident::control::DesignStatus::kOk)
       law.set_polynomials(design.R(), design.S(), design.T());
     const double r = (t / 200) % 2 == 0 ? 1.0 : -1.0;
-    double u = law.Control(r, y_measured);
+    double u = law.Control(r, y_feedback);
     if (t < kWarmUp) u = unit(input_rng) < 0.5 ? -1.0 : 1.0;
     // Designed response Am y_d = Am(1) r(t−1).
     const double yd = -am(1) * yd1 - am(2) * yd2 + am.sum() * r1;
@@ -105,11 +122,22 @@ Metrics RunLoop(Estimator& est, unsigned seed, int samples, bool outliers, Trace
       trace->u.push_back(u), trace->a1.push_back(a1), trace->a1_hat.push_back(theta(0));
       trace->b1.push_back(b1), trace->b1_hat.push_back(theta(2));
     }
-    y2 = y1, y1 = y, ym2 = ym1, ym1 = y_measured, u2 = u1, u1 = u, yd2 = yd1, yd1 = yd, r1 = r;
+    y2 = y1, y1 = y, ym2 = ym1, ym1 = y_feedback, u2 = u1, u1 = u, yd2 = yd1, yd1 = yd, r1 = r;
   }
   const double mean = sum_e / count;
   return {sum_e2 / count - mean * mean, std::sqrt(sum_track2 / count)};
 }
+
+// Reference "estimator" that knows the true θ(t): the loop's floor (what a perfect model achieves with
+// the same raw measurements in the feedback path).
+struct TrueModel {
+  Eigen::Vector4d theta = Eigen::Vector4d::Zero();
+  void SetTruth(const Eigen::Vector4d& truth) { theta = truth; }
+  ident::StepReport Update(double, const Eigen::Vector4d&) { return {}; }
+  ident::StepReport Skip() { return {ident::StepStatus::kSkipped}; }
+  double noise_std() const { return 0.1; }
+  const Eigen::Vector4d& parameters() const { return theta; }
+};
 
 ident::RegressionPrior Prior() { return ident::RegressionPrior::Diagonal(4, 6, 1, 1e-3); }
 
@@ -119,12 +147,12 @@ struct Row {
 };
 
 template <class MakeEstimator>
-Row Study(const char* name, MakeEstimator make, int runs, int samples) {
+Row Study(const char* name, MakeEstimator make, int runs, int samples, Feedback feedback) {
   Row row{name, {}, {}};
   for (int run = 1; run <= runs; ++run)
     for (const bool outliers : {false, true}) {
       auto est = make();
-      const Metrics m = RunLoop(est, static_cast<unsigned>(run), samples, outliers, nullptr);
+      const Metrics m = RunLoop(est, static_cast<unsigned>(run), samples, outliers, feedback, nullptr);
       Metrics& acc = outliers ? row.outliers : row.clean;
       acc.output_variance += m.output_variance / runs;
       acc.tracking_rms += m.tracking_rms / runs;
@@ -177,7 +205,7 @@ int main(int argc, char** argv) {
     o.prior = Prior();
     return ident::BasicRecursiveLeastSquares<4>(4, o);
   };
-  std::vector<Row> rows{Study("RLS, lambda = 0.99", make_rls, runs, samples)};
+  auto make_truth = [] { return TrueModel(); };
 #ifdef IDENT_HAS_CAUCHY
   auto make_cauchy = [] {
     ident::StudentRegressionOptions o;  // k = 1: Cauchy
@@ -185,28 +213,48 @@ int main(int argc, char** argv) {
     o.prior = Prior();
     return ident::BasicStudentRegression<4>(4, o);
   };
-  rows.push_back(Study("Cauchy, lambda = 0.99", make_cauchy, runs, samples));
 #endif
+  struct Table {
+    const char* title;
+    std::vector<Row> rows;
+  };
+  std::vector<Table> tables;
+  for (const Feedback feedback : {Feedback::kRaw, Feedback::kValidated, Feedback::kValidatedSkip}) {
+    Table table{feedback == Feedback::kRaw         ? "control law fed the raw measurement y_m"
+                : feedback == Feedback::kValidated ? "control law fed y_m validated by the model (|y_m - yhat| > 5 sigma: use yhat)"
+                                                   : "validated, and rejected samples withheld from the estimator (Skip())",
+                {}};
+    table.rows.push_back(Study("true model (floor)", make_truth, runs, samples, feedback));
+    table.rows.push_back(Study("RLS, lambda = 0.99", make_rls, runs, samples, feedback));
+#ifdef IDENT_HAS_CAUCHY
+    table.rows.push_back(Study("Cauchy, lambda = 0.99", make_cauchy, runs, samples, feedback));
+#endif
+    tables.push_back(table);
+  }
 
   std::printf("Indirect STR (pole placement), drifting ARX(2,2,1) plant, %d seeded runs x %d samples "
               "(statistics over t >= %d)\n",
               runs, samples, kBurnIn);
-  std::printf("%-24s %14s %14s %8s   %12s %12s %8s\n", "model from", "Var(y-yd) clean", "with outliers",
-              "ratio", "RMS(r-y) clean", "w/ outliers", "ratio");
-  for (const Row& row : rows)
-    std::printf("%-24s %15.5f %14.5f %8.3f   %14.5f %12.5f %8.3f\n", row.name, row.clean.output_variance,
-                row.outliers.output_variance, row.outliers.output_variance / row.clean.output_variance,
-                row.clean.tracking_rms, row.outliers.tracking_rms, row.outliers.tracking_rms / row.clean.tracking_rms);
+  for (const Table& table : tables) {
+    std::printf("\n%s\n", table.title);
+    std::printf("%-24s %15s %14s %8s   %14s %12s %8s\n", "model from", "Var(y-yd) clean", "with outliers",
+                "ratio", "RMS(r-y) clean", "w/ outliers", "ratio");
+    for (const Row& row : table.rows)
+      std::printf("%-24s %15.5f %14.5f %8.3f   %14.5f %12.5f %8.3f\n", row.name, row.clean.output_variance,
+                  row.outliers.output_variance, row.outliers.output_variance / row.clean.output_variance,
+                  row.clean.tracking_rms, row.outliers.tracking_rms,
+                  row.outliers.tracking_rms / row.clean.tracking_rms);
+  }
 
   if (!plot.empty() || !csv.empty()) {
     Trace rls_trace;
     auto rls = make_rls();
-    RunLoop(rls, 1, samples, true, &rls_trace);
+    RunLoop(rls, 1, samples, true, Feedback::kRaw, &rls_trace);
     Trace* cauchy_ptr = nullptr;
 #ifdef IDENT_HAS_CAUCHY
     Trace cauchy_trace;
     auto cauchy = make_cauchy();
-    RunLoop(cauchy, 1, samples, true, &cauchy_trace);
+    RunLoop(cauchy, 1, samples, true, Feedback::kRaw, &cauchy_trace);
     cauchy_ptr = &cauchy_trace;
 #endif
     if (!csv.empty()) {
