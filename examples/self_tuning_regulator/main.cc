@@ -17,9 +17,11 @@
 //          Three tables: the control law fed (1) the raw y_m, (2) y_m validated by the model (its
 //          one-step prediction replaces y_m when |y_m − ŷ| > 5σ̂), (3) validated and rejected samples
 //          withheld from the estimator with Skip(); a "true model" row gives the floor of each.
-//          --plot FILE.svg draws run 1 (with outliers, raw feedback); --csv FILE writes it.
+//          --plot FILE.svg draws run 1 (with outliers; feedback mode --plot-feedback, default
+//          validated); --csv FILE writes it.
 //
 //   ./build/examples/self_tuning_regulator [--runs 20] [--samples 5000] [--plot str.svg] [--csv str.csv]
+//                                          [--plot-feedback raw|validated|skip]
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -177,11 +179,14 @@ void WriteCsv(const std::string& path, const Trace& a, const Trace* b) {
 
 int main(int argc, char** argv) {
   int runs = 20, samples = 5000;
-  std::string plot, csv;
+  std::string plot, csv, plot_feedback = "validated";
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (i + 1 >= argc) {
-      std::fprintf(stderr, "usage: %s [--runs N] [--samples N] [--plot FILE.svg] [--csv FILE]\n", argv[0]);
+      std::fprintf(stderr,
+                   "usage: %s [--runs N] [--samples N] [--plot FILE.svg|.png] [--csv FILE] "
+                   "[--plot-feedback raw|validated|skip]\n",
+                   argv[0]);
       return 2;
     }
     const std::string value = argv[++i];
@@ -189,10 +194,18 @@ int main(int argc, char** argv) {
     else if (arg == "--samples") samples = std::atoi(value.c_str());
     else if (arg == "--plot") plot = value;
     else if (arg == "--csv") csv = value;
+    else if (arg == "--plot-feedback") plot_feedback = value;
     else {
       std::fprintf(stderr, "unknown option %s\n", arg.c_str());
       return 2;
     }
+  }
+  Feedback plotted = Feedback::kValidated;
+  if (plot_feedback == "raw") plotted = Feedback::kRaw;
+  else if (plot_feedback == "skip") plotted = Feedback::kValidatedSkip;
+  else if (plot_feedback != "validated") {
+    std::fprintf(stderr, "--plot-feedback %s: need raw, validated or skip\n", plot_feedback.c_str());
+    return 2;
   }
   if (runs < 1 || samples <= kBurnIn + 10) {
     std::fprintf(stderr, "need --runs >= 1 and --samples > %d\n", kBurnIn + 10);
@@ -249,12 +262,12 @@ int main(int argc, char** argv) {
   if (!plot.empty() || !csv.empty()) {
     Trace rls_trace;
     auto rls = make_rls();
-    RunLoop(rls, 1, samples, true, Feedback::kRaw, &rls_trace);
+    RunLoop(rls, 1, samples, true, plotted, &rls_trace);
     Trace* cauchy_ptr = nullptr;
 #ifdef IDENT_HAS_CAUCHY
     Trace cauchy_trace;
     auto cauchy = make_cauchy();
-    RunLoop(cauchy, 1, samples, true, Feedback::kRaw, &cauchy_trace);
+    RunLoop(cauchy, 1, samples, true, plotted, &cauchy_trace);
     cauchy_ptr = &cauchy_trace;
 #endif
     if (!csv.empty()) {
@@ -265,17 +278,17 @@ int main(int argc, char** argv) {
 #ifdef IDENT_HAS_GNUPLOT
       using ident::tools::PlotPanel;
       std::vector<PlotPanel> panels;
-      PlotPanel p1{.title = "run 1 with outliers: RLS-based loop", .xlabel = "t", .ylabel = "y", .series = {}};
-      p1.series.push_back({"reference r", rls_trace.t, rls_trace.r});
+      PlotPanel p1{.title = "run 1 with outliers (feedback: " + plot_feedback + "): RLS-based loop", .xlabel = "t", .ylabel = "y", .series = {}};
       p1.series.push_back({"true output y", rls_trace.t, rls_trace.y});
+      p1.series.push_back({"reference r", rls_trace.t, rls_trace.r});
       panels.push_back(p1);
       PlotPanel p3{.title = "estimated a1 (true a1 drifts)", .xlabel = "t", .ylabel = "a1", .series = {}};
       p3.series.push_back({"true a1", rls_trace.t, rls_trace.a1});
       p3.series.push_back({"RLS", rls_trace.t, rls_trace.a1_hat});
       if (cauchy_ptr) {
-        PlotPanel p2{.title = "run 1 with outliers: Cauchy-based loop", .xlabel = "t", .ylabel = "y", .series = {}};
-        p2.series.push_back({"reference r", cauchy_ptr->t, cauchy_ptr->r});
+        PlotPanel p2{.title = "run 1 with outliers (feedback: " + plot_feedback + "): Cauchy-based loop", .xlabel = "t", .ylabel = "y", .series = {}};
         p2.series.push_back({"true output y", cauchy_ptr->t, cauchy_ptr->y});
+        p2.series.push_back({"reference r", cauchy_ptr->t, cauchy_ptr->r});
         panels.push_back(p2);
         p3.series.push_back({"Cauchy", cauchy_ptr->t, cauchy_ptr->a1_hat});
       }
