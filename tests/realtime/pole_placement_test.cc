@@ -177,3 +177,34 @@ TEST(PolePlacement, DesignAndControlAllocateNothingPerSample) {
 
 }  // namespace
 }  // namespace ident::control
+
+namespace ident::control {
+namespace {
+
+// R = 1 − q⁻¹ (pure integrator), S = 0, T = 1: u(t) = r(t) + u(t−1), clamped to ±2. The clamped value
+// enters the history, so after the reference flips the input leaves the limit at once (no wind-up):
+// r = 1, 1, 1, 1, −1, −1  ⇒  u = 1, 2, 2, 2, 1, 0   (unclamped history would give 1, 2, 3, 4, 3, 2 → 2, 2).
+TEST(RstController, ClampsTheInputAndFeedsBackTheAppliedValue) {
+  RstController law(1, 0, 0, /*u_max=*/2);
+  law.set_polynomials(Eigen::Vector2d(1, -1), Eigen::VectorXd::Zero(1), Eigen::VectorXd::Ones(1));
+  const double r[] = {1, 1, 1, 1, -1, -1};
+  const double want[] = {1, 2, 2, 2, 1, 0};
+  for (int t = 0; t < 6; ++t) EXPECT_EQ(law.Control(r[t], 0.0), want[t]) << "t = " << t;
+  law.Reset();
+  EXPECT_EQ(law.Control(0.5, 0.0), 0.5);
+}
+
+// u(t) = Σ T_i r(t−i) − Σ S_i y(t−i) − Σ_{i≥1} R_i u(t−i), written out by hand for two steps.
+TEST(RstController, ImplementsTheRstDifferenceEquation) {
+  RstController law(2, 1, 1);
+  law.set_polynomials(Eigen::Vector3d(1, 0.5, -0.25), Eigen::Vector2d(2, -1), Eigen::Vector2d(3, 0.5));
+  // t = 0: u0 = 3·1 − 2·0.2 = 2.6
+  EXPECT_NEAR(law.Control(1.0, 0.2), 2.6, 1e-12);
+  // t = 1: u1 = 3·2 + 0.5·1 − (2·0.4 − 1·0.2) − 0.5·2.6 = 6.5 − 0.6 − 1.3 = 4.6
+  EXPECT_NEAR(law.Control(2.0, 0.4), 4.6, 1e-12);
+  // t = 2: u2 = 3·0 + 0.5·2 − (2·0 − 0.4) − 0.5·4.6 + 0.25·2.6 = 1 + 0.4 − 2.3 + 0.65 = −0.25
+  EXPECT_NEAR(law.Control(0.0, 0.0), -0.25, 1e-12);
+}
+
+}  // namespace
+}  // namespace ident::control

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 #include "ident/rls.h"
@@ -233,6 +234,32 @@ TYPED_TEST(RlsRealtime, TenThousandLoopIterationsAllocateNothing) {
   EXPECT_GT(skipped, 800);
   EXPECT_TRUE(std::isfinite(sink));
   EXPECT_LT((rls.parameters() - Eigen::Vector4d(-1.5, 0.7, 1.0, 0.5)).norm(), 0.05);
+}
+
+}  // namespace
+}  // namespace ident
+
+namespace ident {
+namespace {
+
+// The allocation-free V_z⁻¹ (ExtendedInformation::ScaledVzInverse) equals the allocating one and the
+// inverse of the reconstructed V_z, for ρ = 1…8 and random SPD priors.
+TEST(ExtendedInformation, AllocationFreeVzInverseEqualsTheDirectInverse) {
+  std::mt19937 rng(28);
+  std::normal_distribution<double> g;
+  for (int rho = 1; rho <= 8; ++rho) {
+    Eigen::MatrixXd X(rho + 1, 3 * (rho + 1));
+    for (auto& v : X.reshaped()) v = g(rng);
+    RegressionPrior prior;
+    prior.nu0 = 3;
+    prior.V0 = X * X.transpose() / X.cols() + 0.1 * Eigen::MatrixXd::Identity(rho + 1, rho + 1);
+    const ExtendedInformation<> stats(prior);
+    Eigen::MatrixXd out(rho, rho);
+    stats.ScaledVzInverse(2.5, out);
+    const Eigen::MatrixXd direct = 2.5 * prior.V0.bottomRightCorner(rho, rho).inverse();
+    EXPECT_LT((out - direct).norm(), 1e-10 * direct.norm()) << "rho = " << rho;
+    EXPECT_LT((out - 2.5 * stats.VzInverse()).norm(), 1e-12 * direct.norm()) << "rho = " << rho;
+  }
 }
 
 }  // namespace
