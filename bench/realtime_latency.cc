@@ -1,4 +1,5 @@
-// Update latency distribution of the fixed-size (ρ = 4) recursive estimators: each of 10^6 updates
+// Update latency distribution of the fixed-size (ρ = 4) recursive estimators (and dynamic-size RLS for
+// comparison): each of 10^6 updates
 // is timed on its own with std::chrono::steady_clock, after 10^4 warm-up updates, on a cyclic
 // pre-generated ARX(2,2) stream (forgetting λ = 0.99). Reported per estimator as Google Benchmark
 // counters p50, p99, p99.9 and max [ns], plus the cost of one clock read pair (timing overhead,
@@ -105,6 +106,15 @@ void BM_LatencyRls4(benchmark::State& state) {
 }
 BENCHMARK(BM_LatencyRls4)->Iterations(1)->Unit(benchmark::kMillisecond);
 
+// The same with dynamic-size storage (for comparison with the fixed-size variant).
+void BM_LatencyRlsDynamic4(benchmark::State& state) {
+  ident::RlsOptions o;
+  o.forgetting.factor = kForgetting;
+  ident::RecursiveLeastSquares rls(4, o);
+  MeasureLatency(state, rls);
+}
+BENCHMARK(BM_LatencyRlsDynamic4)->Iterations(1)->Unit(benchmark::kMillisecond);
+
 #ifdef IDENT_HAS_CAUCHY
 void BM_LatencyCauchy4(benchmark::State& state) {
   ident::StudentRegressionOptions o;  // k = 1: Cauchy
@@ -129,7 +139,7 @@ class LatencyReporter : public benchmark::ConsoleReporter {
   }
   void Finalize() override {
     ConsoleReporter::Finalize();
-    std::printf("\nUpdate latency over %d updates, rho = 4, fixed size (steady_clock per update)\n", kUpdates);
+    std::printf("\nUpdate latency over %d updates, rho = 4 (steady_clock around each update)\n", kUpdates);
     std::printf("%-20s %8s %8s %8s %9s %9s %8s\n", "estimator", "p50[ns]", "p99[ns]", "p99.9", "max[ns]",
                 "clock[ns]", "p99/p50");
     for (auto& [name, c] : counters_)
