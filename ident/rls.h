@@ -23,7 +23,8 @@
 //   CovarianceInto()                                 ≈ (5/6)ρ³ + O(ρ²)
 // No step allocates after construction (fixed-size and dynamic variants alike).
 //
-// Real-time loop features (what MATLAB's recursive estimators offer, all noexcept, allocation-free):
+// Real-time loop features (what MATLAB's recursive estimators offer; all allocation-free; Update, Skip,
+// Reset and set_enabled are noexcept, set_forgetting and CovarianceInto throw only on invalid arguments):
 //   set_enabled(false)      Update() returns kSkipped and leaves the state bit-identical (EnableAdapt)
 //   Skip()                  a missing sample: kSkipped, state untouched
 //   Reset()                 back to the prior (ν0, V0)
