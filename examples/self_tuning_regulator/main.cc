@@ -104,10 +104,11 @@ Metrics RunLoop(Estimator& est, unsigned seed, int samples, bool outliers, Feedb
     const double scale = est.noise_std();
     const bool suspect = feedback != Feedback::kRaw && t >= kWarmUp && std::abs(y_measured - prediction) > 5 * scale;
     const double y_feedback = suspect ? prediction : y_measured;
-    if (suspect && feedback == Feedback::kValidatedSkip)
-      est.Skip();
-    else
+    if (suspect && feedback == Feedback::kValidatedSkip) {
+      if constexpr (requires { est.Skip(); }) est.Skip();  // (not updating is the same: state untouched)
+    } else {
       est.Update(y_measured, z);
+    }
     const auto& theta = est.parameters();
     // Design (keeps the last good controller if the model is not controllable) and control.
     if (design.Design(theta.head(2), theta.tail(2)) == ident::control::DesignStatus::kOk)
