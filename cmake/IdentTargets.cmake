@@ -25,4 +25,7 @@ function(ident_add_layer target alias dir)
     target_compile_features(${target} INTERFACE cxx_std_20)
   endif()
   add_library(${alias} ALIAS ${target})
+  # Installed/exported as the alias name: ident_core -> Ident::ident (see cmake/IdentInstall.cmake).
+  string(REPLACE "Ident::" "" export_name "${alias}")
+  set_target_properties(${target} PROPERTIES EXPORT_NAME ${export_name})
 endfunction()

@@ -12,7 +12,8 @@
 // Read-outs: Θ̂ = L_z⁻¹ l_zy (forward substitution, cached), D_y = d_0, V_z⁻¹ (on demand).
 // Index 0 of V is y; L = [[1, 0], [l_zy, L_z]], D = diag(d_y, D_z).
 //
-// All operations after construction are allocation-free except VzInverse() and V().
+// All operations after construction are allocation-free except VzInverse() and V() (ScaledVzInverse()
+// is the allocation-free alternative to VzInverse()).
 #pragma once
 
 #include <cmath>
@@ -49,6 +50,14 @@ class ExtendedInformation {
     h_.resize(n);
     g_.resize(n);
     theta_.resize(n - 1);
+    theta_valid_ = false;
+  }
+
+  // Back to (ν0, V0) given in factored form (e.g. a factor kept from construction). No allocation when
+  // V0 has the current size; never throws.
+  void Reset(double nu0, const LdFactor<Dim>& V0) noexcept {
+    nu_ = nu0;
+    V_ = V0;
     theta_valid_ = false;
   }
 
@@ -129,6 +138,31 @@ class ExtendedInformation {
     const Eigen::MatrixXd Linv =
         Lz.template triangularView<Eigen::UnitLower>().solve(Eigen::MatrixXd::Identity(rho, rho));
     return Linv * V_.d().tail(rho).cwiseInverse().asDiagonal() * Linv.transpose();
+  }
+
+  // out = s·V_z⁻¹ without allocating: M = L_z⁻¹ by forward substitution into the strict lower
+  // triangle of `out`, then out_ij = s Σ_{k≤i} M_ik M_jk / d_{z,k} (i ≤ j) into the upper triangle
+  // and diagonal, then mirrored. ~ρ³/2 flops. `out` must be ρ x ρ (not checked here).
+  template <class Derived>
+  void ScaledVzInverse(double s, Eigen::MatrixBase<Derived>& out) const noexcept {
+    const auto& L = V_.L();
+    const auto& d = V_.d();
+    const Eigen::Index rho = theta_.size();
+    // M = L_z⁻¹, L_z(i,k) = L(i+1,k+1): M_ik = −L_z(i,k) − Σ_{k<j<i} L_z(i,j) M_jk  (i > k).
+    for (Eigen::Index k = 0; k < rho; ++k)
+      for (Eigen::Index i = k + 1; i < rho; ++i) {
+        double m = -L(i + 1, k + 1);
+        for (Eigen::Index j = k + 1; j < i; ++j) m -= L(i + 1, j + 1) * out(j, k);
+        out(i, k) = m;
+      }
+    for (Eigen::Index i = 0; i < rho; ++i)
+      for (Eigen::Index j = i; j < rho; ++j) {
+        double c = (i == j ? 1.0 : out(j, i)) / d(i + 1);  // k = i: M_ii = 1
+        for (Eigen::Index k = 0; k < i; ++k) c += out(i, k) * out(j, k) / d(k + 1);
+        out(i, j) = s * c;
+      }
+    for (Eigen::Index i = 0; i < rho; ++i)
+      for (Eigen::Index j = 0; j < i; ++j) out(i, j) = out(j, i);
   }
 
   Eigen::MatrixXd V() const { return V_.Reconstruct(); }

@@ -6,12 +6,40 @@
 //           as in spec §7b.
 //   Read-outs: Θ̂ = V_z⁻¹V_zy; residual sum ν D_y; noise variance s² = ν D_y/(n − ρ) with
 //           n = Σ λ^k the (discounted) sample count; Cov(Θ̂) = s² (ν V_z)⁻¹ = D_y V_z⁻¹/(n − ρ).
-//   Cost:   ~3(ρ+1)² flops per update (back substitution + rank-one update), no allocation.
+//
+// Cost per Update() (m = ρ+1; one flop = one add or multiply; counted from the loops in ld_factor.h
+// and extended_information.h):
+//   input check (finite, no overflow)              3ρ
+//   ν̃ = λν, ν = ν̃ + 1, β = 1/ν, n ← λn + 1          5
+//   back substitution L'g = h                       m(m−1)          [spec §6]
+//   ê, ξ_z, ξ                                        3ρ + 4
+//   d ← (1−β)d                                       m + 1
+//   rank-one update (Agee–Turner)                    2m(m−1) + 7m    [spec §6]
+//   total, exponential forgetting                    3m(m−1) + 8m + 6ρ + 10 = 3ρ² + 17ρ + 18
+//                                                    (ρ = 4: 134 flops)
+//   stabilised forgetting adds m sparse rank-one     ≈ (2/3)m³ + 4m²   (O(ρ³); ρ = 4: ≈ 190 more)
+//   updates with the rows of L_a [spec §7b]
+//   parameters() after an update (cached)            ρ²     (forward substitution)
+//   CovarianceInto()                                 ≈ (5/6)ρ³ + O(ρ²)
+// No step allocates after construction (fixed-size and dynamic variants alike).
+//
+// Real-time loop features (what MATLAB's recursive estimators offer; all allocation-free; Update, Skip,
+// Reset and set_enabled are noexcept, set_forgetting and CovarianceInto throw only on invalid arguments):
+//   set_enabled(false)      Update() returns kSkipped and leaves the state bit-identical (EnableAdapt)
+//   Skip()                  a missing sample: kSkipped, state untouched
+//   Reset()                 back to the prior (ν0, V0)
+//   set_forgetting(λ)       takes effect at the next update (throws only for λ ∉ (0, 1])
+//   CovarianceInto(P)       Cov(Θ̂) into a caller-owned ρ x ρ matrix, at any time
 //
 // Example:
-//   ident::RecursiveLeastSquares rls(/*num_parameters=*/4, {.forgetting = {.factor = 0.99}});
-//   for (...) rls.Update(y, z);
-//   Eigen::VectorXd theta = rls.parameters();
+//   ident::BasicRecursiveLeastSquares<4> rls(/*num_parameters=*/4, {.forgetting = {.factor = 0.99}});
+//   Eigen::Matrix4d P;
+//   for (...) {
+//     rls.set_enabled(excitation_ok);
+//     ident::StepReport r = sensor_ok ? rls.Update(y, z) : rls.Skip();
+//     rls.CovarianceInto(P);
+//   }
+//   Eigen::Vector4d theta = rls.parameters();
 #pragma once
 
 #include <cmath>
@@ -54,7 +82,8 @@ class BasicRecursiveLeastSquares {
         prior_factor_(prior_.V0) {}
 
   // One sample. Rejects (state unchanged) a sample with a non-finite entry, a regressor of the
-  // wrong size, or one so large that the update would overflow (kRejectedInvalid).
+  // wrong size, or one so large that the update would overflow (kRejectedInvalid). While disabled: kSkipped,
+  // state unchanged (the sample is not even inspected).
   // Safeguards (the state is copied before the step, O(ρ²), allocation-free):
   //   windup  exponential forgetting without excitation shrinks d geometrically (d ∝ λ^t) until it
   //           underflows; a step that would leave some d_i below kWindupFloor is taken without
@@ -64,6 +93,7 @@ class BasicRecursiveLeastSquares {
   //           (overflow on samples of wildly mixed scales) is undone: kNumericalFailure.
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
+    if (!enabled_) return {StepStatus::kSkipped};
     if (z.size() != num_parameters() || !std::isfinite(y) || !z.allFinite() ||
         !std::isfinite(y * y + z.squaredNorm()))
       return {StepStatus::kRejectedInvalid};
@@ -105,14 +135,34 @@ class BasicRecursiveLeastSquares {
   double noise_std() const { return std::sqrt(noise_variance()); }
   // Cov(Θ̂) = s² (νV_z)⁻¹ (allocates, O(ρ³)).
   Eigen::MatrixXd covariance() const { return noise_variance() / stats_.nu() * stats_.VzInverse(); }
+  // The same Cov(Θ̂) into a caller-owned ρ x ρ matrix, without allocating (NaN until n > ρ).
+  // Throws InvalidArgument only if `out` has the wrong size.
+  void CovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
+    IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
+                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(),
+                  num_parameters());
+    stats_.ScaledVzInverse(noise_variance() / stats_.nu(), out);
+  }
   const ExtendedInformation<kDim>& statistics() const { return stats_; }
   const RlsOptions& options() const { return options_; }
 
-  void Reset() {
-    stats_.Reset(prior_);
+  // A missing sample (no measurement this period): returns kSkipped; the state is untouched, so
+  // the next Update() continues exactly as if this period had not happened.
+  StepReport Skip() const noexcept { return {StepStatus::kSkipped}; }
+  // Enable flag (MATLAB's EnableAdapt): while false, Update() skips every sample. Read-outs and
+  // Predict() keep working on the frozen state.
+  void set_enabled(bool enabled) noexcept { enabled_ = enabled; }
+  bool enabled() const noexcept { return enabled_; }
+
+  // Back to the prior (ν0, V0) and n = 0, from a factor kept since construction: no allocation.
+  // Keeps the enable flag and the current forgetting factor.
+  void Reset() noexcept {
+    stats_.Reset(prior_.nu0, prior_factor_);
     samples_ = 0;
   }
-  // Changes λ on the fly (the next update uses it). Throws InvalidArgument if λ ∉ (0, 1].
+  const RegressionPrior& prior() const { return prior_; }
+  // Changes λ on the fly (the next update uses it). Throws InvalidArgument if λ ∉ (0, 1]; no
+  // allocation otherwise.
   void set_forgetting(double lambda) {
     ForgettingOptions f = options_.forgetting;
     f.factor = lambda;
@@ -148,6 +198,7 @@ class BasicRecursiveLeastSquares {
   StepGuard<kDim> guard_{stats_};  // the state before the current step (see Update)
   LdFactor<kDim> prior_factor_;
   double samples_ = 0;
+  bool enabled_ = true;
 };
 
 using RecursiveLeastSquares = BasicRecursiveLeastSquares<Eigen::Dynamic>;

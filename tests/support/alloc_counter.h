@@ -1,4 +1,5 @@
-// Counts heap allocations made through the global operator new in this thread (test helper).
+// Counts heap allocations in this thread: operator new and malloc-family calls, so Eigen's dynamic
+// matrices (which call std::malloc) are counted too (test helper; see alloc_counter.cc).
 //
 // Example:
 //   ident::testing::AllocationCounter count;

@@ -1,0 +1,39 @@
+# Install rules: `cmake --install <build> [--prefix <dir>]` puts in place
+#   include/ident/{ident,models,approx}/**.h   the public headers, paths preserved (consumers write
+#                                               #include "ident/rls.h" as inside the tree)
+#   lib/libident_{core,models,approx}.a         the layer libraries
+#   lib/cmake/Ident/IdentConfig.cmake, IdentConfigVersion.cmake, IdentTargets*.cmake
+# Consumers: find_package(Ident 0.1 REQUIRED) and link Ident::ident (or Ident::models, Ident::approx,
+# Ident::common). Everything here is in the COMPONENT `ident_development`, so
+# `cmake --install <build> --component ident_development` installs only the library package.
+include(GNUInstallDirs)
+include(CMakePackageConfigHelpers)
+
+set(IDENT_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/Ident")
+
+set(ident_installed_targets ident_common ident_models ident_approx ident_core)
+install(TARGETS ${ident_installed_targets}
+        EXPORT IdentTargets
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT ident_development
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT ident_development
+        INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ident)
+foreach(layer models approx ident)
+  install(DIRECTORY "${PROJECT_SOURCE_DIR}/${layer}/"
+          DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/ident/${layer}"
+          COMPONENT ident_development
+          FILES_MATCHING PATTERN "*.h")
+endforeach()
+install(EXPORT IdentTargets
+        NAMESPACE Ident::
+        DESTINATION ${IDENT_INSTALL_CMAKEDIR}
+        COMPONENT ident_development)
+
+configure_package_config_file("${PROJECT_SOURCE_DIR}/cmake/IdentConfig.cmake.in"
+                              "${PROJECT_BINARY_DIR}/IdentConfig.cmake"
+                              INSTALL_DESTINATION ${IDENT_INSTALL_CMAKEDIR})
+write_basic_package_version_file("${PROJECT_BINARY_DIR}/IdentConfigVersion.cmake"
+                                 VERSION ${PROJECT_VERSION}
+                                 COMPATIBILITY SameMajorVersion)
+install(FILES "${PROJECT_BINARY_DIR}/IdentConfig.cmake" "${PROJECT_BINARY_DIR}/IdentConfigVersion.cmake"
+        DESTINATION ${IDENT_INSTALL_CMAKEDIR}
+        COMPONENT ident_development)
