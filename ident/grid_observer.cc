@@ -231,13 +231,24 @@ void GridObserver::Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* 
     return k < (np_[i] + 1) / 2 ? k : k - np_[i];
   };
   if (log_noise == nullptr) {
-    // Gaussian: multiply by the characteristic function exp(−½ ω'P_N ω), ω_i = 2π k_i / (np_i Δ_i).
-    Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+    // Gaussian: multiply by a lattice version of the characteristic function exp(−½ ω'P_N ω). The
+    // continuous one jumps at the Nyquist frequency when P_N is narrow against the grid, and that jump
+    // becomes a slowly decaying 1/x tail in space. With s_i = (2/Δ_i) sin(ω_i Δ_i/2) (periodic) and
+    // d_i = cos(ω_i Δ_i/2) we use the exponent −½[(D s)'P_N(D s) + Σ_i P_N,ii (1 − d_i²) s_i²]: smooth
+    // and periodic in ω, ≥ 0 since P_N ≥ 0, equal to −½ω'P_N ω to second order, so the kernel has
+    // exactly the covariance P_N (for diagonal P_N it is the lattice heat kernel).
+    Eigen::Vector3d s = Eigen::Vector3d::Zero(), ds = Eigen::Vector3d::Zero();
     for (int flat = 0; flat < padded_total_; ++flat) {
       double quad = 0;
-      for (int i = 0; i < dim_; ++i) omega(i) = 2 * std::numbers::pi * signed_index(flat, i) / (np_[i] * spacing_[i]);
+      for (int i = 0; i < dim_; ++i) {
+        const double half_angle = std::numbers::pi * signed_index(flat, i) / np_[i];
+        s(i) = 2 * std::sin(half_angle) / spacing_[i];
+        const double d = std::cos(half_angle);
+        ds(i) = d * s(i);
+        quad += noise_cov(i, i) * (1 - d * d) * s(i) * s(i);
+      }
       for (int i = 0; i < dim_; ++i)
-        for (int j = 0; j < dim_; ++j) quad += omega(i) * noise_cov(i, j) * omega(j);
+        for (int j = 0; j < dim_; ++j) quad += ds(i) * noise_cov(i, j) * ds(j);
       buf_[flat] *= std::exp(-0.5 * quad);
     }
   } else {

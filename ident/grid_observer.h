@@ -3,8 +3,9 @@
 //
 //   (1) dynamics       f^d(x)  ∝ f_{k−1}(A⁻¹(x − B u))     multilinear interpolation of the old grid
 //   (2) process noise  f^dn    = f_N * f^d                 FFT convolution (Eigen FFT, zero padded); a
-//                                                         Gaussian f_N multiplies the spectrum by its
-//                                                         characteristic function exp(−½ ω'P_N ω), any
+//                                                         Gaussian f_N multiplies the spectrum by a
+//                                                         lattice characteristic function with the
+//                                                         exact covariance P_N (grid_observer.cc), any
 //                                                         other log-concave f_N is sampled on the grid
 //   (3) measurement    f_k(x)  ∝ f_M(y, x) · f^dn(x)      pointwise product, in log space shifted by
 //                                                         max log f_M (no underflow), renormalised

@@ -8,6 +8,7 @@
 namespace ident::tools {
 
 void AddFitCommand(CLI::App& app);        // ident fit        (fit_command.cc)
+void AddMemsCommand(CLI::App& app);       // ident mems       (mems_command.cc)
 
 // Exit codes of every subcommand.
 inline constexpr int kExitOk = 0;
