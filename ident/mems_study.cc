@@ -133,8 +133,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       first_passage(event, side, outward);
       first_passage(event_trunc, side, outward);
     } else {
-      if (y == 0) gaussian_reading(event, 0.0, r_zero13);
-      else event.Correct(*sensor, y);
+      gaussian_reading(event, y * o.threshold, r_zero13);   // y = 0: x1 = 0; outside: x1 = ±T
       event_trunc.Correct(*sensor, y);
     }
     bound.Predict(model);

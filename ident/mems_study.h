@@ -17,8 +17,10 @@
 //   lc_plain        LcGaussianFilter, exact tilted moments every step (assumed-density filter; baseline)
 //   lc_event        LcGaussianFilter with the first-passage event model: a crossing reading is the
 //                   Gaussian x1 = y (T + h|x̂2|/2) with variance h²(x̂2² + P22)/12 (crossing time uniform
-//                   in the step); persistent y = ±1 exact half-line moments; y = 0 the σ_o (p11 = 1/3)
-//                   reading (successive y = 0 carry little new information, [1, sec. V-B])
+//                   in the step; likewise the first sample back inside, at y_prev (T − h|x̂2|/2)); every
+//                   other reading (y = 0 inside, y = ±1 still outside) is the σ_o reading x1 = y T with
+//                   variance σ_o²/h, p11 = 1/3: successive equal readings carry little new information
+//                   [1, sec. V-B], and exact moments at each of them collapse the filter (lc_plain)
 //   lc_event_trunc  first-passage event model, but exact interval moments for every other reading
 //   bound           CovarianceBoundTracker with the modified event measurement: crossing ∈ LC(Q_M),
 //                   Q_M = diag(σ_M⁻², 0), y = 0 ∈ LC(0); rms = √(mean P̄22)
