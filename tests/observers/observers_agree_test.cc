@@ -173,7 +173,7 @@ TEST(GridObserver, AgreesWithKalmanFilterIn3D) {
   Eigen::MatrixXd A(3, 3), B(3, 1), Q = 0.05 * Eigen::MatrixXd::Identity(3, 3);
   A << 0.9, 0.1, 0, 0, 0.8, 0.2, 0.1, 0, 0.85;
   B << 0, 0, 1;
-  ExpectGridAgreesWithKalman(models::LinearStateSpace::Make(A, B, Q), Eigen::Vector3d(1, 0, 0.5), 32, 5);
+  ExpectGridAgreesWithKalman(models::LinearStateSpace::Make(A, B, Q), Eigen::Vector3d(1, 0, 0.5), 24, 5);
 }
 
 TEST(GridObserver, SampledNoiseDensityMatchesCharacteristicFunctionPath) {
