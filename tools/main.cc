@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   AddFitCommand(app);
   AddDatasetsCommand(app);
   AddCompareCommand(app);
+  AddMemsCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

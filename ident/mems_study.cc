@@ -1,0 +1,182 @@
+#include "ident/mems_study.h"
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include <Eigen/Cholesky>
+#include <fmt/format.h>
+
+#include "ident/common/error.h"
+#include "ident/covariance_bound.h"
+#include "ident/grid_observer.h"
+#include "ident/kalman_filter.h"
+#include "ident/lc_gaussian_filter.h"
+#include "models/measurement.h"
+#include "models/state_space.h"
+
+namespace ident {
+
+std::string MemsStudyOptions::Validate() const {
+  if (!(h > 0 && h < 1)) return fmt::format("h = {}; need 0 < h < 1", h);
+  if (!(noise_intensity > 0)) return fmt::format("noise_intensity = {}; need > 0", noise_intensity);
+  if (!(threshold > 0)) return fmt::format("threshold = {}; need > 0", threshold);
+  if (!(t_target >= 10 * h)) return fmt::format("t_target = {}; need >= 10 h = {}", t_target, 10 * h);
+  if (steps < 100) return fmt::format("steps = {}; need >= 100", steps);
+  if (burn_in < 0 || burn_in >= steps) return fmt::format("burn_in = {}; need 0 <= burn_in < steps", burn_in);
+  if (grid_points < 16 || grid_points > 1024) return fmt::format("grid_points = {}; need 16..1024", grid_points);
+  if (!(sigma_m2 >= 0)) return fmt::format("sigma_m2 = {}; need >= 0", sigma_m2);
+  return "";
+}
+
+const MemsObserverResult& MemsStudyResult::Get(const std::string& name) const {
+  for (const auto& o : observers) if (o.name == name) return o;
+  IDENT_REQUIRE(false, "no observer named '{}' in the MEMS study", name);
+  return observers.front();  // unreachable
+}
+
+double TunedSigmaO(double p11_stat, double noise_intensity) {
+  IDENT_REQUIRE(p11_stat > 0 && noise_intensity > 0, "need p11_stat > 0 and noise intensity > 0");
+  return std::cbrt(0.5) * std::pow(p11_stat, 2.0 / 3.0) * std::pow(noise_intensity, -1.0 / 6.0);  // [1, sec. V-B]
+}
+
+namespace {
+
+struct Accumulator {
+  double se = 0, var = 0;
+  int n = 0;
+  void Add(double err, double predicted_var) { se += err * err; var += predicted_var; ++n; }
+  MemsObserverResult Result(const std::string& name) const {
+    return {name, std::sqrt(se / n), (var / n) / (se / n)};
+  }
+};
+
+}  // namespace
+
+MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
+  const std::string problem = o.Validate();
+  IDENT_REQUIRE(problem.empty(), "MEMS study: {}", problem);
+  const auto model = models::MemsAccelerometerDynamics(o.h, o.noise_intensity);
+  const Eigen::Vector2d c(1.0, 0.0);
+  auto sensor = std::make_shared<models::ThresholdSensor>(c, o.threshold);
+  const double v_ref = 2 * o.threshold / o.t_target;
+  const double tau = o.t_target / 8;
+  MemsStudyResult result;
+  result.sigma_m2 = o.sigma_m2 > 0 ? o.sigma_m2 : (2 * o.h * v_ref) * (2 * o.h * v_ref) / 3;
+  result.sigma_o = TunedSigmaO(1 / std::sqrt(3.0), o.noise_intensity);
+  const double sigma_o13 = TunedSigmaO(1.0 / 3.0, o.noise_intensity);
+  const double r_zero = result.sigma_o * result.sigma_o / o.h;        // measurement variance σ_o² h⁻¹
+  const double r_zero13 = sigma_o13 * sigma_o13 / o.h;
+
+  const Eigen::Vector2d m0(0.0, v_ref);
+  Eigen::Matrix2d P0;
+  P0 << 0.3, 0, 0, 1.0;
+  GridObserverOptions gopt;
+  gopt.points = {o.grid_points, o.grid_points};
+  GridObserver grid(m0, P0, gopt);
+  KalmanFilter tuned(m0, P0), tuned13(m0, P0);
+  LcGaussianFilter plain(m0, P0), event(m0, P0), event_trunc(m0, P0);
+  CovarianceBoundTracker bound(P0);
+
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> normal;
+  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
+  Eigen::Vector2d x(0.0, v_ref), w;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
+  double y_prev = 0, direction = 1;
+  Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_bound;
+  int events_counted = 0;
+
+  // Gaussian reading of x1 at `value` with variance r, as tilted moments (exact for a Gaussian).
+  const models::GaussianMeasurement unit_reading(c, 1.0);
+  auto gaussian_reading = [&](LcGaussianFilter& f, double value, double r) {
+    const double s2 = f.covariance()(0, 0);
+    const double m = f.mean()(0);
+    const double g = s2 / (s2 + r);
+    f.ApplyTilt(c, {0.0, m + g * (value - m), s2 * r / (s2 + r), true});
+  };
+  // First sample past a threshold at ±T (side = ±1; inward = −1 when leaving the outer region):
+  // x1 = side (T + inward·h|v|/2), variance h²(v² + P22)/12.
+  auto first_passage = [&](LcGaussianFilter& f, double side, double outward) {
+    const double v = f.mean()(1);
+    gaussian_reading(f, side * (o.threshold + outward * o.h * std::abs(v) / 2),
+                     o.h * o.h * (v * v + f.covariance()(1, 1)) / 12 + 1e-12);
+  };
+
+  for (int k = 0; k < o.steps; ++k) {
+    // Truth, reading.
+    for (int i = 0; i < 2; ++i) w(i) = normal(rng);
+    x = model.A * x + model.B * u + L * w;
+    const double y = sensor->Measure(x);
+    const bool crossing = y != 0 && y_prev == 0;   // an event: 0 → ±1
+    const bool leaving = y == 0 && y_prev != 0;    // back inside: ±1 → 0
+    if (crossing) {
+      direction = -y;
+      if (k >= o.burn_in) ++events_counted;
+    }
+    // Observers: time update with u(k−1), then the reading y(k).
+    grid.Predict(model, u);
+    grid.Correct(*sensor, y);
+    for (KalmanFilter* kf : {&tuned, &tuned13}) {
+      kf->Predict(model, u);
+      const double rz = kf == &tuned ? r_zero : r_zero13;
+      if (crossing) kf->Correct(c, result.sigma_m2, y * o.threshold);
+      else if (leaving) kf->Correct(c, result.sigma_m2, y_prev * o.threshold);
+      else kf->Correct(c, rz, y * o.threshold);   // y = 0: x1 = 0; outside: x1 = ±T, both σ_o² h⁻¹
+    }
+    plain.Predict(model, u);
+    plain.Correct(*sensor, y);
+    event.Predict(model, u);
+    event_trunc.Predict(model, u);
+    if (crossing || leaving) {
+      const double side = crossing ? y : y_prev, outward = crossing ? 1.0 : -1.0;
+      first_passage(event, side, outward);
+      first_passage(event_trunc, side, outward);
+    } else {
+      gaussian_reading(event, y * o.threshold, r_zero13);   // y = 0: x1 = 0; outside: x1 = ±T
+      event_trunc.Correct(*sensor, y);
+    }
+    bound.Predict(model);
+    if (crossing) bound.UpdateStrength(c, 1.0 / result.sigma_m2);   // modified event measurement
+    // Control law (causal in u and y): push back while outside, else track ∓v_ref with the tuned
+    // Kalman filter's velocity estimate.
+    u(0) = y != 0 ? -y * 2 * v_ref / tau : -(tuned.mean()(1) - direction * v_ref) / tau;
+    y_prev = y;
+
+    if (k >= o.burn_in) {
+      acc_grid.Add(grid.mean()(1) - x(1), grid.covariance()(1, 1));
+      acc_tuned.Add(tuned.mean()(1) - x(1), tuned.covariance()(1, 1));
+      acc_tuned13.Add(tuned13.mean()(1) - x(1), tuned13.covariance()(1, 1));
+      acc_plain.Add(plain.mean()(1) - x(1), plain.covariance()(1, 1));
+      acc_event.Add(event.mean()(1) - x(1), event.covariance()(1, 1));
+      acc_trunc.Add(event_trunc.mean()(1) - x(1), event_trunc.covariance()(1, 1));
+      acc_bound.Add(0.0, bound.covariance()(1, 1));
+    }
+    if (o.record_trace) {
+      auto& t = result.trace;
+      t.t.push_back((k + 1) * o.h);
+      t.x1.push_back(x(0));
+      t.y.push_back(y);
+      t.var_grid.push_back(grid.covariance()(1, 1));
+      t.var_tuned_kalman.push_back(tuned.covariance()(1, 1));
+      t.var_lc_event.push_back(event.covariance()(1, 1));
+      t.var_bound.push_back(bound.covariance()(1, 1));
+      const double e = grid.mean()(1) - x(1);
+      t.err2_grid.push_back(e * e);
+    }
+  }
+  result.events = events_counted;
+  result.t_mean = events_counted > 0 ? (o.steps - o.burn_in) * o.h / events_counted
+                                     : std::numeric_limits<double>::infinity();
+  result.observers.push_back(acc_grid.Result("grid"));
+  result.observers.push_back(acc_tuned.Result("tuned_kalman"));
+  result.observers.push_back(acc_tuned13.Result("tuned_kalman_13"));
+  result.observers.push_back(acc_plain.Result("lc_plain"));
+  result.observers.push_back(acc_event.Result("lc_event"));
+  result.observers.push_back(acc_trunc.Result("lc_event_trunc"));
+  MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n), (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n)};
+  result.observers.push_back(b);
+  return result;
+}
+
+}  // namespace ident

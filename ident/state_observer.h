@@ -1,0 +1,39 @@
+// The common interface of ident's state observers (Kalman filter, log-concave Gaussian filter, grid
+// Bayesian observer, covariance bound tracker).
+//
+// A state-space data item is d(k) = (u(k−1), y(k)): the input applied over the last sampling interval
+// and the reading taken at its end. Update(d) runs the time update with u(k−1) (dynamics and process
+// noise, [1, eqs. (1)-(2)]) and then the measurement update with y(k) [1, eq. (3)].
+//
+//   StepReport E::Update(const StateSpaceItem&)   one step; StepStatus says whether the state changed
+//   mean()                                         state estimate x̂(k) (posterior mean)
+//   covariance()                                   its covariance (for the bound tracker: the bound)
+//
+// Example:
+//   ident::KalmanFilter kf(model, measurement, x0, P0);
+//   for (const auto& d : items) kf.Update(d);
+//
+// [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
+#pragma once
+
+#include <concepts>
+
+#include <Eigen/Core>
+
+#include "ident/common/step_report.h"
+
+namespace ident {
+
+struct StateSpaceItem {
+  Eigen::VectorXd u;  // u(k−1), size = number of inputs (may be empty)
+  double y = 0.0;     // y(k)
+};
+
+template <class E>
+concept StateObserver = requires(E& e, const E& ce, const StateSpaceItem& d) {
+  { e.Update(d) } -> std::same_as<StepReport>;
+  { ce.mean() } -> std::convertible_to<Eigen::VectorXd>;
+  { ce.covariance() } -> std::convertible_to<Eigen::MatrixXd>;
+};
+
+}  // namespace ident
