@@ -8,6 +8,8 @@
 namespace ident::tools {
 
 void AddFitCommand(CLI::App& app);        // ident fit        (fit_command.cc)
+void AddLogcondensCommand(CLI::App& app); // ident logcondens (logcondens_command.cc)
+void AddSmoothCommand(CLI::App& app);     // ident smooth     (smooth_command.cc)
 
 // Exit codes of every subcommand.
 inline constexpr int kExitOk = 0;

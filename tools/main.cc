@@ -13,6 +13,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "ident 0.1.0");
   AddFitCommand(app);
+  AddLogcondensCommand(app);
+  AddSmoothCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
