@@ -10,7 +10,8 @@ namespace ident::testing {
 
 // <repo>/datasets/<name>
 std::string DatasetPath(const std::string& name);
-// <repo>/../shared/<relative>
+// <repo>/tests/data/shared/<relative>: the in-repository copy of the shared material tests need
+// (spec/vectors/*), so that a clean clone tests without ../shared.
 std::string SharedPath(const std::string& relative);
 // Reads a whole CSV with a header of column names into `names` and a row-major matrix (test helper;
 // fails the test via exception on a bad file).
