@@ -18,12 +18,14 @@ struct JValues {
 // |d| < 1 (the closed forms cancel there), closed forms otherwise.
 void SmallJ(double d, double* j0, double* j1, double* j2) {
   if (std::abs(d) < 1.0) {
+    // Terms fall like |d|^m / m!; stop once they no longer change s0 (at most 30 terms for |d| < 1).
     double term = 1, s0 = 0, s1 = 0, s2 = 0;
     for (int m = 0; m < 30; ++m) {
       s0 += term / (m + 1);
       s1 += term / (m + 2);
       s2 += term / (m + 3);
       term *= d / (m + 1);
+      if (std::abs(term) < 1e-17 * s2) break;
     }
     *j0 = s0, *j1 = s1, *j2 = s2;
     return;
@@ -50,6 +52,22 @@ JValues Jfun(double r, double s) {
   v.Jss = swap ? near2 : far2;
   v.Jrs = mixed;
   return v;
+}
+
+// J(r, s) and Jr(r, s) given er = e^r, es = e^s (each exp computed once per data point):
+//   J = (es - er) / d,  Jr = (es - er - d er) / d^2  (d = s - r), Taylor series in d for |d| < 0.01.
+inline void SegmentIntegrals(double r, double s, double er, double es, double* J, double* Jr) {
+  const double d = s - r;
+  if (std::abs(d) < 1e-2) {
+    // J/er = sum_m d^m/(m+1)!,  Jr/er = sum_m d^m/(m+2)!  (Horner; the d^7 terms are below 1e-18)
+    const double j0 = 1 + d * (1. / 2 + d * (1. / 6 + d * (1. / 24 + d * (1. / 120 + d * (1. / 720 + d / 5040)))));
+    const double jr = 1. / 2 + d * (1. / 6 + d * (1. / 24 + d * (1. / 120 + d * (1. / 720 + d * (1. / 5040 + d / 40320)))));
+    *J = er * j0;
+    *Jr = er * jr;
+    return;
+  }
+  *J = (es - er) / d;
+  *Jr = (es - er - d * er) / (d * d);
 }
 
 class ActiveSet {
@@ -80,6 +98,7 @@ class ActiveSet {
     };
     Eigen::VectorXd g(K), diag(K), off(std::max(K - 1, 1)), step(K), trial(K);
     double L = objective(eta);
+    int fine_steps = 0;
     for (int it = 0; it < 200; ++it) {
       g = c;
       diag.setZero();
@@ -101,7 +120,16 @@ class ActiveSet {
       step(K - 1) /= diag(K - 1);
       for (int a = K - 2; a >= 0; --a) step(a) = (step(a) - off(a) * step(a + 1)) / diag(a);
       const double decrement = g.dot(step);
-      if (!(decrement > o_.tolerance * o_.tolerance)) break;
+      // Newton decrement g'(-H)^-1 g = twice the predicted gain in L. Below 1e-10 the full step is taken
+      // without line search (quadratic convergence; L itself cannot resolve such gains in rounding),
+      // and at most 3 such steps are needed to reach rounding level.
+      if (!(decrement > 1e-26)) break;
+      if (decrement < 1e-10) {
+        eta += step;
+        L = objective(eta);
+        if (++fine_steps >= 3) break;
+        continue;
+      }
       double t = 1;
       for (; t > 1e-12; t *= 0.5) {
         trial = eta + t * step;
@@ -211,13 +239,15 @@ class ActiveSet {
                                                 const Eigen::VectorXd& phi) {
     const int m = static_cast<int>(x.size());
     Eigen::VectorXd D(m);
-    double F = 0, IF = 0, Fn = 0, IFn = 0;
+    double F = 0, IF = 0, Fn = 0, IFn = 0, e_next = std::exp(phi(0));
     D(0) = 0;
     for (int j = 0; j + 1 < m; ++j) {
-      const double delta = x(j + 1) - x(j);
-      const JValues v = Jfun(phi(j), phi(j + 1));
-      IF += delta * F + delta * delta * v.Jr;
-      F += delta * v.J;
+      const double delta = x(j + 1) - x(j), e = e_next;
+      e_next = std::exp(phi(j + 1));
+      double J, Jr;
+      SegmentIntegrals(phi(j), phi(j + 1), e, e_next, &J, &Jr);
+      IF += delta * F + delta * delta * Jr;
+      F += delta * J;
       Fn += w(j);
       IFn += delta * Fn;
       D(j + 1) = IF - IFn;
