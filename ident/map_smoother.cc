@@ -126,6 +126,26 @@ Eigen::MatrixXd StatesFromDual(const MapSmootherProblem& p, const Eigen::MatrixX
 
 namespace {
 
+// y += alpha A x and y += alpha A' x with plain loops (A column-major): for the small matrices of
+// state-space smoothing these are several times faster than Eigen's dynamic-size kernels.
+inline void AddMatVec(const Eigen::MatrixXd& A, const double* x, double* y, double alpha) {
+  const Eigen::Index r = A.rows(), c = A.cols();
+  const double* a = A.data();
+  for (Eigen::Index j = 0; j < c; ++j) {
+    const double xj = alpha * x[j];
+    for (Eigen::Index i = 0; i < r; ++i) y[i] += a[i + j * r] * xj;
+  }
+}
+inline void AddMatTVec(const Eigen::MatrixXd& A, const double* x, double* y, double alpha) {
+  const Eigen::Index r = A.rows(), c = A.cols();
+  const double* a = A.data();
+  for (Eigen::Index j = 0; j < c; ++j) {
+    double s = 0;
+    for (Eigen::Index i = 0; i < r; ++i) s += a[i + j * r] * x[i];
+    y[j] += alpha * s;
+  }
+}
+
 // Solver-side data of one distinct penalty.
 struct Prepared {
   const PlqForm* plq = nullptr;
@@ -190,6 +210,7 @@ class Solver {
     v_.resize(m);
     g_.resize(m);
     W_.resize(m, m);
+    WF_.resize(m, n_);
     int kmax = 1;
     for (auto& [_, prep] : prepared_) kmax = std::max(kmax, prep->k);
     tk_.resize(kmax);
@@ -288,23 +309,26 @@ class Solver {
   // r = residual of the term at x (process: x_t - F x_{t-1}; measurement: z_t - H_t x_t).
   void Residual(const Term& term, const Eigen::MatrixXd& x, bool include_constant, Eigen::Ref<Eigen::VectorXd> r) {
     const int t = term.t;
+    double* out = r.data();
     if (term.process) {
-      r = x.col(t);
-      if (t > 0) r.noalias() -= p_.Ft(t - 1) * x.col(t - 1);
+      const double* xt = x.data() + static_cast<Eigen::Index>(t) * n_;
+      for (int i = 0; i < n_; ++i) out[i] = xt[i];
+      if (t > 0) AddMatVec(p_.Ft(t - 1), xt - n_, out, -1.0);
     } else {
-      r.noalias() = -p_.Ht(t) * x.col(t);
-      if (include_constant) r += p_.z.col(t);
+      for (int i = 0; i < nz_; ++i) out[i] = include_constant ? p_.z(i, t) : 0.0;
+      AddMatVec(p_.Ht(t), x.data() + static_cast<Eigen::Index>(t) * n_, out, -1.0);
     }
   }
 
   // out += sign * J' g
   void AddJt(const Term& term, const Eigen::Ref<const Eigen::VectorXd>& g, double sign, Eigen::MatrixXd& out) {
     const int t = term.t;
+    double* ot = out.data() + static_cast<Eigen::Index>(t) * n_;
     if (term.process) {
-      out.col(t) += sign * g;
-      if (t > 0) out.col(t - 1).noalias() -= sign * p_.Ft(t - 1).transpose() * g;
+      for (int i = 0; i < n_; ++i) ot[i] += sign * g(i);
+      if (t > 0) AddMatTVec(p_.Ft(t - 1), g.data(), ot - n_, -sign);
     } else {
-      out.col(t).noalias() -= sign * p_.Ht(t).transpose() * g;
+      AddMatTVec(p_.Ht(t), g.data(), ot, -sign);
     }
   }
 
@@ -320,12 +344,12 @@ class Solver {
       Residual(term, x_, true, r);
       auto u = u_.segment(term.offset, k);
       v = f.p;
-      v.noalias() += f.B.transpose() * u;
+      AddMatTVec(f.B, u.data(), v.data(), 1.0);
       v_scale = std::max(v_scale, v.cwiseAbs().maxCoeff());
       AddJt(term, v, 1.0, R4_);
       auto r3 = r3_.segment(term.offset, k);
-      r3.noalias() = f.B * r;
-      r3 -= f.b;
+      r3 = -f.b;
+      AddMatVec(f.B, r.data(), r3.data(), 1.0);
       if (f.diagonal_M)
         r3 -= f.M.diagonal().cwiseProduct(u);
       else
@@ -357,7 +381,8 @@ class Solver {
   void ApplyKinv(const Term& term, Eigen::Ref<Eigen::VectorXd> tk, Eigen::Ref<Eigen::VectorXd> out) {
     Prepared& prep = *term.prep;
     if (prep.constant) {
-      out.noalias() = prep.Kinv * tk;
+      out.setZero();
+      AddMatVec(prep.Kinv, tk.data(), out.data(), 1.0);
     } else if (prep.plq->diagonal_M) {
       out = tk.cwiseQuotient(kd_.segment(term.offset, prep.k));
     } else {
@@ -389,7 +414,11 @@ class Solver {
           kd_(term.offset + i) = BarrierCurvature(term.offset + i) + (f.diagonal_M ? f.M(i, i) : 0.0);
         if (f.diagonal_M) {
           W.setZero();
-          for (int i = 0; i < k; ++i) W.noalias() += f.B.row(i).transpose() * f.B.row(i) / kd_(term.offset + i);
+          for (int i = 0; i < k; ++i) {
+            const double inv = 1.0 / kd_(term.offset + i);
+            for (int a = 0; a < m; ++a)
+              for (int b = 0; b < m; ++b) W(a, b) += f.B(i, a) * f.B(i, b) * inv;
+          }
         } else {
           for (int i = 0; i < k; ++i) kd_(term.offset + i) = BarrierCurvature(term.offset + i);
           FactorK(term);
@@ -398,17 +427,42 @@ class Solver {
         }
       }
       const int t = term.t;
-      auto Dt = D_.middleCols(static_cast<Eigen::Index>(t) * n_, n_);
+      double* Dt = D_.data() + static_cast<Eigen::Index>(t) * n_ * n_;
       if (term.process) {
-        Dt += W;
-        if (t > 0) {
+        for (int b = 0; b < n_; ++b)
+          for (int a = 0; a < n_; ++a) Dt[a + b * n_] += W(a, b);
+        if (t > 0) {  // D_{t-1} += F'WF,  E_t -= W F
           const Eigen::MatrixXd& F = p_.Ft(t - 1);
-          D_.middleCols(static_cast<Eigen::Index>(t - 1) * n_, n_).noalias() += F.transpose() * W * F;
-          E_.middleCols(static_cast<Eigen::Index>(t) * n_, n_).noalias() -= W * F;
+          double* Dp = Dt - static_cast<Eigen::Index>(n_) * n_;
+          double* Et = E_.data() + static_cast<Eigen::Index>(t) * n_ * n_;
+          for (int b = 0; b < n_; ++b)
+            for (int a = 0; a < n_; ++a) {
+              double wf = 0;
+              for (int c = 0; c < n_; ++c) wf += W(a, c) * F(c, b);
+              WF_(a, b) = wf;
+              Et[a + b * n_] -= wf;
+            }
+          for (int b = 0; b < n_; ++b)
+            for (int a = 0; a < n_; ++a) {
+              double s = 0;
+              for (int c = 0; c < n_; ++c) s += F(c, a) * WF_(c, b);
+              Dp[a + b * n_] += s;
+            }
         }
-      } else {
+      } else {  // D_t += H'WH
         const Eigen::MatrixXd& H = p_.Ht(t);
-        Dt.noalias() += H.transpose() * W * H;
+        for (int b = 0; b < n_; ++b)
+          for (int a = 0; a < nz_; ++a) {
+            double wh = 0;
+            for (int c = 0; c < nz_; ++c) wh += W(a, c) * H(c, b);
+            WF_(a, b) = wh;
+          }
+        for (int b = 0; b < n_; ++b)
+          for (int a = 0; a < n_; ++a) {
+            double s = 0;
+            for (int c = 0; c < nz_; ++c) s += H(c, a) * WF_(c, b);
+            Dt[a + b * n_] += s;
+          }
       }
     }
   }
@@ -432,7 +486,8 @@ class Solver {
       auto kinv = tk2_.head(k);
       ApplyKinv(term, rt3, kinv);
       auto g = g_.head(m);
-      g.noalias() = term.prep->plq->B.transpose() * kinv;
+      g.setZero();
+      AddMatTVec(term.prep->plq->B, kinv.data(), g.data(), 1.0);
       AddJt(term, g, -1.0, dx_);
     }
     chol_.Solve(dx_);
@@ -442,7 +497,7 @@ class Solver {
       RightHandSide(term, target, corrector, rt3);
       auto r = r_.head(m);
       Residual(term, dx_, false, r);  // J dx
-      rt3.noalias() += term.prep->plq->B * r;
+      AddMatVec(term.prep->plq->B, r.data(), rt3.data(), 1.0);
       auto du = du_.segment(term.offset, k);
       ApplyKinv(term, rt3, du);
       for (int i = 0; i < k; ++i) {
@@ -554,7 +609,7 @@ class Solver {
   Eigen::VectorXd u_, slo_, qlo_, shi_, qhi_, lo_, hi_, r3_, du_, dslo_, dqlo_, dshi_, dqhi_, xlo_, xhi_, kd_;
   Eigen::MatrixXd x_, R4_, dx_, D_, E_;
   Eigen::VectorXd r_, v_, g_, tk_, tk2_;
-  Eigen::MatrixXd W_;
+  Eigen::MatrixXd W_, WF_;
   BlockTridiagonalCholesky chol_;
 };
 
