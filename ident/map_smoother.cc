@@ -593,6 +593,19 @@ class Solver {
     res->primal = PrimalObjective(p_, x_, 1e-8 * z_scale);
     res->gap = res->primal - res->dual;
     res->relative_gap = res->gap / std::max(1.0, std::abs(res->primal));
+    // w_t in d f_t*(y_t) is unique where f_t* is differentiable: y_t strictly inside the box dom f_t*,
+    // and for Vapnik (eps |y|) also y_t != 0. On the boundary the normal cone adds freedom, so the
+    // rebuilt states need not equal x (reported via reconstruction_unique).
+    res->reconstruction_unique = true;
+    for (int t = 0; t <= T_; ++t) {
+      const Penalty& f = p_.ft(t);
+      for (int i = 0; i < n_; ++i) {
+        const double v = res->y(i, t), lo = f.conjugate_lo()(i), hi = f.conjugate_hi()(i);
+        const double margin = 1e-7 * (1 + std::abs(v));
+        if (v - lo <= margin || hi - v <= margin) res->reconstruction_unique = false;
+        if (f.kind() == Penalty::Kind::kVapnik && std::abs(v) <= margin) res->reconstruction_unique = false;
+      }
+    }
     res->x_from_dual = StatesFromDual(p_, res->y);
     res->max_abs_x_difference = (res->x_from_dual - x_).cwiseAbs().maxCoeff();
   }

@@ -95,6 +95,7 @@ struct MapSmootherResult {
   double dual_infeasibility = 0;    // max distance of u_t, y_t outside dom g_t*, dom f_t* before projection
   Eigen::MatrixXd x_from_dual;      // states rebuilt from y: w_t in d f_t*(y_t), then the dynamics
   double max_abs_x_difference = 0;  // max |x - x_from_dual|
+  bool reconstruction_unique = true;  // every f_t* differentiable at y_t (e.g. quadratic f_t): x_from_dual = x
 };
 
 // (P) at x (n x (T+1)); +inf if infeasible. Residuals within `domain_tolerance` of a penalty's domain

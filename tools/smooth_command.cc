@@ -47,6 +47,7 @@ void RunSmooth(const SmoothOptions& o) {
     j["u"] = Rows(r.u);
     j["y"] = Rows(r.y);
     j["max_abs_x_from_dual_difference"] = r.max_abs_x_difference;
+    j["reconstruction_unique"] = r.reconstruction_unique;
     j["dual_infeasibility"] = r.dual_infeasibility;
     j["solve_seconds"] = seconds;  // SolveMapSmoother alone (no file I/O), for benchmark scripts
     std::cout << j.dump(2) << "\n";
@@ -57,7 +58,10 @@ void RunSmooth(const SmoothOptions& o) {
   fmt::print("interior point: {}\n", r.message);
   fmt::print("primal (P) {:.12g}\ndual   (D) {:.12g}\ngap        {:.3e} (relative {:.3e})\n", r.primal, r.dual, r.gap,
              r.relative_gap);
-  fmt::print("max |x - x from dual| {:.3e}\n\n  {:>6}", r.max_abs_x_difference, "t");
+  fmt::print("max |x - x from dual| {:.3e}{}\n\n  {:>6}", r.max_abs_x_difference,
+             r.reconstruction_unique ? ""
+                                     : " (w_t in d f_t*(y_t) is not unique: some y_t lie on the boundary of dom f_t*)",
+             "t");
   for (int i = 0; i < p.state_dim(); ++i) fmt::print(" {:>14}", fmt::format("x{}", i + 1));
   fmt::print("\n");
   for (int t = 0; t <= p.T(); ++t) {
