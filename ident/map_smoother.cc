@@ -182,13 +182,18 @@ class Solver {
     for (Eigen::VectorXd* v : {&u_, &slo_, &qlo_, &shi_, &qhi_, &lo_, &hi_, &r3_, &du_, &dslo_, &dqlo_, &dshi_,
                                &dqhi_, &xlo_, &xhi_, &kd_})
       v->setZero(K);
+    rt3_.setZero(K);
+    has_lo_.assign(K, 0);
+    has_hi_.assign(K, 0);
     for (const Term& term : terms_) {
       const PlqForm& f = *term.prep->plq;
       for (int i = 0; i < f.rows(); ++i) {
         const int c = term.offset + i;
         lo_(c) = f.lo(i);
         hi_(c) = f.hi(i);
-        const bool has_lo = std::isfinite(lo_(c)), has_hi = std::isfinite(hi_(c));
+        has_lo_[c] = std::isfinite(lo_(c));
+        has_hi_[c] = std::isfinite(hi_(c));
+        const bool has_lo = has_lo_[c], has_hi = has_hi_[c];
         // A strictly interior start, so that C'u + s = c holds exactly from the first iterate.
         u_(c) = has_lo && has_hi ? 0.5 * (lo_(c) + hi_(c)) : has_lo ? lo_(c) + 1 : has_hi ? hi_(c) - 1 : 0.0;
         slo_(c) = has_lo ? u_(c) - lo_(c) : 1.0;
@@ -222,8 +227,8 @@ class Solver {
     const double z_scale = 1 + p_.z.cwiseAbs().maxCoeff();
     double bound_scale = 1;
     for (int c = 0; c < u_.size(); ++c) {
-      if (std::isfinite(lo_(c))) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
-      if (std::isfinite(hi_(c))) bound_scale = std::max(bound_scale, std::abs(hi_(c)));
+      if (has_lo_[c]) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
+      if (has_hi_[c]) bound_scale = std::max(bound_scale, std::abs(hi_(c)));
     }
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
@@ -363,8 +368,8 @@ class Solver {
   double Complementarity(double a) const {
     double sum = 0;
     for (int c = 0; c < u_.size(); ++c) {
-      if (std::isfinite(lo_(c))) sum += (slo_(c) + a * dslo_(c)) * (qlo_(c) + a * dqlo_(c));
-      if (std::isfinite(hi_(c))) sum += (shi_(c) + a * dshi_(c)) * (qhi_(c) + a * dqhi_(c));
+      if (has_lo_[c]) sum += (slo_(c) + a * dslo_(c)) * (qlo_(c) + a * dqlo_(c));
+      if (has_hi_[c]) sum += (shi_(c) + a * dshi_(c)) * (qhi_(c) + a * dqhi_(c));
     }
     return sum;
   }
@@ -372,8 +377,8 @@ class Solver {
   // D = q_hi/s_hi + q_lo/s_lo per coordinate (the barrier curvature C S^-1 Q C').
   double BarrierCurvature(int c) const {
     double d = 0;
-    if (std::isfinite(lo_(c))) d += qlo_(c) / slo_(c);
-    if (std::isfinite(hi_(c))) d += qhi_(c) / shi_(c);
+    if (has_lo_[c]) d += qlo_(c) / slo_(c);
+    if (has_hi_[c]) d += qhi_(c) / shi_(c);
     return d;
   }
 
@@ -469,8 +474,8 @@ class Solver {
 
   // Complementarity residuals R2 = s.*q (+ ds_aff.*dq_aff) - target for coordinate c.
   void R2(int c, double target, bool corrector, double* r2lo, double* r2hi) const {
-    *r2lo = std::isfinite(lo_(c)) ? slo_(c) * qlo_(c) + (corrector ? xlo_(c) : 0.0) - target : 0.0;
-    *r2hi = std::isfinite(hi_(c)) ? shi_(c) * qhi_(c) + (corrector ? xhi_(c) : 0.0) - target : 0.0;
+    *r2lo = has_lo_[c] ? slo_(c) * qlo_(c) + (corrector ? xlo_(c) : 0.0) - target : 0.0;
+    *r2hi = has_hi_[c] ? shi_(c) * qhi_(c) + (corrector ? xhi_(c) : 0.0) - target : 0.0;
   }
 
   // Newton direction for F_mu = 0 [ABP eq. (4.3)], with slack s and multiplier q eliminated per term:
@@ -481,7 +486,7 @@ class Solver {
     dx_ = -R4_;
     for (const Term& term : terms_) {
       const int k = term.prep->k, m = term.prep->m;
-      auto rt3 = tk_.head(k);
+      auto rt3 = rt3_.segment(term.offset, k);
       RightHandSide(term, target, corrector, rt3);
       auto kinv = tk2_.head(k);
       ApplyKinv(term, rt3, kinv);
@@ -494,7 +499,7 @@ class Solver {
     for (const Term& term : terms_) {
       const int k = term.prep->k, m = term.prep->m;
       auto rt3 = tk_.head(k);
-      RightHandSide(term, target, corrector, rt3);
+      rt3 = rt3_.segment(term.offset, k);
       auto r = r_.head(m);
       Residual(term, dx_, false, r);  // J dx
       AddMatVec(term.prep->plq->B, r.data(), rt3.data(), 1.0);
@@ -504,12 +509,12 @@ class Solver {
         const int c = term.offset + i;
         double r2lo, r2hi;
         R2(c, target, corrector, &r2lo, &r2hi);
-        if (std::isfinite(hi_(c))) {
+        if (has_hi_[c]) {
           const double r1 = u_(c) + shi_(c) - hi_(c);
           dshi_(c) = -r1 - du_(c);
           dqhi_(c) = (-r2hi - qhi_(c) * dshi_(c)) / shi_(c);
         }
-        if (std::isfinite(lo_(c))) {
+        if (has_lo_[c]) {
           const double r1 = -u_(c) + slo_(c) + lo_(c);
           dslo_(c) = -r1 + du_(c);
           dqlo_(c) = (-r2lo - qlo_(c) * dslo_(c)) / slo_(c);
@@ -525,8 +530,8 @@ class Solver {
       double r2lo, r2hi;
       R2(c, target, corrector, &r2lo, &r2hi);
       double e = 0;
-      if (std::isfinite(hi_(c))) e += (-r2hi + qhi_(c) * (u_(c) + shi_(c) - hi_(c))) / shi_(c);
-      if (std::isfinite(lo_(c))) e -= (-r2lo + qlo_(c) * (-u_(c) + slo_(c) + lo_(c))) / slo_(c);
+      if (has_hi_[c]) e += (-r2hi + qhi_(c) * (u_(c) + shi_(c) - hi_(c))) / shi_(c);
+      if (has_lo_[c]) e -= (-r2lo + qlo_(c) * (-u_(c) + slo_(c) + lo_(c))) / slo_(c);
       rt3(i) = r3_(c) - e;
     }
   }
@@ -538,11 +543,11 @@ class Solver {
       if (delta < 0) a = std::min(a, -value / delta);
     };
     for (int c = 0; c < u_.size(); ++c) {
-      if (std::isfinite(lo_(c))) {
+      if (has_lo_[c]) {
         limit(slo_(c), dslo_(c));
         limit(qlo_(c), dqlo_(c));
       }
-      if (std::isfinite(hi_(c))) {
+      if (has_hi_[c]) {
         limit(shi_(c), dshi_(c));
         limit(qhi_(c), dqhi_(c));
       }
@@ -619,6 +624,8 @@ class Solver {
   double matrix_scale_ = 1;
   // Per PLQ coordinate: u, slacks and multipliers of lo <= u <= hi, residual R3, Newton direction,
   // affine cross terms ds.*dq, and K's diagonal.
+  std::vector<char> has_lo_, has_hi_;  // finite bounds per coordinate
+  Eigen::VectorXd rt3_;                // R3 - e of the current direction (first pass of Direction)
   Eigen::VectorXd u_, slo_, qlo_, shi_, qhi_, lo_, hi_, r3_, du_, dslo_, dqlo_, dshi_, dqhi_, xlo_, xhi_, kd_;
   Eigen::MatrixXd x_, R4_, dx_, D_, E_;
   Eigen::VectorXd r_, v_, g_, tk_, tk2_;
