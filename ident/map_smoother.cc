@@ -305,7 +305,6 @@ class Solver {
       prep->W = f.B.transpose() * prep->Kinv * f.B;
     } else if (!f.diagonal_M) {
       prep->K.resize(prep->k, prep->k);
-      prep->llt = Eigen::LLT<Eigen::MatrixXd>(prep->k);
       prep->KinvB.resize(prep->k, prep->m);
     }
     return prep;
