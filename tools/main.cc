@@ -16,6 +16,8 @@ int main(int argc, char** argv) {
   AddDatasetsCommand(app);
   AddCompareCommand(app);
   AddMemsCommand(app);
+  AddLogcondensCommand(app);
+  AddSmoothCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
