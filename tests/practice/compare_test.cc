@@ -128,16 +128,9 @@ TEST(CompareCommand, DryerDefaultsAreArx223WithFivePercentOutliersOfTwentySigma)
   EXPECT_GT(rls, 80);
 }
 
-bool CauchyRegistered() {
-  const std::vector<std::string> names = RegressionEstimatorNames();
-  return std::find(names.begin(), names.end(), "cauchy") != names.end();
-}
-
 // Issue 6, item 8: on dryer with 5 % outliers of 20σ the Cauchy estimator's validation fit stays
 // within 2 points of clean-data RLS while RLS loses at least 5. Over 10 seeds, worst case.
 TEST(CompareCommand, CauchyStaysWithinTwoPointsOfCleanRlsWhileRlsLosesFive) {
-  // TEMPORARY guard until the cauchy estimator (issue 3) is on main; to be removed then.
-  if (!CauchyRegistered()) GTEST_SKIP() << "cauchy is not registered on this branch yet";
   const nlohmann::json j = CompareJson("dryer --estimators rls,cauchy,student:3 --trials 10");
   const double clean = j["reference"]["fit_percent"]["one_step"];
   EXPECT_NEAR(clean, 95.04, 0.005);  // datasets/README.md
@@ -152,7 +145,6 @@ TEST(CompareCommand, CauchyStaysWithinTwoPointsOfCleanRlsWhileRlsLosesFive) {
 // Item 5: regressor cleaning is on by default because over many seeds it never made a robust
 // estimator worse in the worst case; here 10 seeds on dryer, off vs on.
 TEST(CompareCommand, RegressorCleaningImprovesCauchyOnDryer) {
-  if (!CauchyRegistered()) GTEST_SKIP() << "cauchy is not registered on this branch yet";  // TEMPORARY
   const nlohmann::json off = CompareJson("dryer --estimators cauchy,rls --trials 10 --clean-regressors off");
   const nlohmann::json on = CompareJson("dryer --estimators cauchy,rls --trials 10");
   EXPECT_EQ(on["clean_regressors"], "on");
