@@ -17,17 +17,6 @@ namespace {
 
 const std::string kArx = " --output y --input u --na 2 --nb 2 --nk 3";
 
-// Exit code `code`, stdout empty, and (for exit 1) exactly one stderr line "ident: error: ...needle...".
-void ExpectError(const std::string& args, const std::string& needle, int code = 1) {
-  const CliResult r = RunCli(args);
-  EXPECT_EQ(r.exit_code, code) << args << "\nstderr: " << r.err;
-  EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\nstderr: " << r.err;
-  if (code == 1) {
-    EXPECT_EQ(r.err.rfind("ident: error: ", 0), 0u) << r.err;
-    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "more than one line: " << r.err;
-  }
-  EXPECT_TRUE(r.out.empty()) << "stdout should be empty on error: " << r.out;
-}
 
 // dryer.csv with every u and y multiplied by `scale` (printed with 17 digits).
 std::string ScaledDryer(const std::string& name, double scale) {
@@ -52,58 +41,58 @@ std::string Repeat(const std::string& header, int rows, std::string (*row)(int))
   return csv;
 }
 
-TEST(BadInput, MissingFile) { ExpectError("fit /nonexistent/x.csv" + kArx, "cannot open '/nonexistent/x.csv': No such file or directory"); }
+TEST(BadInput, MissingFile) { ExpectCliError("fit /nonexistent/x.csv" + kArx, "cannot open '/nonexistent/x.csv': No such file or directory"); }
 
 TEST(BadInput, UnreadableFileIsADirectory) {
   const std::string dir = TempDir() + "/adir";
   std::filesystem::create_directories(dir);
-  ExpectError("fit " + dir + kArx, "cannot read '" + dir + "': it is a directory");
+  ExpectCliError("fit " + dir + kArx, "cannot read '" + dir + "': it is a directory");
 }
 
-TEST(BadInput, EmptyFile) { ExpectError("fit " + WriteFile("empty.csv", "") + kArx, "empty.csv: the file is empty"); }
+TEST(BadInput, EmptyFile) { ExpectCliError("fit " + WriteFile("empty.csv", "") + kArx, "empty.csv: the file is empty"); }
 
 TEST(BadInput, BlankLinesOnlyIsEmpty) {
-  ExpectError("fit " + WriteFile("blank.csv", "\n  \r\n\n") + kArx, "blank.csv: the file is empty");
+  ExpectCliError("fit " + WriteFile("blank.csv", "\n  \r\n\n") + kArx, "blank.csv: the file is empty");
 }
 
 TEST(BadInput, HeaderOnly) {
-  ExpectError("fit " + WriteFile("header.csv", "t,u,y\n") + kArx, "header.csv: no data rows after the header");
+  ExpectCliError("fit " + WriteFile("header.csv", "t,u,y\n") + kArx, "header.csv: no data rows after the header");
 }
 
 TEST(BadInput, RaggedRowShort) {
-  ExpectError("fit " + WriteFile("ragged.csv", "t,u,y\n0,1,2\n1,2\n") + kArx, "ragged.csv:3: row has 2 fields; the header has 3");
+  ExpectCliError("fit " + WriteFile("ragged.csv", "t,u,y\n0,1,2\n1,2\n") + kArx, "ragged.csv:3: row has 2 fields; the header has 3");
 }
 
 TEST(BadInput, RaggedRowLongLateInTheFile) {
   // The bad row sits in the validation part: still reported before any result.
   std::string csv = ReadFile(DatasetPath("dryer.csv"));
   csv += "1001,1,2,3\n";
-  ExpectError("fit " + WriteFile("ragged_late.csv", csv) + kArx, "ragged_late.csv:1002: row has 4 fields; the header has 3");
+  ExpectCliError("fit " + WriteFile("ragged_late.csv", csv) + kArx, "ragged_late.csv:1002: row has 4 fields; the header has 3");
 }
 
 TEST(BadInput, NonNumericCell) {
-  ExpectError("fit " + WriteFile("text.csv", "t,u,y\n0,1,2\n1,x1,2\n") + kArx, "text.csv:3: column 2 ('u'): 'x1' is not a number");
+  ExpectCliError("fit " + WriteFile("text.csv", "t,u,y\n0,1,2\n1,x1,2\n") + kArx, "text.csv:3: column 2 ('u'): 'x1' is not a number");
 }
 
 TEST(BadInput, EmptyCell) {
-  ExpectError("fit " + WriteFile("hole.csv", "t,u,y\n0,,2\n") + kArx, "hole.csv:2: column 2 ('u') is empty");
+  ExpectCliError("fit " + WriteFile("hole.csv", "t,u,y\n0,,2\n") + kArx, "hole.csv:2: column 2 ('u') is empty");
 }
 
 TEST(BadInput, NanCell) {
-  ExpectError("fit " + WriteFile("nan.csv", "t,u,y\n0,1,2\n1,NaN,3\n") + kArx,
+  ExpectCliError("fit " + WriteFile("nan.csv", "t,u,y\n0,1,2\n1,NaN,3\n") + kArx,
               "nan.csv:3: column 2 ('u'): 'NaN' is not a finite number (pass --missing");
 }
 
 TEST(BadInput, InfCell) {
-  ExpectError("fit " + WriteFile("inf.csv", "t,u,y\n0,1,-inf\n") + kArx, "inf.csv:2: column 3 ('y'): '-inf' is not a finite number");
+  ExpectCliError("fit " + WriteFile("inf.csv", "t,u,y\n0,1,-inf\n") + kArx, "inf.csv:2: column 3 ('y'): '-inf' is not a finite number");
 }
 
 TEST(BadInput, CellBeyondDoubleRange) {
-  ExpectError("fit " + WriteFile("e309.csv", "t,u,y\n0,1e309,1\n") + kArx, "e309.csv:2: column 2 ('u'): '1e309' is out of the range of double");
+  ExpectCliError("fit " + WriteFile("e309.csv", "t,u,y\n0,1e309,1\n") + kArx, "e309.csv:2: column 2 ('u'): '1e309' is out of the range of double");
 }
 
 TEST(BadInput, ValuesNear1e308AreRefusedNotTurnedIntoInf) {
-  ExpectError("fit " + ScaledDryer("dryer_e300.csv", 1e300) + kArx,
+  ExpectCliError("fit " + ScaledDryer("dryer_e300.csv", 1e300) + kArx,
               "none of the 496 samples of the estimation part could be used");
 }
 
@@ -113,14 +102,14 @@ TEST(BadInput, OneValueNear1e308SpoilsTheMeanAndIsRefused) {
   ASSERT_NE(row, std::string::npos);
   const std::size_t comma = csv.find(',', row + 1), next = csv.find(',', comma + 1);
   csv.replace(comma + 1, next - comma - 1, "1.7e308");
-  ExpectError("fit " + WriteFile("dryer_one.csv", csv) + kArx, "could be used (all missing, or too large");
+  ExpectCliError("fit " + WriteFile("dryer_one.csv", csv) + kArx, "could be used (all missing, or too large");
 }
 
 TEST(BadInput, ValuesNear1e308OfBothSignsOverflowTheMean) {
   const std::string path = WriteFile("alt.csv", Repeat("t,u,y", 40, [](int i) {
     return fmt::format("{},{},{}", i, i % 2 ? 1.7e308 : -1.7e308, std::sin(i));
   }));
-  ExpectError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 1", "the mean of column 'u' overflows");
+  ExpectCliError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 1", "the mean of column 'u' overflows");
 }
 
 // Squares of 1e150 are still finite: the result must be correct, not inf/NaN. ARX parameters do not
@@ -139,7 +128,7 @@ TEST(BadInput, ValuesNear1e150GiveTheSameModelAsUnscaledData) {
 // Values near 1e-150 have squares near 1e-300, far below the default flat prior's information 1e-12:
 // the estimate would be the prior's (θ ≈ 1e-286, found by this test) — refused with a clear message.
 TEST(BadInput, ValuesNear1em150AreRefusedInsteadOfReturningThePrior) {
-  ExpectError("fit " + ScaledDryer("dryer_em150.csv", 1e-150) + kArx,
+  ExpectCliError("fit " + ScaledDryer("dryer_em150.csv", 1e-150) + kArx,
               "over the estimation part, too small against the default flat prior (values near 1e-150?)");
 }
 
@@ -147,7 +136,7 @@ TEST(BadInput, ConstantInputColumn) {
   const std::string path = WriteFile("const.csv", Repeat("t,u,y", 50, [](int i) {
     return fmt::format("{},1.5,{}", i, std::sin(0.3 * i));
   }));
-  ExpectError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 1",
+  ExpectCliError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 1",
               "regressor 'b1' is identically zero over the estimation part (constant input after detrending?); the "
               "model is not identifiable");
 }
@@ -156,53 +145,53 @@ TEST(BadInput, CollinearRegressors) {
   const std::string path = WriteFile("collinear.csv", Repeat("x1,x2,y", 50, [](int i) {
     return fmt::format("{},{},{}", std::sin(i), 2 * std::sin(i), i % 7);
   }));
-  ExpectError("fit " + path + " --output y --regressors x1,x2", "the regressors are collinear over the estimation part");
+  ExpectCliError("fit " + path + " --output y --regressors x1,x2", "the regressors are collinear over the estimation part");
 }
 
 TEST(BadInput, OrdersTooLargeForTheRecord) {
-  ExpectError("fit gas_furnace --output y --input u --na 100 --nb 50 --nk 3",
+  ExpectCliError("fit gas_furnace --output y --input u --na 100 --nb 50 --nk 3",
               "the estimation part has 148 rows; ARX(100,50,3) with 150 parameters needs at least 251");
 }
 
-TEST(BadInput, UnknownEstimator) { ExpectError("fit dryer" + kArx + " --estimator nonesuch", "unknown estimator 'nonesuch'"); }
+TEST(BadInput, UnknownEstimator) { ExpectCliError("fit dryer" + kArx + " --estimator nonesuch", "unknown estimator 'nonesuch'"); }
 
 TEST(BadInput, UnknownColumn) {
-  ExpectError("fit dryer --output y --input q --na 2 --nb 2 --nk 3", "no column 'q' (columns: t, u, y)");
+  ExpectCliError("fit dryer --output y --input q --na 2 --nb 2 --nk 3", "no column 'q' (columns: t, u, y)");
 }
 
-TEST(BadInput, ForgettingAboveOne) { ExpectError("fit dryer" + kArx + " --forgetting 1.5", "forgetting = 1.5; need 0 < forgetting <= 1"); }
-TEST(BadInput, ForgettingZero) { ExpectError("fit dryer" + kArx + " --forgetting 0", "forgetting = 0; need 0 < forgetting <= 1"); }
-TEST(BadInput, ForgettingNegative) { ExpectError("fit dryer" + kArx + " --forgetting -0.5", "forgetting = -0.5"); }
-TEST(BadInput, ForgettingNan) { ExpectError("fit dryer" + kArx + " --forgetting nan", "forgetting = nan"); }
-TEST(BadInput, ForgettingNotANumberIsAUsageError) { ExpectError("fit dryer" + kArx + " --forgetting abc", "--forgetting", 2); }
+TEST(BadInput, ForgettingAboveOne) { ExpectCliError("fit dryer" + kArx + " --forgetting 1.5", "forgetting = 1.5; need 0 < forgetting <= 1"); }
+TEST(BadInput, ForgettingZero) { ExpectCliError("fit dryer" + kArx + " --forgetting 0", "forgetting = 0; need 0 < forgetting <= 1"); }
+TEST(BadInput, ForgettingNegative) { ExpectCliError("fit dryer" + kArx + " --forgetting -0.5", "forgetting = -0.5"); }
+TEST(BadInput, ForgettingNan) { ExpectCliError("fit dryer" + kArx + " --forgetting nan", "forgetting = nan"); }
+TEST(BadInput, ForgettingNotANumberIsAUsageError) { ExpectCliError("fit dryer" + kArx + " --forgetting abc", "--forgetting", 2); }
 
-TEST(BadInput, PriorDegreesZero) { ExpectError("fit dryer" + kArx + " --nu0 0 --vy0 1 --vz0 1", "nu0 = 0; need a positive number of prior degrees"); }
-TEST(BadInput, PriorDegreesNegative) { ExpectError("fit dryer" + kArx + " --nu0 -1 --vy0 1 --vz0 1", "nu0 = -1"); }
-TEST(BadInput, NegativePriorOutputVariance) { ExpectError("fit dryer" + kArx + " --nu0 5 --vy0 -1 --vz0 1", "vy0 = -1; need a positive prior output variance"); }
-TEST(BadInput, NegativePriorRegressorVariance) { ExpectError("fit dryer" + kArx + " --nu0 5 --vy0 1 --vz0 -2", "vz0 = -2; need a positive prior regressor variance"); }
+TEST(BadInput, PriorDegreesZero) { ExpectCliError("fit dryer" + kArx + " --nu0 0 --vy0 1 --vz0 1", "nu0 = 0; need a positive number of prior degrees"); }
+TEST(BadInput, PriorDegreesNegative) { ExpectCliError("fit dryer" + kArx + " --nu0 -1 --vy0 1 --vz0 1", "nu0 = -1"); }
+TEST(BadInput, NegativePriorOutputVariance) { ExpectCliError("fit dryer" + kArx + " --nu0 5 --vy0 -1 --vz0 1", "vy0 = -1; need a positive prior output variance"); }
+TEST(BadInput, NegativePriorRegressorVariance) { ExpectCliError("fit dryer" + kArx + " --nu0 5 --vy0 1 --vz0 -2", "vz0 = -2; need a positive prior regressor variance"); }
 
-TEST(BadInput, DofForAnEstimatorWithoutOne) { ExpectError("fit dryer" + kArx + " --dof 0", "dof = 0 does not apply to estimator 'rls'"); }
+TEST(BadInput, DofForAnEstimatorWithoutOne) { ExpectCliError("fit dryer" + kArx + " --dof 0", "dof = 0 does not apply to estimator 'rls'"); }
 
-TEST(BadInput, SplitOutOfRange) { ExpectError("fit dryer" + kArx + " --split 0", "split = 0; need 0 < split <= 1"); }
+TEST(BadInput, SplitOutOfRange) { ExpectCliError("fit dryer" + kArx + " --split 0", "split = 0; need 0 < split <= 1"); }
 
-TEST(BadInput, NegativeOrder) { ExpectError("fit dryer --output y --input u --na -1", "na = -1; need na >= 0"); }
+TEST(BadInput, NegativeOrder) { ExpectCliError("fit dryer --output y --input u --na -1", "na = -1; need na >= 0"); }
 
 TEST(BadInput, MalformedPriorJson) {
-  ExpectError("fit dryer" + kArx + " --prior " + WriteFile("bad.json", "{\"nu0\": 5, "), "bad.json: not valid JSON");
+  ExpectCliError("fit dryer" + kArx + " --prior " + WriteFile("bad.json", "{\"nu0\": 5, "), "bad.json: not valid JSON");
 }
 
 TEST(BadInput, PriorJsonOfTheWrongDimension) {
-  ExpectError("fit dryer" + kArx + " --prior " + WriteFile("dim.json", "{\"nu0\": 5, \"V0\": [[1,0],[0,1]]}"),
+  ExpectCliError("fit dryer" + kArx + " --prior " + WriteFile("dim.json", "{\"nu0\": 5, \"V0\": [[1,0],[0,1]]}"),
               "dim.json: V0 has 2 rows; the model needs 5x5 (rho = 4, y first)");
 }
 
 TEST(BadInput, PriorJsonNotPositiveDefinite) {
-  ExpectError("fit dryer --output y --regressors u --prior " +
+  ExpectCliError("fit dryer --output y --regressors u --prior " +
                   WriteFile("npd.json", "{\"nu0\": 5, \"V0\": [[1,2],[2,1]]}"),
               "npd.json: prior matrix V is not positive definite");
 }
 
-TEST(BadInput, UnknownOptionIsAUsageError) { ExpectError("fit dryer" + kArx + " --bogus", "--bogus", 2); }
+TEST(BadInput, UnknownOptionIsAUsageError) { ExpectCliError("fit dryer" + kArx + " --bogus", "--bogus", 2); }
 
 }  // namespace
 }  // namespace ident::testing

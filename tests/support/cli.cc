@@ -1,5 +1,9 @@
 #include "tests/support/cli.h"
 
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -48,6 +52,17 @@ CliResult RunCli(const std::string& args) {
   r.err = ReadFile(base + ".err");
   return r;
 #endif
+}
+
+void ExpectCliError(const std::string& args, const std::string& needle, int code) {
+  const CliResult r = RunCli(args);
+  EXPECT_EQ(r.exit_code, code) << args << "\nstderr: " << r.err;
+  EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\nstderr: " << r.err;
+  if (code == 1) {
+    EXPECT_EQ(r.err.rfind("ident: error: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "more than one line: " << r.err;
+  }
+  EXPECT_TRUE(r.out.empty()) << "stdout should be empty on error: " << r.out;
 }
 
 }  // namespace ident::testing

@@ -18,4 +18,8 @@ std::string TempDir();
 std::string WriteFile(const std::string& name, const std::string& text);
 std::string ReadFile(const std::string& path);
 
+// Runs `args` and expects exit code `code`, `needle` in stderr, empty stdout and, for exit 1, exactly
+// one stderr line starting "ident: error: " (gtest EXPECTs, so the calling test fails on a mismatch).
+void ExpectCliError(const std::string& args, const std::string& needle, int code = 1);
+
 }  // namespace ident::testing
