@@ -4,7 +4,8 @@
 // raw doubles per step. Options the constructor refuses (InvalidArgument, e.g. inadmissible
 // forgetting) end the run: refusing them is the specified answer.
 // Holds if, after every step, ν > 0, every d_i a positive normal number, L and Θ̂ finite, β ∈ (0, 1)
-// for an updated step; a step rejected as invalid leaves the state bit-for-bit unchanged.
+// for an updated step; a step not taken (rejected as invalid or as a numerical failure) leaves the
+// state bit-for-bit unchanged. Update() is noexcept: a throw would terminate the process.
 #pragma once
 
 #include <cmath>
@@ -51,8 +52,8 @@ inline std::string StudentProperty(const std::uint8_t* data, std::size_t size) {
     const double nu0 = s.nu();
     const StepReport report = est->Update(y, z);
     const auto& d = s.factor().d();
-    if (report.status == StepStatus::kRejectedInvalid) {
-      if (!(s.nu() == nu0 && d == d0 && s.factor().L() == L0)) return "a rejected sample leaves the state unchanged";
+    if (!report.updated()) {
+      if (!(s.nu() == nu0 && d == d0 && s.factor().L() == L0)) return "a step not taken leaves the state unchanged";
       continue;
     }
     if (report.updated() && !(report.weight > 0 && report.weight < 1)) return "beta in (0, 1)";

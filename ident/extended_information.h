@@ -12,11 +12,16 @@
 // Read-outs: Θ̂ = L_z⁻¹ l_zy (forward substitution, cached), D_y = d_0, V_z⁻¹ (on demand).
 // Index 0 of V is y; L = [[1, 0], [l_zy, L_z]], D = diag(d_y, D_z).
 //
+// Step 5 also comes in two phases, PlanApply() (O(ρ): the new d and what bounds the new L, state
+// unchanged) and CommitApply() (the O(ρ²) update), so that ident/step_guard.h can decide before
+// touching the state.
+//
 // All operations after construction are allocation-free except VzInverse() and V() (ScaledVzInverse()
 // is the allocation-free alternative to VzInverse()).
 #pragma once
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -86,11 +91,16 @@ class ExtendedInformation {
   }
 
   // Step 3: stores h = [y; z] for Apply() and returns ξ, ξ_z, ê against the current (forgotten) V.
-  template <class Derived>
+  // With_xi = false computes ê only (ξ = ξ_z = NaN): RLS needs no ξ and saves ρ+1 divisions.
+  template <bool WithXi = true, class Derived>
   Innovation Prepare(double y, const Eigen::MatrixBase<Derived>& z) {
     h_(0) = y;
     h_.tail(h_.size() - 1) = z;
     V_.SolveTransposed(h_, g_);
+    if constexpr (!WithXi) {
+      constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+      return {nan, nan, g_(0)};
+    }
     const auto& d = V_.d();
     double zeta = 0;
     for (Eigen::Index i = 1; i < g_.size(); ++i) zeta += g_(i) * g_(i) / d(i);
@@ -103,12 +113,22 @@ class ExtendedInformation {
 
   // Step 5: V ← (1−β)V + β h h' with the h of the last Prepare(); ν ← nu_new. Requires 0 < β < 1.
   void Apply(double beta, double nu_new) {
-    V_.ScaleD(1 - beta);
+    PlanApply(beta);
+    CommitApply(nu_new, h_.cwiseAbs().maxCoeff());
+  }
+  // Step 5 in two phases (see LdFactor::PlanUpdate): the plan gives the new d (and what bounds the
+  // new L) in O(ρ) from the g of Prepare(), without changing anything, so that a guard can decide
+  // before the state is touched (ident/step_guard.h); the commit applies it.
+  typename LdFactor<Dim>::Plan PlanApply(double beta) noexcept { return V_.PlanUpdate(1 - beta, beta, g_); }
+  // `h_bound` ≥ max_i |h_i| (e.g. the 2-norm of h), for the factor's bound on max|L|.
+  void CommitApply(double nu_new, double h_bound) noexcept {
     g_ = h_;
-    V_.RankOneUpdate(beta, g_);
+    V_.CommitUpdate(g_, h_bound);
     nu_ = nu_new;
     theta_valid_ = false;
   }
+  // ν only (undoes ForgetExponential).
+  void RestoreNu(double nu) noexcept { nu_ = nu; }
 
   // Θ̂ = L_z⁻¹ l_zy (forward substitution, cached until the next change).
   const ParamVector& parameters() const {

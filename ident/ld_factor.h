@@ -12,6 +12,12 @@
 //   RankOneUpdate(c, a)   V <- V + c a a' for c >= 0: Agee–Turner / Bierman U-D update,
 //                         Gill–Golub–Murray–Saunders (1974) method C1; ~2n^2 flops, no square
 //                         roots; all d_j stay positive. `a` is used as workspace.            [spec §6]
+//   PlanUpdate(s, c, g)   the same update of V <- s V + c a a' in two phases, given g = L'^{-1} a
+//   CommitUpdate(a)       (from SolveTransposed): the plan computes the new d and the multipliers
+//                         b_j in O(n) without touching the factor (so a caller can check the result
+//                         first, see ident/step_guard.h); the commit applies it, ~2n^2 flops.
+//   OffDiagonalBound()    an upper bound on max |L_ij| (i != j): exact after Factorize/SetIdentity/
+//                         RankOneUpdate (recomputed lazily, O(n^2)), grown by CommitUpdate in O(1)
 //   SolveTransposed(h, g) solves L' g = h (back substitution, row-oriented), ~n^2/2 flops
 //   Reconstruct()         V = L' D L (for tests and read-outs)
 //
@@ -23,7 +29,9 @@
 // Factorize() when the size changes and in Reconstruct().
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -43,6 +51,15 @@ class LdFactor {
   // Factorises V; throws InvalidArgument if V is not square, not symmetric or not positive definite.
   explicit LdFactor(const Eigen::Ref<const Eigen::MatrixXd>& V) { Factorize(V); }
 
+  // What PlanUpdate() found about the planned update (all O(n) by-products of the plan).
+  struct Plan {
+    double min_d = 0;      // min_j of the new d_j
+    double max_d = 0;      // max_j of the new d_j
+    double d_sum = 0;      // Σ new d_j: finite iff every new d_j is (barring overflow of the sum)
+    double max_b = 0;      // max_j |b_j|: L_new[j, i] = L[j, i] + b_j a_i^(j)
+    double g_abs_sum = 0;  // Σ|g_j|
+  };
+
   int size() const { return static_cast<int>(d_.size()); }
   const Matrix& L() const { return L_; }
   const Vector& d() const { return d_; }
@@ -51,6 +68,16 @@ class LdFactor {
     IDENT_REQUIRE(n >= 1 && (Dim == Eigen::Dynamic || n == Dim), "LD factor size {} is invalid", n);
     L_.setIdentity(n, n);
     d_.setOnes(n);
+    Workspace(n);
+    l_bound_ = 0;
+  }
+
+  // L = I, d = `diagonal` (all entries must be positive: not checked). No allocation at the same size.
+  template <class Derived>
+  void SetDiagonal(const Eigen::MatrixBase<Derived>& diagonal) noexcept {
+    L_.setIdentity();
+    d_ = diagonal;
+    l_bound_ = 0;
   }
 
   // Bottom-up L'DL [spec §6]: for j = n-1..0:
@@ -79,16 +106,70 @@ class LdFactor {
         L_(j, i) = s / dj;
       }
     }
+    Workspace(static_cast<int>(n));
+    l_bound_ = kStale;
   }
 
   // V <- s V (s > 0).
   void ScaleD(double s) { d_ *= s; }
+
+  // Phase 1 of V <- s V + c a a' (s > 0, c > 0) given g = L'^{-1} a: the sweep of RankOneUpdate on
+  // d only [spec §6], d'_j = s d_j, dn_j = d'_j + c_{j+1} g_j^2, b_j = c_{j+1} g_j / dn_j,
+  // c_j = c_{j+1} d'_j / dn_j (c_n = c; g_j is the a_j of RankOneUpdate's sweep: its back substitution
+  // is the one of SolveTransposed). In terms of u_j = 1/c_j this is a running sum of positive terms,
+  //   u_j = u_{j+1} + g_j^2/d'_j,   dn_j = d'_j u_j / u_{j+1},   b_j = g_j / (d'_j u_j),
+  // whose only dependency chain is one addition per j (the c-form chains a division per j, which
+  // dominates small updates); if that overflows (u, 1/d' infinite: extreme scales) the c-form is used.
+  // Stores the new d and b_j in a workspace; the factor is unchanged. O(n).
+  template <class Derived>
+  Plan PlanUpdate(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
+    Plan p = PlanPrefixSum(s, c, g);
+    if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) p = PlanChained(s, c, g);
+    plan_ = p;
+    return p;
+  }
+
+  // Phase 2: applies the last PlanUpdate(). `a` (size n, the a of the plan's g = L'^{-1} a) is
+  // overwritten; `a_max` = max_i |a_i|. ~2n^2 flops:
+  //   for j = n-1..1:  for i < j:  a_i -= a_j L[j,i];  L[j,i] += b_j a_i   (updated a_i)
+  // The bound M on max|L| grows to GrownBound(M, a_max): the partial back substitution has
+  // |a_i^(j)| ≤ |a_i| + Σ_k |g_k| M, so |L_new[j,i]| ≤ M + max|b_j| (max|a| + Σ|g| M).
+  template <class Derived>
+  void CommitUpdate(Eigen::MatrixBase<Derived>& a, double a_max) noexcept {
+    const Eigen::Index n = d_.size();
+    for (Eigen::Index j = n - 1; j >= std::max<Eigen::Index>(1, sweep_end_); --j) {
+      const double aj = a(j);
+      if (aj == 0.0) continue;
+      const double b = b_(j);
+      double* row = L_.data() + j * n;  // row-major: L[j, 0..j-1] contiguous
+      for (Eigen::Index i = 0; i < j; ++i) {
+        a(i) -= aj * row[i];
+        row[i] += b * a(i);
+      }
+    }
+    d_.swap(d_next_);
+    if (l_bound_ == l_bound_) l_bound_ = GrownBound(l_bound_, a_max);  // (NaN: stale, recomputed on demand)
+  }
+
+  // The bound on max|L| after committing the last plan, if it is M now (see CommitUpdate).
+  double GrownBound(double M, double a_max) const noexcept {
+    return (M + plan_.max_b * (a_max + plan_.g_abs_sum * M)) * kRoundingSlack;
+  }
+
+  // An upper bound on max_{i>j} |L_ij| (+inf or NaN if L is not finite); see the header comment.
+  double OffDiagonalBound() const {
+    if (!(l_bound_ == l_bound_)) l_bound_ = MaxAbsOffDiagonal();
+    return l_bound_;
+  }
+  // Recomputes the bound exactly (O(n^2)), e.g. when the grown bound is too large to be useful.
+  double TightenOffDiagonalBound() const { return l_bound_ = MaxAbsOffDiagonal(); }
 
   // V <- V + c a a', c >= 0. `a` (size n) is overwritten. Sweep from the last index [spec §6]:
   //   for j = n-1..0:  dn = d_j + c a_j^2;  b = c a_j / dn;  c = c d_j / dn;  d_j = dn
   //                    for i < j:  a_i -= a_j L[j,i];  L[j,i] += b a_i   (updated a_i)
   template <class Derived>
   void RankOneUpdate(double c, Eigen::MatrixBase<Derived>& a) {
+    l_bound_ = kStale;
     const Eigen::Index n = d_.size();
     for (Eigen::Index j = n - 1; j >= 0 && c > 0; --j) {
       const double aj = a(j);
@@ -129,8 +210,92 @@ class LdFactor {
   }
 
  private:
+  static constexpr double kStale = std::numeric_limits<double>::quiet_NaN();
+  // Covers the rounding of the ~2n operations behind each L entry (relative 2^-52 each) many times over.
+  static constexpr double kRoundingSlack = 1 + 0x1p-20;
+
+  void Workspace(int n) {
+    d_next_.resize(n);
+    b_.resize(n);
+  }
+
+  template <class Derived>
+  Plan PlanPrefixSum(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
+    const Eigen::Index n = d_.size();
+    Plan p;
+    p.min_d = std::numeric_limits<double>::infinity();
+    sweep_end_ = 0;
+    double u_next = 1 / c, ru_next = c;  // u_{j+1}, 1/u_{j+1}
+    for (Eigen::Index j = n - 1; j >= 0; --j) {
+      const double dj = d_(j) * s;
+      const double gj = g(j);
+      double b = 0, dn = dj;
+      if (gj != 0.0) {
+        const double w = 1 / dj;
+        const double u = u_next + gj * gj * w;
+        const double ru = 1 / u;
+        dn = dj * u * ru_next;
+        b = gj * w * ru;
+        u_next = u, ru_next = ru;
+      }
+      d_next_(j) = dn;
+      b_(j) = b;
+      p.min_d = std::min(p.min_d, dn);
+      p.max_d = std::max(p.max_d, dn);
+      p.d_sum += dn;
+      p.max_b = std::max(p.max_b, std::abs(b));
+      p.g_abs_sum += std::abs(gj);
+    }
+    return p;
+  }
+
+  // The c-form of the same sweep (as RankOneUpdate), for scales where the prefix sum overflows.
+  template <class Derived>
+  Plan PlanChained(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
+    const Eigen::Index n = d_.size();
+    Plan p;
+    p.min_d = std::numeric_limits<double>::infinity();
+    sweep_end_ = 0;
+    for (Eigen::Index j = n - 1; j >= 0; --j) {
+      const double dj = d_(j) * s;
+      const double gj = g(j);
+      double b = 0, dn = dj;
+      if (c > 0 && gj != 0.0) {
+        dn = dj + c * gj * gj;
+        b = c * gj / dn;
+        c = c * dj / dn;
+      } else if (!(c > 0) && sweep_end_ == 0) {
+        sweep_end_ = j + 1;  // rows < j+1 keep their L
+      }
+      d_next_(j) = dn;
+      b_(j) = b;
+      p.min_d = std::min(p.min_d, dn);
+      p.max_d = std::max(p.max_d, dn);
+      p.d_sum += dn;
+      p.max_b = std::max(p.max_b, std::abs(b));
+      p.g_abs_sum += std::abs(gj);
+    }
+    return p;
+  }
+
+  double MaxAbsOffDiagonal() const {
+    const Eigen::Index n = d_.size();
+    double m = 0;
+    bool finite = true;
+    for (Eigen::Index j = 1; j < n; ++j) {
+      const auto row = L_.row(j).head(j);
+      finite = finite && row.allFinite();
+      m = std::max(m, row.cwiseAbs().maxCoeff());
+    }
+    return finite ? m : std::numeric_limits<double>::infinity();
+  }
+
   Matrix L_;
   Vector d_;
+  Vector d_next_, b_;                 // PlanUpdate -> CommitUpdate workspace
+  Eigen::Index sweep_end_ = 0;        // rows below this keep their L (the sweep's c reached 0)
+  Plan plan_;                         // the last PlanUpdate()
+  mutable double l_bound_ = kStale;  // ≥ max |L_ij| off the diagonal; NaN = recompute
 };
 
 }  // namespace ident

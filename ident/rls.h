@@ -7,18 +7,19 @@
 //   Read-outs: Θ̂ = V_z⁻¹V_zy; residual sum ν D_y; noise variance s² = ν D_y/(n − ρ) with
 //           n = Σ λ^k the (discounted) sample count; Cov(Θ̂) = s² (ν V_z)⁻¹ = D_y V_z⁻¹/(n − ρ).
 //
-// Cost per Update() (m = ρ+1; one flop = one add or multiply; counted from the loops in ld_factor.h
-// and extended_information.h):
-//   input check (finite, no overflow)              3ρ
+// Cost per Update() (m = ρ+1; one flop = one add, multiply, divide or square root; counted from the
+// loops in ident/step_driver.h, step_guard.h, extended_information.h and ld_factor.h):
+//   input check |h|² = y² + |z|², |h|               2ρ + 2
 //   ν̃ = λν, ν = ν̃ + 1, β = 1/ν, n ← λn + 1          5
-//   back substitution L'g = h                       m(m−1)          [spec §6]
-//   ê, ξ_z, ξ                                        3ρ + 4
-//   d ← (1−β)d                                       m + 1
-//   rank-one update (Agee–Turner)                    2m(m−1) + 7m    [spec §6]
-//   total, exponential forgetting                    3m(m−1) + 8m + 6ρ + 10 = 3ρ² + 17ρ + 18
-//                                                    (ρ = 4: 134 flops)
-//   stabilised forgetting adds m sparse rank-one     ≈ (2/3)m³ + 4m²   (O(ρ³); ρ = 4: ≈ 190 more)
-//   updates with the rows of L_a [spec §7b]
+//   back substitution L'g = h, ê = g_0               m(m−1)          [spec §6]
+//   plan: new d, b_j (prefix-sum form), Σd, Σ|g|     12m + 2         (O(m): ld_factor.h PlanUpdate)
+//   guard verdict (bound on max|L|, Θ̂)              5               (step_guard.h; no copy)
+//   rank-one update of L (Agee–Turner), bound        2m(m−1) + 5     [spec §6]
+//   total, exponential forgetting                    3m² + 9m + 2ρ + 19 = 3ρ² + 17ρ + 31
+//                                                    (ρ = 4: 147 flops, plus ≈ 4m comparisons)
+//   stabilised forgetting adds a copy of L, d and m  ≈ (2/3)m³ + 4m²   (O(ρ³); ρ = 4: ≈ 190 more)
+//   sparse rank-one updates with the rows of L_a [spec §7b]
+//   a step the O(m) guard cannot prove healthy       + a copy of L, d and Σ|L| (O(m²); rare: extreme scales)
 //   parameters() after an update (cached)            ρ²     (forward substitution)
 //   CovarianceInto()                                 ≈ (5/6)ρ³ + O(ρ²)
 // No step allocates after construction (fixed-size and dynamic variants alike).
@@ -54,7 +55,7 @@
 #include "ident/extended_information.h"
 #include "ident/forgetting.h"
 #include "ident/regression_prior.h"
-#include "ident/step_guard.h"
+#include "ident/step_driver.h"
 
 namespace ident {
 
@@ -82,36 +83,23 @@ class BasicRecursiveLeastSquares {
         prior_factor_(prior_.V0) {}
 
   // One sample. Rejects (state unchanged) a sample with a non-finite entry, a regressor of the
-  // wrong size, or one so large that the update would overflow (kRejectedInvalid). While disabled: kSkipped,
-  // state unchanged (the sample is not even inspected).
-  // Safeguards (the state is copied before the step, O(ρ²), allocation-free):
+  // wrong size, or one so large that the update would overflow (kRejectedInvalid). While disabled:
+  // kSkipped, state unchanged (the sample is not even inspected).
+  // Safeguards (ident/step_driver.h; O(ρ) checks in the common case, allocation-free):
   //   windup  exponential forgetting without excitation shrinks d geometrically (d ∝ λ^t) until it
   //           underflows; a step that would leave some d_i below kWindupFloor is taken without
   //           forgetting (λ = 1 for this step: d then shrinks only as ν/(ν+1)), so the estimator
   //           neither underflows nor freezes, and recovers as soon as excitation returns;
-  //   health  a step whose result has some d_i not a positive normal number, or L, Θ̂ not finite
-  //           (overflow on samples of wildly mixed scales) is undone: kNumericalFailure.
+  //   health  a step whose result would have some d_i not a positive normal number, or L, Θ̂ not
+  //           finite (overflow on samples of wildly mixed scales) is undone: kNumericalFailure.
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     if (!enabled_) return {StepStatus::kSkipped};
-    if (z.size() != num_parameters() || !std::isfinite(y) || !z.allFinite() ||
-        !std::isfinite(y * y + z.squaredNorm()))
-      return {StepStatus::kRejectedInvalid};
-    guard_.Save(stats_);
-    double lambda = options_.forgetting.factor;
-    StepReport report = Step(y, z, lambda);
-    if (lambda < 1 && !guard_.Healthy(stats_, kWindupFloor)) {
-      guard_.Restore(stats_);
-      lambda = 1;
-      report = Step(y, z, lambda);
-    }
-    if (!guard_.Healthy(stats_)) {
-      guard_.Restore(stats_);
-      report.status = StepStatus::kNumericalFailure;
-      return report;
-    }
-    samples_ = lambda * samples_ + 1;
-    return report;
+    const DrivenStep s =
+        driver_.template Run</*WithXi=*/false>(stats_, {options_.forgetting.factor, options_.forgetting.stabilised, kWindupFloor}, prior_.nu0,
+                    prior_factor_, y, z, [](double nu, const Innovation&) { return 1 / nu; });  // β = 1/ν [spec §7c]
+    if (s.report.updated()) samples_ = s.lambda * samples_ + 1;
+    return s.report;
   }
 
   // Below this, d is taken to be winding up under forgetting (see Update); 2^-900 ≈ 1.2e-271.
@@ -172,20 +160,6 @@ class BasicRecursiveLeastSquares {
   }
 
  private:
-  // Forgetting with λ, then the RLS step β = 1/ν.
-  template <class Derived>
-  StepReport Step(double y, const Eigen::MatrixBase<Derived>& z, double lambda) {
-    if (options_.forgetting.stabilised)
-      stats_.ForgetStabilised(lambda, prior_.nu0, prior_factor_);
-    else
-      stats_.ForgetExponential(lambda);
-    const double nu = stats_.nu() + 1;
-    const Innovation in = stats_.Prepare(y, z);
-    const double beta = 1 / nu;
-    stats_.Apply(beta, nu);
-    return {StepStatus::kUpdated, beta, nu, in.prediction_error};
-  }
-
   static const RlsOptions& Checked(int num_parameters, const RlsOptions& options) {
     const std::string error = options.Validate(num_parameters);
     IDENT_REQUIRE(error.empty(), "{}", error);
@@ -195,7 +169,7 @@ class BasicRecursiveLeastSquares {
   RlsOptions options_;
   RegressionPrior prior_;
   ExtendedInformation<kDim> stats_;
-  StepGuard<kDim> guard_{stats_};  // the state before the current step (see Update)
+  StepDriver<kDim> driver_{stats_};
   LdFactor<kDim> prior_factor_;
   double samples_ = 0;
   bool enabled_ = true;

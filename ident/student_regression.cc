@@ -21,6 +21,10 @@ std::string StudentRegressionOptions::Validate(int rho) const {
     return fmt::format("prior V0 is {}x{}; the model needs {}x{} (rho = {}, y first)", prior->V0.rows(),
                        prior->V0.cols(), rho + 1, rho + 1, rho);
   const double nu0 = prior ? prior->nu0 : rho + dof + delta;
+  return ForgettingAdmissibility(rho, nu0, forgetting, dof, delta);
+}
+
+std::string ForgettingAdmissibility(int rho, double nu0, const ForgettingOptions& forgetting, double dof, int delta) {
   const double nu_hard = approx::NuHard(rho, dof, delta);
   // The smallest ν(t), t ≥ 1, of the forgetting recursion [spec §7b]: ν(t) moves monotonically from
   // ν(1) towards its fixed point 1/(1−λ) (exponential) or ν_a + 1/(1−λ) (stabilised, ν_a = ν(0)).

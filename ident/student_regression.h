@@ -10,16 +10,29 @@
 //   Read-outs: Θ̂ = V_z⁻¹V_zy; D_y = |V|/|V_z| (→ σ², the squared t-scale); Cov(Θ) = D_y V_z⁻¹/(ν−δ−ρ)
 //            (multivariate t with ν−δ−ρ+2 d.o.f.) [spec §2]; β(t), ν(t) of the last step; a predictive
 //            t distribution of the next y (see Predictive()).
-//   Cost:    O(ρ²) per update (~3(ρ+1)² flops plus a fixed-cost cubic root), no allocation.
+//   Cost per Update() (flops as counted in ident/rls.h; m = ρ+1): the statistics steps of RLS without
+//            β = 1/ν, plus ξ, ξ_z (m divisions, 2m adds/multiplies) — 3ρ² + 20ρ + 33 flops (ρ = 4: 161) —
+//            plus the weighting-cubic root, a ρ-independent cost (logs and a bracketed iteration,
+//            approx/weighting_polynomial.h); stabilised forgetting adds ≈ (2/3)m³ + 4m² and a copy of
+//            L, d. No allocation after construction (also not at the start-up restart).
+//   Real-time loop features (as RLS, ident/rls.h): set_enabled/enabled, Skip(), Reset() (noexcept,
+//            allocation-free, back to a freshly built estimator's state), set_forgetting(λ) (refused
+//            if inadmissible), CovarianceInto(P) (caller-owned ρ x ρ, ≈ (5/6)ρ³ flops).
 //   Admissibility: every step needs ν(t) > ν_hard = max(ρ+δ−1, (k+3−δ)/k, ρ/(k+1)) [spec §5]. The
 //            constructor checks this for every t ≥ 1 of the forgetting recursion and throws otherwise.
 //
 // Example:
 //   ident::StudentRegressionOptions o;           // Cauchy (k = 1), δ = 1
 //   o.prior = ident::RegressionPrior::Diagonal(/*rho=*/4, /*nu0=*/6, /*vy0=*/1, /*vz0=*/1e-3);
-//   ident::StudentRegression est(/*num_parameters=*/4, o);
-//   for (...) ident::StepReport r = est.Update(y, z);    // r.weight = β(t)
-//   Eigen::VectorXd theta = est.parameters();
+//   o.forgetting.factor = 0.99;
+//   ident::BasicStudentRegression<4> est(/*num_parameters=*/4, o);   // fixed size; StudentRegression: dynamic
+//   Eigen::Matrix4d P;
+//   for (...) {
+//     est.set_enabled(excitation_ok);
+//     ident::StepReport r = sensor_ok ? est.Update(y, z) : est.Skip();   // r.weight = β(t)
+//     est.CovarianceInto(P);
+//   }
+//   Eigen::Vector4d theta = est.parameters();
 //
 // References: M. Kárný, K. M. Hangos, Kybernetika 24(5), 1988; [spec] shared/spec/cauchy-estimator.md.
 #pragma once
@@ -31,6 +44,7 @@
 #include <string>
 
 #include <Eigen/Core>
+#include <fmt/core.h>
 
 #include "approx/weighting_polynomial.h"
 #include "ident/common/error.h"
@@ -38,6 +52,7 @@
 #include "ident/extended_information.h"
 #include "ident/forgetting.h"
 #include "ident/regression_prior.h"
+#include "ident/step_driver.h"
 
 namespace ident {
 
@@ -66,6 +81,10 @@ struct StudentRegressionOptions {
   std::string Validate(int num_parameters) const;
 };
 
+// "" if forgetting `f` keeps every ν(t), t ≥ 1, above ν_hard(ρ, k, δ) starting from ν(0) = nu0, else one
+// line naming the inadmissible value [spec §5, §7b].
+std::string ForgettingAdmissibility(int rho, double nu0, const ForgettingOptions& f, double dof, int delta);
+
 // The predictive distribution of the next y given z: Student-t with `dof` degrees of freedom,
 // location Θ̂'z and squared scale D_y·(1 + z'V_z⁻¹z/(ν−δ−ρ)) — the noise scale widened by the
 // parameter uncertainty Cov(Θ) of spec §2 (a moment-style approximation, exact in the Gaussian limit).
@@ -91,6 +110,9 @@ class BasicStudentRegression {
  public:
   using ParamVector = typename ExtendedInformation<kDim>::ParamVector;
 
+  // Below this, d is taken to be winding up under forgetting (as in RLS; off with `exact`).
+  static constexpr double kWindupFloor = 0x1p-900;
+
   // Throws InvalidArgument naming the option if `options` is invalid or inadmissible.
   explicit BasicStudentRegression(int num_parameters, const StudentRegressionOptions& options = {})
       : options_(Checked(num_parameters, options)),
@@ -101,6 +123,9 @@ class BasicStudentRegression {
       window_size_ = options_.startup_window > 0 ? options_.startup_window : std::max(20, 4 * num_parameters);
       window_.resize(window_size_, num_parameters + 1);
       scratch_.resize(window_size_);
+      provisional_prior_ = prior_;
+      provisional_factor_ = prior_factor_;
+      prior_diagonal_.resize(num_parameters + 1);
     }
   }
 
@@ -108,14 +133,15 @@ class BasicStudentRegression {
   bool in_startup() const { return window_size_ > 0 && window_count_ < window_size_; }
 
   // One sample. A sample with a non-finite entry, a regressor of the wrong size or one that would
-  // overflow is rejected (state unchanged). Never throws, never allocates.
-  // During the start-up window (see StudentRegressionOptions::startup_window) the reports come from the
-  // provisional prior; the restart after sample W allocates once (prior validation).
+  // overflow is rejected (kRejectedInvalid, state unchanged); while disabled: kSkipped, state unchanged.
+  // A step that would leave D not a positive normal number or L, Θ̂ not finite is undone
+  // (kNumericalFailure, state unchanged), and — unless `exact` — a step under forgetting that would
+  // push some d_i below kWindupFloor is retaken with λ = 1 (ident/step_driver.h). Never throws,
+  // never allocates. During the start-up window (see StudentRegressionOptions::startup_window) the
+  // reports come from the provisional prior.
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
-    if (z.size() != num_parameters() || !std::isfinite(y) || !z.allFinite() ||
-        !std::isfinite(y * y + z.squaredNorm()))
-      return {StepStatus::kRejectedInvalid};
+    if (!enabled_) return {StepStatus::kSkipped};
     const StepReport report = Step(y, z);
     if (in_startup() && report.updated()) {
       window_(window_count_, 0) = y;
@@ -125,28 +151,67 @@ class BasicStudentRegression {
     return report;
   }
 
+  // A missing sample: kSkipped, the state is untouched (the next Update() continues as if this
+  // period had not happened).
+  StepReport Skip() const noexcept { return {StepStatus::kSkipped}; }
+  // Enable flag: while false, Update() skips every sample; read-outs keep working on the frozen state.
+  void set_enabled(bool enabled) noexcept { enabled_ = enabled; }
+  bool enabled() const noexcept { return enabled_; }
+
+  // Back to the state of a freshly built estimator with the same options (keeping the enable flag and
+  // the current forgetting factor): the prior (ν0, V0) — with the data-driven start-up, the provisional
+  // prior and an empty window, collected again. noexcept, allocation-free.
+  void Reset() noexcept {
+    if (window_size_ > 0) {
+      prior_.nu0 = provisional_prior_.nu0;
+      prior_.V0 = provisional_prior_.V0;  // same size: no allocation
+      prior_factor_ = provisional_factor_;
+      window_count_ = 0;
+    }
+    stats_.Reset(prior_.nu0, prior_factor_);
+    last_beta_ = std::numeric_limits<double>::quiet_NaN();
+    details_ = {};
+  }
+
+  // Changes λ on the fly (the next update uses it). Throws InvalidArgument if λ ∉ (0, 1] or if λ is
+  // inadmissible — ν(t) would reach ν_hard from the current ν or from ν(0) after a Reset() [spec §5, §7b].
+  // No allocation otherwise.
+  void set_forgetting(double lambda) {
+    ForgettingOptions f = options_.forgetting;
+    f.factor = lambda;
+    std::string error = f.Validate();
+    if (error.empty())
+      error = ForgettingAdmissibility(num_parameters(), prior_.nu0, f, options_.dof, options_.delta);
+    if (error.empty()) {
+      const double nu_next = f.stabilised ? lambda * stats_.nu() + (1 - lambda) * prior_.nu0 + 1
+                                          : lambda * stats_.nu() + 1;
+      if (!(nu_next > nu_hard_))
+        error = fmt::format("forgetting = {} is inadmissible now: the next step has nu = {} <= nu_hard = {}", lambda,
+                            nu_next, nu_hard_);
+    }
+    IDENT_REQUIRE(error.empty(), "{}", error);
+    options_.forgetting = f;
+  }
+
  private:
   template <class Derived>
   StepReport Step(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
-    const double lambda = options_.forgetting.factor;
-    const double nu_tilde =
-        options_.forgetting.stabilised ? lambda * stats_.nu() + (1 - lambda) * prior_.nu0 : lambda * stats_.nu();
-    if (!(nu_tilde + 1 > nu_hard_))  // cannot happen: admissibility is checked at construction [spec §5]
-      return {StepStatus::kNumericalFailure, std::numeric_limits<double>::quiet_NaN(), nu_tilde + 1};
-    if (options_.forgetting.stabilised)
-      stats_.ForgetStabilised(lambda, prior_.nu0, prior_factor_);  // [spec §7b]
-    else
-      stats_.ForgetExponential(lambda);  // [spec §7b]
-    const double nu = stats_.nu() + 1;
-    const Innovation in = stats_.Prepare(y, z);  // ξ, ξ_z, ê [spec §6]
+    const StepSettings settings{options_.forgetting.factor, options_.forgetting.stabilised,
+                                options_.exact ? 0.0 : kWindupFloor};
+    const DrivenStep s = driver_.Run(stats_, settings, prior_.nu0, prior_factor_, y, z,  // [spec §7b, §6]
+                                     [this](double nu, const Innovation& in) { return Weight(nu, in); });
+    if (s.report.updated()) last_beta_ = s.report.weight;
+    return s.report;
+  }
+
+  // β(t): the maximin root of the weighting cubic [spec §4, §5]; NaN (step refused) if it fails —
+  // not observed for ν > ν_hard, which the constructor and set_forgetting guarantee.
+  double Weight(double nu, const Innovation& in) noexcept {
+    if (!(nu > nu_hard_)) return std::numeric_limits<double>::quiet_NaN();
     const approx::WeightingProblem problem{nu, in.xi, in.xi_z, num_parameters(), options_.dof, options_.delta};
-    const approx::WeightSolution w = approx::SolveWeight(problem);  // [spec §4, §5]
+    const approx::WeightSolution w = approx::SolveWeight(problem);
     details_ = {in.xi, in.xi_z, w.beta0, w.beta_hi, w.num_maxima};
-    if (!w.ok || !(w.beta > 0 && w.beta < 1))  // not observed for ν > ν_hard; state is forgotten only
-      return {StepStatus::kNumericalFailure, w.beta, nu, in.prediction_error};
-    stats_.Apply(w.beta, nu);  // V(t) = (1−β)Ṽ + βhh' [spec §3 step 5]
-    last_beta_ = w.beta;
-    return {StepStatus::kUpdated, w.beta, nu, in.prediction_error};
+    return w.ok ? w.beta : std::numeric_limits<double>::quiet_NaN();
   }
 
   // s = 1.4826·MAD of column c of the window (RMS if 0, else 1).
@@ -162,24 +227,27 @@ class BasicStudentRegression {
     return s > 0 ? s : 1.0;
   }
 
-  // The data-driven prior from the window, then replay of the window (see the options).
+  // The data-driven prior from the window, then replay of the window (see the options). The prior is
+  // diagonal, so its factor is L = I, d = diag V(0) (no factorisation, no allocation). If some diagonal
+  // entry is not within [kWindupFloor, 1/kWindupFloor] (robust scales of samples ~1e-150 square to
+  // subnormals, of ~1e154 to infinity), the restart is skipped: the estimator continues from the
+  // provisional prior it has run the window on (fuzz finding, fuzz/corpus/student_fuzzer).
   void Restart() noexcept {
     const int rho = num_parameters();
-    const double sy = RobustScale(0);
     const double nu0 = rho + options_.dof + options_.delta;
-    prior_.nu0 = nu0;
-    prior_.V0.setZero();
-    prior_.V0(0, 0) = sy * sy;
+    auto& v0 = prior_diagonal_;  // sized at construction
+    const double sy = RobustScale(0);
+    v0(0) = sy * sy;
     for (int i = 1; i <= rho; ++i) {
       const double sz = RobustScale(i);
-      prior_.V0(i, i) = sz * sz / (100 * (nu0 - options_.delta - rho));
+      v0(i) = sz * sz / (100 * (nu0 - options_.delta - rho));
     }
-    try {
-      stats_.Reset(prior_);
-      prior_factor_.Factorize(prior_.V0);
-    } catch (...) {  // cannot happen: V0 is diagonal with positive entries
-      return;
-    }
+    if (!((v0.array() >= kWindupFloor).all() && (v0.array() <= 1 / kWindupFloor).all())) return;
+    prior_.nu0 = nu0;
+    prior_.V0.setZero();
+    prior_.V0.diagonal() = v0;
+    prior_factor_.SetDiagonal(v0);
+    stats_.Reset(nu0, prior_factor_);
     for (int t = 0; t < window_size_; ++t) Step(window_(t, 0), window_.row(t).tail(rho).transpose());
   }
 
@@ -199,10 +267,21 @@ class BasicStudentRegression {
   double noise_std() const { return std::sqrt(stats_.Dy()); }
   // Cov(Θ) = D_y V_z⁻¹/(ν−δ−ρ) (multivariate t, ν−δ−ρ+2 d.o.f.); +inf entries while ν ≤ δ+ρ.
   Eigen::MatrixXd covariance() const {
+    Eigen::MatrixXd out(num_parameters(), num_parameters());
+    CovarianceInto(out);
+    return out;
+  }
+  // The same Cov(Θ) into a caller-owned ρ x ρ matrix, without allocating, at any time. ~(5/6)ρ³ flops.
+  // Throws InvalidArgument only if `out` has the wrong size.
+  void CovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
+    IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
+                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(),
+                  num_parameters());
     const double dof = stats_.nu() - options_.delta - num_parameters();
     if (!(dof > 0))
-      return Eigen::MatrixXd::Constant(num_parameters(), num_parameters(), std::numeric_limits<double>::infinity());
-    return stats_.Dy() / dof * stats_.VzInverse();
+      out.setConstant(std::numeric_limits<double>::infinity());
+    else
+      stats_.ScaledVzInverse(stats_.Dy() / dof, out);
   }
   // Degrees of freedom of the multivariate-t marginal of Θ: ν−δ−ρ+2 [spec §2].
   double parameter_dof() const { return stats_.nu() - options_.delta - num_parameters() + 2; }
@@ -219,13 +298,6 @@ class BasicStudentRegression {
   const StudentRegressionOptions& options() const { return options_; }
   const RegressionPrior& prior() const { return prior_; }
 
-  // Back to the prior (the data-driven one, if the start-up window was completed).
-  void Reset() {
-    stats_.Reset(prior_);
-    last_beta_ = std::numeric_limits<double>::quiet_NaN();
-    details_ = {};
-  }
-
  private:
   static const StudentRegressionOptions& Checked(int num_parameters, const StudentRegressionOptions& options) {
     const std::string error = options.Validate(num_parameters);
@@ -236,13 +308,18 @@ class BasicStudentRegression {
   StudentRegressionOptions options_;
   RegressionPrior prior_;
   ExtendedInformation<kDim> stats_;
+  StepDriver<kDim> driver_{stats_};
   LdFactor<kDim> prior_factor_;
   double nu_hard_ = approx::NuHard(stats_.num_parameters(), options_.dof, options_.delta);
   double last_beta_ = std::numeric_limits<double>::quiet_NaN();
   StudentStepDetails details_;
+  bool enabled_ = true;
   int window_size_ = 0, window_count_ = 0;  // data-driven start-up (0 = off)
   Eigen::MatrixXd window_;                  // W x (ρ+1): y, z of the first W samples
   Eigen::VectorXd scratch_;
+  RegressionPrior provisional_prior_;       // the prior before the start-up window (for Reset)
+  LdFactor<kDim> provisional_factor_;
+  Eigen::Matrix<double, kDim, 1> prior_diagonal_;  // Restart() workspace
 };
 
 using StudentRegression = BasicStudentRegression<Eigen::Dynamic>;

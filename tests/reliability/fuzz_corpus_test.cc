@@ -12,6 +12,7 @@
 #include "fuzz/csv_property.h"
 #include "fuzz/prior_json_property.h"
 #include "fuzz/rls_property.h"
+#include "fuzz/student_property.h"
 
 namespace ident::testing {
 namespace {
@@ -43,6 +44,10 @@ TEST(FuzzCorpus, PriorJsonReaderPropertiesHoldOnEveryCommittedInput) {
 
 TEST(FuzzCorpus, RlsPropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("rls_fuzzer", &fuzz::RlsProperty), 7);
+}
+
+TEST(FuzzCorpus, StudentPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("student_fuzzer", &fuzz::StudentProperty), 6);
 }
 
 }  // namespace
