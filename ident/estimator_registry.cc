@@ -10,7 +10,7 @@
 
 #include "ident/common/error.h"
 #include "ident/rls.h"
-#include "ident/student_regression.h"
+#include "ident/safe_student_regression.h"
 
 namespace ident {
 namespace {
@@ -28,13 +28,13 @@ std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int 
 // Kárný–Hangos Student-t regression with k = dof; `name` is "cauchy" (k = 1) or "student".
 std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, int rho, const std::string& name,
                                                     double dof) {
-  StudentRegressionOptions options;
-  options.dof = dof;
-  options.delta = s.delta;
-  options.forgetting = s.forgetting;
-  options.prior = s.prior;
-  options.exact = s.exact;
-  return std::make_unique<RegressionEstimatorModel<StudentRegression>>(name, rho, options);
+  SafeStudentOptions options;  // start-up prior and lock-in safeguards unless exact (docs/kh.md)
+  options.base.dof = dof;
+  options.base.delta = s.delta;
+  options.base.forgetting = s.forgetting;
+  options.base.prior = s.prior;
+  options.base.exact = s.exact;
+  return std::make_unique<RegressionEstimatorModel<SafeStudentRegression>>(name, rho, options);
 }
 
 std::unique_ptr<AnyRegressionEstimator> MakeCauchy(const EstimatorSettings& s, int rho) {

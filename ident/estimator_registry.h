@@ -1,8 +1,9 @@
 // Run-time selection of regression estimators by name.
 //
 //   "rls"                     RecursiveLeastSquares
-//   "cauchy"                  StudentRegression with k = 1 (Kárný–Hangos; rejects dof ≠ 1)
-//   "student" (needs dof)     StudentRegression with k = dof ("student:3" or dof = 3)
+//   "cauchy"                  SafeStudentRegression with k = 1 (Kárný–Hangos; rejects dof ≠ 1)
+//   "student" (needs dof)     SafeStudentRegression with k = dof ("student:3" or dof = 3)
+//                             (exact = true: the plain StudentRegression recursion, no safeguards)
 //   (further names are registered in estimator_registry.cc as estimators are added)
 //
 // Example:

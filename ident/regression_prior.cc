@@ -1,6 +1,8 @@
 #include "ident/regression_prior.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <Eigen/Cholesky>
 
@@ -41,6 +43,44 @@ RegressionPrior RegressionPrior::FromGuess(const Eigen::VectorXd& theta0, const 
   prior.V0(0, 0) = sigma0 * sigma0 + theta0.dot(Vz * theta0);
   prior.Validate();
   return prior;
+}
+
+RegressionPrior RegressionPrior::FromWindow(const Eigen::Ref<const Eigen::MatrixXd>& window, double nu0, int delta,
+                                            double noise_scale) {
+  const int rho = static_cast<int>(window.cols()) - 1;
+  IDENT_REQUIRE(rho >= 1, "prior window has {} columns; need (y, z1..z_rho), rho >= 1", window.cols());
+  IDENT_REQUIRE(window.rows() >= 2, "prior window has {} rows; need at least 2 samples", window.rows());
+  IDENT_REQUIRE(window.allFinite(), "prior window has a non-finite entry");
+  IDENT_REQUIRE(nu0 > rho + delta, "nu0 = {}; need nu0 > rho + delta = {}", nu0, rho + delta);
+  IDENT_REQUIRE(std::isfinite(noise_scale) && noise_scale >= 0, "noise_scale = {}; need >= 0 (0: s_y)", noise_scale);
+  const double sy = RobustScale(window.col(0));
+  const double sigma0 = noise_scale > 0 ? noise_scale : sy;
+  RegressionPrior prior;
+  prior.nu0 = nu0;
+  prior.V0 = Eigen::MatrixXd::Zero(rho + 1, rho + 1);
+  prior.V0(0, 0) = sigma0 * sigma0;  // Θ0 = 0: V_y(0) = σ0² [spec §8]
+  for (int i = 1; i <= rho; ++i) {
+    const double sz = RobustScale(window.col(i));
+    // V_z(0) = σ0² P0⁻¹/(ν0−δ−ρ) with P0_ii = (10·s_y/s_{z_i})² [spec §8]
+    prior.V0(i, i) = sigma0 * sigma0 * sz * sz / (100 * sy * sy * (nu0 - delta - rho));
+  }
+  prior.Validate();
+  return prior;
+}
+
+double RobustScale(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  const std::size_t n = static_cast<std::size_t>(x.size());
+  if (n == 0) return 1.0;
+  std::vector<double> v(x.data(), x.data() + n);
+  auto median = [&] {
+    std::nth_element(v.begin(), v.begin() + n / 2, v.end());
+    return v[n / 2];
+  };
+  const double med = median();
+  for (std::size_t i = 0; i < n; ++i) v[i] = std::abs(x(i) - med);
+  double s = 1.4826 * median();
+  if (!(s > 0)) s = std::sqrt(x.squaredNorm() / n);
+  return s > 0 && std::isfinite(s) ? s : 1.0;
 }
 
 RegressionPrior RegressionPrior::Flat(int rho) {

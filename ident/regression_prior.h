@@ -5,6 +5,7 @@
 //
 // Example:
 //   auto prior = ident::RegressionPrior::Diagonal(/*rho=*/4, /*nu0=*/6, /*vy0=*/1, /*vz0=*/1e-3);
+//   auto robust = ident::RegressionPrior::FromWindow(window, /*nu0=*/6, /*delta=*/1);  // rows (y, z')
 #pragma once
 
 #include <Eigen/Core>
@@ -25,6 +26,13 @@ struct RegressionPrior {
   static RegressionPrior FromGuess(const Eigen::VectorXd& theta0, const Eigen::MatrixXd& P0, double sigma0,
                                    double nu0, int delta);
 
+  // The robust data-driven prior from a window of samples (row t = (y(t), z(t)')), spec §8 recipe with
+  //   Θ0 = 0,  σ0 = noise_scale (0: s_y),  P0 = diag((10·s_y/s_{z_i})²),  i.e.
+  //   V_y(0) = D_y(0) = σ0²,  V_z(0) = diag(s_{z_i}²)·σ0²/(100·s_y²·(ν0−δ−ρ)),
+  // where s = RobustScale() of the column. Scaling y or a regressor scales the prior along (spec §10.8).
+  static RegressionPrior FromWindow(const Eigen::Ref<const Eigen::MatrixXd>& window, double nu0, int delta,
+                                    double noise_scale = 0);
+
   // Flat prior for least squares: information ν0·V0 = 1e-12·I (negligible against any real
   // record's Z'Z, so RLS reproduces batch least squares).
   static RegressionPrior Flat(int rho);
@@ -33,5 +41,10 @@ struct RegressionPrior {
   // square, symmetric and positive definite.
   void Validate() const;
 };
+
+// Robust scale of a sample: 1.4826·MAD (median absolute deviation from the median; = σ for Gaussian
+// data, ignores up to half the sample being outliers); the RMS if the MAD is 0; 1 if that is 0 too
+// (or the sample is empty).
+double RobustScale(const Eigen::Ref<const Eigen::VectorXd>& x);
 
 }  // namespace ident
