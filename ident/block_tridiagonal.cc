@@ -7,43 +7,119 @@
 namespace ident {
 namespace {
 
-// Plain loops on column-major n x n blocks (ld = n): for the small blocks of state-space smoothing they
-// are several times faster than Eigen's dynamic-size kernels.
+// Plain loops on column-major n x n blocks (ld = n). kN > 0 fixes the block size at compile time
+// (n = 1..4: the loops unroll); kN = 0 is the run-time-size fallback.
+template <int kN>
+inline int Size(int n) { return kN > 0 ? kN : n; }
 inline double& At(double* A, int n, int i, int j) { return A[i + j * n]; }
 inline double At(const double* A, int n, int i, int j) { return A[i + j * n]; }
 
-// In-place Cholesky A = C C' (lower triangle of A becomes C). False if not positive definite.
-bool CholeskyInPlace(double* A, int n) {
+// In-place Cholesky A = C C': the strict lower triangle of A becomes C's, the diagonal holds 1 / C_jj
+// (the solves multiply instead of divide: the recursions over t are latency-bound). False if not
+// positive definite.
+template <int kN>
+inline bool CholeskyInPlace(double* A, int n_runtime) {
+  const int n = Size<kN>(n_runtime);
   for (int j = 0; j < n; ++j) {
     double d = At(A, n, j, j);
     for (int k = 0; k < j; ++k) d -= At(A, n, j, k) * At(A, n, j, k);
     if (!(d > 0) || !std::isfinite(d)) return false;
-    const double c = std::sqrt(d);
-    At(A, n, j, j) = c;
+    const double inv = 1.0 / std::sqrt(d);
+    At(A, n, j, j) = inv;
     for (int i = j + 1; i < n; ++i) {
       double s = At(A, n, i, j);
       for (int k = 0; k < j; ++k) s -= At(A, n, i, k) * At(A, n, j, k);
-      At(A, n, i, j) = s / c;
+      At(A, n, i, j) = s * inv;
     }
   }
   return true;
 }
 
-// b <- C^-1 b (C lower triangular).
-inline void ForwardSolve(const double* C, int n, double* b) {
+// b <- C^-1 b (C lower triangular, diagonal stored inverted).
+template <int kN>
+inline void ForwardSolve(const double* C, int n_runtime, double* b) {
+  const int n = Size<kN>(n_runtime);
   for (int i = 0; i < n; ++i) {
     double s = b[i];
     for (int k = 0; k < i; ++k) s -= At(C, n, i, k) * b[k];
-    b[i] = s / At(C, n, i, i);
+    b[i] = s * At(C, n, i, i);
   }
 }
 
 // b <- C^-T b.
-inline void BackwardSolve(const double* C, int n, double* b) {
+template <int kN>
+inline void BackwardSolve(const double* C, int n_runtime, double* b) {
+  const int n = Size<kN>(n_runtime);
   for (int i = n - 1; i >= 0; --i) {
     double s = b[i];
     for (int k = i + 1; k < n; ++k) s -= At(C, n, k, i) * b[k];
-    b[i] = s / At(C, n, i, i);
+    b[i] = s * At(C, n, i, i);
+  }
+}
+
+// Block Cholesky of the header: C_0 C_0' = D_0;  G_t = E_t C_{t-1}^-T;  C_t C_t' = D_t - G_t G_t'.
+template <int kN>
+bool FactorizeBlocks(const double* D, const double* E, int n_runtime, int N, double* C_all, double* G_all,
+                     double* row) {
+  const int n = Size<kN>(n_runtime);
+  const Eigen::Index nn = static_cast<Eigen::Index>(n) * n;
+  for (int t = 0; t < N; ++t) {
+    double* C = C_all + t * nn;
+    const double* Dt = D + t * nn;
+    for (int i = 0; i < n * n; ++i) C[i] = Dt[i];
+    if (t > 0) {
+      // G_t = E_t C_{t-1}^-T: row i of G solves C_{t-1} g = (row i of E_t)'.
+      double* G = G_all + t * nn;
+      const double* Et = E + t * nn;
+      const double* Cp = C_all + (t - 1) * nn;
+      for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) row[j] = At(Et, n, i, j);
+        ForwardSolve<kN>(Cp, n, row);
+        for (int j = 0; j < n; ++j) At(G, n, i, j) = row[j];
+      }
+      // C_t C_t' = D_t - G_t G_t' (lower triangle suffices)
+      for (int j = 0; j < n; ++j)
+        for (int i = j; i < n; ++i) {
+          double s = 0;
+          for (int k = 0; k < n; ++k) s += At(G, n, i, k) * At(G, n, j, k);
+          At(C, n, i, j) -= s;
+        }
+    }
+    if (!CholeskyInPlace<kN>(C, n)) return false;
+  }
+  return true;
+}
+
+// Forward  y_t = C_t^-1 (b_t - G_t y_{t-1}),  backward  x_t = C_t^-T (y_t - G_{t+1}' x_{t+1}).
+template <int kN>
+void SolveBlocks(const double* C_all, const double* G_all, int n_runtime, int N, double* b) {
+  const int n = Size<kN>(n_runtime);
+  const Eigen::Index nn = static_cast<Eigen::Index>(n) * n;
+  for (int t = 0; t < N; ++t) {
+    double* bt = b + static_cast<Eigen::Index>(t) * n;
+    if (t > 0) {
+      const double* G = G_all + t * nn;
+      const double* prev = bt - n;
+      for (int i = 0; i < n; ++i) {
+        double s = 0;
+        for (int k = 0; k < n; ++k) s += At(G, n, i, k) * prev[k];
+        bt[i] -= s;
+      }
+    }
+    ForwardSolve<kN>(C_all + t * nn, n, bt);
+  }
+  for (int t = N - 1; t >= 0; --t) {
+    double* bt = b + static_cast<Eigen::Index>(t) * n;
+    if (t + 1 < N) {
+      const double* G = G_all + (t + 1) * nn;
+      const double* next = bt + n;
+      for (int i = 0; i < n; ++i) {
+        double s = 0;
+        for (int k = 0; k < n; ++k) s += At(G, n, k, i) * next[k];
+        bt[i] -= s;
+      }
+    }
+    BackwardSolve<kN>(C_all + t * nn, n, bt);
   }
 }
 
@@ -62,65 +138,28 @@ bool BlockTridiagonalCholesky::Factorize(const Eigen::Ref<const Eigen::MatrixXd>
                                          const Eigen::Ref<const Eigen::MatrixXd>& E) {
   IDENT_REQUIRE(D.rows() == n_ && D.cols() == C_.cols() && E.rows() == n_ && E.cols() == C_.cols(),
                 "block-tridiagonal storage must be {} x {}", n_, C_.cols());
-  const int n = n_;
-  const Eigen::Index nn = static_cast<Eigen::Index>(n) * n;
-  for (int t = 0; t < N_; ++t) {
-    double* C = C_.data() + t * nn;
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) At(C, n, i, j) = D(i, static_cast<Eigen::Index>(t) * n + j);
-    if (t > 0) {
-      // G_t = E_t C_{t-1}^-T: row i of G solves C_{t-1} g = (row i of E_t)'.
-      double* G = G_.data() + t * nn;
-      const double* Cp = C_.data() + (t - 1) * nn;
-      double* row = work_.data();
-      for (int i = 0; i < n; ++i) {
-        for (int j = 0; j < n; ++j) row[j] = E(i, static_cast<Eigen::Index>(t) * n + j);
-        ForwardSolve(Cp, n, row);
-        for (int j = 0; j < n; ++j) At(G, n, i, j) = row[j];
-      }
-      // C_t C_t' = D_t - G_t G_t' (lower triangle suffices)
-      for (int j = 0; j < n; ++j)
-        for (int i = j; i < n; ++i) {
-          double s = 0;
-          for (int k = 0; k < n; ++k) s += At(G, n, i, k) * At(G, n, j, k);
-          At(C, n, i, j) -= s;
-        }
-    }
-    if (!CholeskyInPlace(C, n)) return false;
+  IDENT_REQUIRE(D.outerStride() == n_ && E.outerStride() == n_, "block-tridiagonal storage must be contiguous");
+  double* C = C_.data();
+  double* G = G_.data();
+  double* row = work_.data();
+  switch (n_) {  // fixed-size kernels for small blocks, run-time size beyond
+    case 1: return FactorizeBlocks<1>(D.data(), E.data(), n_, N_, C, G, row);
+    case 2: return FactorizeBlocks<2>(D.data(), E.data(), n_, N_, C, G, row);
+    case 3: return FactorizeBlocks<3>(D.data(), E.data(), n_, N_, C, G, row);
+    case 4: return FactorizeBlocks<4>(D.data(), E.data(), n_, N_, C, G, row);
+    default: return FactorizeBlocks<0>(D.data(), E.data(), n_, N_, C, G, row);
   }
-  return true;
 }
 
 void BlockTridiagonalCholesky::Solve(Eigen::Ref<Eigen::MatrixXd> b) const {
-  IDENT_REQUIRE(b.rows() == n_ && b.cols() == N_, "right-hand side is {}x{}; need {}x{}", b.rows(), b.cols(), n_,
-                N_);
-  const int n = n_;
-  const Eigen::Index nn = static_cast<Eigen::Index>(n) * n;
-  for (int t = 0; t < N_; ++t) {
-    double* bt = &b(0, t);
-    if (t > 0) {
-      const double* G = G_.data() + t * nn;
-      const double* prev = &b(0, t - 1);
-      for (int i = 0; i < n; ++i) {
-        double s = 0;
-        for (int k = 0; k < n; ++k) s += At(G, n, i, k) * prev[k];
-        bt[i] -= s;
-      }
-    }
-    ForwardSolve(C_.data() + t * nn, n, bt);
-  }
-  for (int t = N_ - 1; t >= 0; --t) {
-    double* bt = &b(0, t);
-    if (t + 1 < N_) {
-      const double* G = G_.data() + (t + 1) * nn;
-      const double* next = &b(0, t + 1);
-      for (int i = 0; i < n; ++i) {
-        double s = 0;
-        for (int k = 0; k < n; ++k) s += At(G, n, k, i) * next[k];
-        bt[i] -= s;
-      }
-    }
-    BackwardSolve(C_.data() + t * nn, n, bt);
+  IDENT_REQUIRE(b.rows() == n_ && b.cols() == N_ && b.outerStride() == n_, "right-hand side is {}x{}; need {}x{}",
+                b.rows(), b.cols(), n_, N_);
+  switch (n_) {
+    case 1: return SolveBlocks<1>(C_.data(), G_.data(), n_, N_, b.data());
+    case 2: return SolveBlocks<2>(C_.data(), G_.data(), n_, N_, b.data());
+    case 3: return SolveBlocks<3>(C_.data(), G_.data(), n_, N_, b.data());
+    case 4: return SolveBlocks<4>(C_.data(), G_.data(), n_, N_, b.data());
+    default: return SolveBlocks<0>(C_.data(), G_.data(), n_, N_, b.data());
   }
 }
 

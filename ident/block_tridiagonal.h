@@ -40,7 +40,7 @@ class BlockTridiagonalCholesky {
 
  private:
   int n_, N_;
-  Eigen::MatrixXd C_;  // n x nN, lower-triangular diagonal factors
+  Eigen::MatrixXd C_;  // n x nN, lower-triangular diagonal factors (their diagonals stored inverted)
   Eigen::MatrixXd G_;  // n x nN, sub-diagonal factors (block 0 unused)
   Eigen::MatrixXd work_;
 };

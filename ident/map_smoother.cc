@@ -118,7 +118,7 @@ Eigen::MatrixXd StatesFromDual(const MapSmootherProblem& p, const Eigen::MatrixX
                 p.state_dim(), p.T() + 1);
   Eigen::MatrixXd x(p.state_dim(), p.T() + 1);
   for (int t = 0; t <= p.T(); ++t) {
-    x.col(t) = p.ft(t).ConjugateGradient(y.col(t));  // w_t in d f_t*(y_t)   [BCW sec. 3]
+    p.ft(t).ConjugateGradient(y.col(t), x.col(t));  // w_t in d f_t*(y_t)   [BCW sec. 3]
     if (t > 0) x.col(t) += p.Ft(t - 1) * x.col(t - 1);
   }
   return x;
@@ -126,36 +126,17 @@ Eigen::MatrixXd StatesFromDual(const MapSmootherProblem& p, const Eigen::MatrixX
 
 namespace {
 
-// y += alpha A x and y += alpha A' x with plain loops (A column-major): for the small matrices of
-// state-space smoothing these are several times faster than Eigen's dynamic-size kernels.
-inline void AddMatVec(const Eigen::MatrixXd& A, const double* x, double* y, double alpha) {
-  const Eigen::Index r = A.rows(), c = A.cols();
-  const double* a = A.data();
-  for (Eigen::Index j = 0; j < c; ++j) {
-    const double xj = alpha * x[j];
-    for (Eigen::Index i = 0; i < r; ++i) y[i] += a[i + j * r] * xj;
-  }
-}
-inline void AddMatTVec(const Eigen::MatrixXd& A, const double* x, double* y, double alpha) {
-  const Eigen::Index r = A.rows(), c = A.cols();
-  const double* a = A.data();
-  for (Eigen::Index j = 0; j < c; ++j) {
-    double s = 0;
-    for (Eigen::Index i = 0; i < r; ++i) s += a[i + j * r] * x[i];
-    y[j] += alpha * s;
-  }
-}
-
 // Solver-side data of one distinct penalty.
 struct Prepared {
   const PlqForm* plq = nullptr;
   int k = 0, m = 0;
-  bool constant = false;   // no finite bound: K = M, W = B'M^-1 B fixed
-  Eigen::MatrixXd Kinv;    // constant case
-  Eigen::MatrixXd W;       // constant case
-  Eigen::MatrixXd K;       // dense case work
+  bool constant = false;    // no finite bound: K = M, W = B'M^-1 B fixed (its Newton block is precomputed)
+  bool identity_B = false;  // B = I, b = 0, p = 0: v = p + B'u = u and B r - b = r
+  Eigen::MatrixXd Kinv;     // constant case
+  Eigen::MatrixXd W;        // constant case
+  Eigen::MatrixXd K;        // dense case work
   Eigen::LLT<Eigen::MatrixXd> llt;
-  Eigen::MatrixXd KinvB;   // dense case work (k x m)
+  Eigen::MatrixXd KinvB;    // dense case work (k x m)
 };
 
 struct Term {
@@ -163,26 +144,58 @@ struct Term {
   int offset;  // into the coordinate arrays
   int t;
   bool process;
+  const double* F;  // F_{t-1} (process terms with t > 0), column-major n x n; else nullptr
+  const double* H;  // H_t (measurement terms), column-major nz x n
 };
 
+#define IDENT_HOT [[gnu::always_inline]] inline
+
+// y += alpha A x (A r x c column-major, plain loops: several times faster than Eigen's dynamic-size
+// kernels for the tiny blocks here). kR, kC > 0 fix the sizes at compile time (the loops unroll).
+template <int kR = 0, int kC = 0>
+IDENT_HOT void AddMatVec(const double* A, int r_runtime, int c_runtime, const double* x, double* y, double alpha) {
+  const int r = kR > 0 ? kR : r_runtime, c = kC > 0 ? kC : c_runtime;
+  for (int j = 0; j < c; ++j) {
+    const double xj = alpha * x[j];
+    for (int i = 0; i < r; ++i) y[i] += A[i + j * r] * xj;
+  }
+}
+// y += alpha A' x.
+template <int kR = 0, int kC = 0>
+IDENT_HOT void AddMatTVec(const double* A, int r_runtime, int c_runtime, const double* x, double* y, double alpha) {
+  const int r = kR > 0 ? kR : r_runtime, c = kC > 0 ? kC : c_runtime;
+  for (int j = 0; j < c; ++j) {
+    double s = 0;
+    for (int i = 0; i < r; ++i) s += A[i + j * r] * x[i];
+    y[j] += alpha * s;
+  }
+}
+
+// The interior-point iteration. kN > 0 fixes the state dimension n at compile time (n = 1..4: the
+// per-step loops unroll); kN = 0 is the run-time-size fallback. All work arrays are allocated by the
+// constructor; an iteration allocates nothing (except the dense K of non-diagonal box monitoring
+// functions, which Eigen's LLT factors in place).
+template <int kN>
 class Solver {
  public:
   Solver(const MapSmootherProblem& p, const MapSmootherOptions& o)
       : p_(p), o_(o), T_(p.T()), n_(p.state_dim()), nz_(p.measurement_dim()), chol_(n_, T_ + 1) {
     int offset = 0;
+    terms_.reserve(2 * (T_ + 1));
     for (int pass = 0; pass < 2; ++pass)
       for (int t = 0; t <= T_; ++t) {
         const Penalty& pen = pass == 0 ? p.ft(t) : p.gt(t);
         auto it = prepared_.find(&pen);
         if (it == prepared_.end()) it = prepared_.emplace(&pen, Prepare(pen)).first;
-        terms_.push_back({it->second.get(), offset, t, pass == 0});
+        const double* F = pass == 0 && t > 0 ? p.Ft(t - 1).data() : nullptr;
+        const double* H = pass == 1 ? p.Ht(t).data() : nullptr;
+        terms_.push_back({it->second.get(), offset, t, pass == 0, F, H});
         offset += it->second->k;
       }
     const int K = offset;
-    for (Eigen::VectorXd* v : {&u_, &slo_, &qlo_, &shi_, &qhi_, &lo_, &hi_, &r3_, &du_, &dslo_, &dqlo_, &dshi_,
-                               &dqhi_, &xlo_, &xhi_, &kd_})
+    for (Eigen::VectorXd* v : {&u_, &slo_, &qlo_, &shi_, &qhi_, &lo_, &hi_, &r3_, &rt3_, &du_, &dslo_, &dqlo_,
+                               &dshi_, &dqhi_, &xlo_, &xhi_, &kd_})
       v->setZero(K);
-    rt3_.setZero(K);
     has_lo_.assign(K, 0);
     has_hi_.assign(K, 0);
     for (const Term& term : terms_) {
@@ -201,6 +214,7 @@ class Solver {
         qlo_(c) = has_lo ? 1.0 : 0.0;
         qhi_(c) = has_hi ? 1.0 : 0.0;
         num_constraints_ += has_lo + has_hi;
+        if (has_lo || has_hi) bounded_.push_back(c);
       }
     }
     for (const auto& F : p.F) matrix_scale_ = std::max(matrix_scale_, 1 + F.cwiseAbs().maxCoeff());
@@ -208,33 +222,40 @@ class Solver {
     x_.setZero(n_, T_ + 1);
     R4_.setZero(n_, T_ + 1);
     dx_.setZero(n_, T_ + 1);
-    D_.setZero(n_, static_cast<Eigen::Index>(n_) * (T_ + 1));
-    E_.setZero(n_, static_cast<Eigen::Index>(n_) * (T_ + 1));
+    const Eigen::Index block_cols = static_cast<Eigen::Index>(n_) * (T_ + 1);
+    D_.setZero(n_, block_cols);
+    E_.setZero(n_, block_cols);
     const int m = std::max(n_, nz_);
     r_.resize(m);
     v_.resize(m);
     g_.resize(m);
-    W_.resize(m, m);
-    WF_.resize(m, n_);
+    W_.resize(m * m);
+    WF_.resize(m * n_);
     int kmax = 1;
     for (auto& [_, prep] : prepared_) kmax = std::max(kmax, prep->k);
     tk_.resize(kmax);
     tk2_.resize(kmax);
+    // The Newton blocks of penalties without bounds do not change: add them up once.
+    for (const Term& term : terms_)
+      if (term.prep->constant) AddNewtonBlocks(term, term.prep->W.data(), D_.data(), E_.data());
+    base_D_ = D_;
+    base_E_ = E_;
   }
 
   MapSmootherResult Run() {
     MapSmootherResult res;
     const double z_scale = 1 + p_.z.cwiseAbs().maxCoeff();
     double bound_scale = 1;
-    for (int c = 0; c < u_.size(); ++c) {
+    for (int c : bounded_) {
       if (has_lo_[c]) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
       if (has_hi_[c]) bound_scale = std::max(bound_scale, std::abs(hi_(c)));
     }
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
+    double mu = 0;
     for (;; ++iter) {
       const double v_scale = Residuals();
-      const double mu = num_constraints_ ? Complementarity(0) / num_constraints_ : 0.0;
+      mu = num_constraints_ ? Complementarity(0) / num_constraints_ : 0.0;
       const double r3max = r3_.size() ? r3_.cwiseAbs().maxCoeff() : 0.0;
       const double r4max = R4_.cwiseAbs().maxCoeff();
       // KKT residual relative to its scale (R4 sums products of H_t, F_t with p + B'u).
@@ -267,8 +288,10 @@ class Solver {
       const double alpha_aff = std::min(1.0, MaxStep());
       const double mu_aff = Complementarity(alpha_aff) / num_constraints_;
       const double sigma = std::pow(std::clamp(mu_aff / mu, 0.0, 1.0), 3);
-      xlo_ = dslo_.cwiseProduct(dqlo_);
-      xhi_ = dshi_.cwiseProduct(dqhi_);
+      for (int c : bounded_) {
+        xlo_(c) = dslo_(c) * dqlo_(c);
+        xhi_(c) = dshi_(c) * dqhi_(c);
+      }
       Direction(sigma * mu, true);
       Step(std::min(1.0, o_.step_fraction * MaxStep()));
     }
@@ -285,11 +308,13 @@ class Solver {
         break;
       case MapSmootherStatus::kNumericalFailure: res.message = "the Newton matrix is not positive definite"; break;
     }
-    Finish(&res, z_scale);
+    Finish(&res, z_scale, mu);
     return res;
   }
 
  private:
+  int n() const { return kN > 0 ? kN : n_; }
+
   static std::unique_ptr<Prepared> Prepare(const Penalty& pen) {
     auto prep = std::make_unique<Prepared>();
     const PlqForm& f = pen.plq();
@@ -297,6 +322,7 @@ class Solver {
     prep->k = f.rows();
     prep->m = pen.dim();
     prep->constant = !(f.lo.array().isFinite().any() || f.hi.array().isFinite().any());
+    prep->identity_B = f.B.rows() == f.B.cols() && f.B.isIdentity(0.0) && f.b.isZero(0.0) && f.p.isZero(0.0);
     if (prep->constant) {
       Eigen::LLT<Eigen::MatrixXd> llt(f.M);
       IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds",
@@ -310,29 +336,30 @@ class Solver {
     return prep;
   }
 
-  // r = residual of the term at x (process: x_t - F x_{t-1}; measurement: z_t - H_t x_t).
-  void Residual(const Term& term, const Eigen::MatrixXd& x, bool include_constant, Eigen::Ref<Eigen::VectorXd> r) {
-    const int t = term.t;
-    double* out = r.data();
+  // r = residual of the term at x (process: x_t - F x_{t-1}; measurement: z_t - H_t x_t), or its
+  // linear part J x (include_constant = false).
+  IDENT_HOT void Residual(const Term& term, const Eigen::MatrixXd& x, bool include_constant, double* out) const {
+    const int n = this->n(), t = term.t;
+    const double* xt = x.data() + static_cast<Eigen::Index>(t) * n;
     if (term.process) {
-      const double* xt = x.data() + static_cast<Eigen::Index>(t) * n_;
-      for (int i = 0; i < n_; ++i) out[i] = xt[i];
-      if (t > 0) AddMatVec(p_.Ft(t - 1), xt - n_, out, -1.0);
+      for (int i = 0; i < n; ++i) out[i] = xt[i];
+      if (term.F) AddMatVec<kN, kN>(term.F, n, n, xt - n, out, -1.0);
     } else {
-      for (int i = 0; i < nz_; ++i) out[i] = include_constant ? p_.z(i, t) : 0.0;
-      AddMatVec(p_.Ht(t), x.data() + static_cast<Eigen::Index>(t) * n_, out, -1.0);
+      const double* zt = p_.z.data() + static_cast<Eigen::Index>(t) * nz_;
+      for (int i = 0; i < nz_; ++i) out[i] = include_constant ? zt[i] : 0.0;
+      AddMatVec(term.H, nz_, n, xt, out, -1.0);
     }
   }
 
   // out += sign * J' g
-  void AddJt(const Term& term, const Eigen::Ref<const Eigen::VectorXd>& g, double sign, Eigen::MatrixXd& out) {
-    const int t = term.t;
-    double* ot = out.data() + static_cast<Eigen::Index>(t) * n_;
+  IDENT_HOT void AddJt(const Term& term, const double* g, double sign, Eigen::MatrixXd& out) const {
+    const int n = this->n();
+    double* ot = out.data() + static_cast<Eigen::Index>(term.t) * n;
     if (term.process) {
-      for (int i = 0; i < n_; ++i) ot[i] += sign * g(i);
-      if (t > 0) AddMatTVec(p_.Ft(t - 1), g.data(), ot - n_, -sign);
+      for (int i = 0; i < n; ++i) ot[i] += sign * g[i];
+      if (term.F) AddMatTVec<kN, kN>(term.F, n, n, g, ot - n, -sign);
     } else {
-      AddMatTVec(p_.Ht(t), g.data(), ot, -sign);
+      AddMatTVec(term.H, nz_, n, g, ot, -sign);
     }
   }
 
@@ -340,25 +367,33 @@ class Solver {
   double Residuals() {
     R4_.setZero();
     double v_scale = 1;
+    double* r = r_.data();
+    double* v = v_.data();
     for (const Term& term : terms_) {
-      const PlqForm& f = *term.prep->plq;
-      const int m = term.prep->m, k = term.prep->k;
-      auto r = r_.head(m);
-      auto v = v_.head(m);
+      const Prepared& prep = *term.prep;
+      const PlqForm& f = *prep.plq;
+      const int m = prep.m, k = prep.k;
       Residual(term, x_, true, r);
-      auto u = u_.segment(term.offset, k);
-      v = f.p;
-      AddMatTVec(f.B, u.data(), v.data(), 1.0);
-      v_scale = std::max(v_scale, v.cwiseAbs().maxCoeff());
+      const double* u = u_.data() + term.offset;
+      double* r3 = r3_.data() + term.offset;
+      if (prep.identity_B) {
+        for (int i = 0; i < m; ++i) v[i] = u[i];
+        for (int i = 0; i < k; ++i) r3[i] = r[i];
+      } else {
+        for (int i = 0; i < m; ++i) v[i] = f.p(i);
+        AddMatTVec(f.B.data(), k, m, u, v, 1.0);
+        for (int i = 0; i < k; ++i) r3[i] = -f.b(i);
+        AddMatVec(f.B.data(), k, m, r, r3, 1.0);
+      }
+      for (int i = 0; i < m; ++i) v_scale = std::max(v_scale, std::abs(v[i]));
       AddJt(term, v, 1.0, R4_);
-      auto r3 = r3_.segment(term.offset, k);
-      r3 = -f.b;
-      AddMatVec(f.B, r.data(), r3.data(), 1.0);
-      if (f.diagonal_M)
-        r3 -= f.M.diagonal().cwiseProduct(u);
-      else
-        r3.noalias() -= f.M * u;
-      r3 -= qhi_.segment(term.offset, k) - qlo_.segment(term.offset, k);
+      if (f.diagonal_M) {
+        const double* M = f.M.data();
+        for (int i = 0; i < k; ++i) r3[i] -= M[i + i * k] * u[i];
+      } else {
+        AddMatVec(f.M.data(), k, k, u, r3, -1.0);
+      }
+      for (int i = 0; i < k; ++i) r3[i] -= qhi_(term.offset + i) - qlo_(term.offset + i);
     }
     return v_scale;
   }
@@ -366,7 +401,7 @@ class Solver {
   // sum (s + a ds) .* (q + a dq) over finite bounds.
   double Complementarity(double a) const {
     double sum = 0;
-    for (int c = 0; c < u_.size(); ++c) {
+    for (int c : bounded_) {
       if (has_lo_[c]) sum += (slo_(c) + a * dslo_(c)) * (qlo_(c) + a * dqlo_(c));
       if (has_hi_[c]) sum += (shi_(c) + a * dshi_(c)) * (qhi_(c) + a * dqhi_(c));
     }
@@ -374,24 +409,29 @@ class Solver {
   }
 
   // D = q_hi/s_hi + q_lo/s_lo per coordinate (the barrier curvature C S^-1 Q C').
-  double BarrierCurvature(int c) const {
+  IDENT_HOT double BarrierCurvature(int c) const {
     double d = 0;
     if (has_lo_[c]) d += qlo_(c) / slo_(c);
     if (has_hi_[c]) d += qhi_(c) / shi_(c);
     return d;
   }
 
-  // tk2 = K^-1 tk for the term (K = M + diag(D)); dense factor computed by AssembleNewtonMatrix.
-  void ApplyKinv(const Term& term, Eigen::Ref<Eigen::VectorXd> tk, Eigen::Ref<Eigen::VectorXd> out) {
+  // out = K^-1 in for the term (K = M + diag(D)); dense factor computed by AssembleNewtonMatrix.
+  IDENT_HOT void ApplyKinv(const Term& term, const double* in, double* out) {
     Prepared& prep = *term.prep;
+    const int k = prep.k;
     if (prep.constant) {
-      out.setZero();
-      AddMatVec(prep.Kinv, tk.data(), out.data(), 1.0);
+      for (int i = 0; i < k; ++i) out[i] = 0;
+      if (term.process && prep.identity_B)  // k = n
+        AddMatVec<kN, kN>(prep.Kinv.data(), k, k, in, out, 1.0);
+      else
+        AddMatVec(prep.Kinv.data(), k, k, in, out, 1.0);
     } else if (prep.plq->diagonal_M) {
-      out = tk.cwiseQuotient(kd_.segment(term.offset, prep.k));
+      const double* kd = kd_.data() + term.offset;
+      for (int i = 0; i < k; ++i) out[i] = in[i] / kd[i];
     } else {
       FactorK(term);
-      out = prep.llt.solve(tk);
+      Eigen::Map<Eigen::VectorXd>(out, k) = prep.llt.solve(Eigen::Map<const Eigen::VectorXd>(in, k));
     }
   }
 
@@ -402,77 +442,86 @@ class Solver {
     prep.llt.compute(prep.K);
   }
 
-  // D_, E_ = sum_terms J' B' K^-1 B J   (block tridiagonal)
+  // D_t, E_t += J' W J for one term (W: m x m, column-major).
+  void AddNewtonBlocks(const Term& term, const double* W, double* D, double* E) {
+    const int n = this->n(), t = term.t;
+    const Eigen::Index nn = static_cast<Eigen::Index>(n) * n;
+    double* Dt = D + t * nn;
+    double* WF = WF_.data();
+    if (term.process) {
+      for (int i = 0; i < n * n; ++i) Dt[i] += W[i];
+      if (term.F) {  // D_{t-1} += F'WF,  E_t -= W F
+        const double* F = term.F;
+        double* Dp = Dt - nn;
+        double* Et = E + t * nn;
+        for (int b = 0; b < n; ++b)
+          for (int a = 0; a < n; ++a) {
+            double wf = 0;
+            for (int c = 0; c < n; ++c) wf += W[a + c * n] * F[c + b * n];
+            WF[a + b * n] = wf;
+            Et[a + b * n] -= wf;
+          }
+        for (int b = 0; b < n; ++b)
+          for (int a = 0; a < n; ++a) {
+            double s = 0;
+            for (int c = 0; c < n; ++c) s += F[c + a * n] * WF[c + b * n];
+            Dp[a + b * n] += s;
+          }
+      }
+    } else {  // D_t += H'WH
+      const double* H = term.H;
+      const int nz = nz_;
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < nz; ++a) {
+          double wh = 0;
+          for (int c = 0; c < nz; ++c) wh += W[a + c * nz] * H[c + b * nz];
+          WF[a + b * nz] = wh;
+        }
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a) {
+          double s = 0;
+          for (int c = 0; c < nz; ++c) s += H[c + a * nz] * WF[c + b * nz];
+          Dt[a + b * n] += s;
+        }
+    }
+  }
+
+  // D_, E_ = sum_terms J' B' K^-1 B J   (block tridiagonal): the precomputed constant part plus the
+  // terms with bounds, whose K = M + diag(q_hi/s_hi + q_lo/s_lo) changes every iteration.
   void AssembleNewtonMatrix() {
-    D_.setZero();
-    E_.setZero();
+    D_ = base_D_;
+    E_ = base_E_;
+    double* W = W_.data();
     for (const Term& term : terms_) {
       Prepared& prep = *term.prep;
+      if (prep.constant) continue;
       const PlqForm& f = *prep.plq;
       const int m = prep.m, k = prep.k;
-      auto W = W_.topLeftCorner(m, m);
-      if (prep.constant) {
-        W = prep.W;
-      } else {
-        for (int i = 0; i < k; ++i)
-          kd_(term.offset + i) = BarrierCurvature(term.offset + i) + (f.diagonal_M ? f.M(i, i) : 0.0);
-        if (f.diagonal_M) {
-          W.setZero();
-          for (int i = 0; i < k; ++i) {
-            const double inv = 1.0 / kd_(term.offset + i);
-            for (int a = 0; a < m; ++a)
-              for (int b = 0; b < m; ++b) W(a, b) += f.B(i, a) * f.B(i, b) * inv;
-          }
+      double* kd = kd_.data() + term.offset;
+      if (f.diagonal_M) {
+        for (int i = 0; i < k; ++i) kd[i] = BarrierCurvature(term.offset + i) + f.M(i, i);
+        for (int i = 0; i < m * m; ++i) W[i] = 0;
+        if (prep.identity_B) {
+          for (int i = 0; i < k; ++i) W[i + i * m] = 1.0 / kd[i];
         } else {
-          for (int i = 0; i < k; ++i) kd_(term.offset + i) = BarrierCurvature(term.offset + i);
-          FactorK(term);
-          prep.KinvB = prep.llt.solve(f.B);
-          W.noalias() = f.B.transpose() * prep.KinvB;
-        }
-      }
-      const int t = term.t;
-      double* Dt = D_.data() + static_cast<Eigen::Index>(t) * n_ * n_;
-      if (term.process) {
-        for (int b = 0; b < n_; ++b)
-          for (int a = 0; a < n_; ++a) Dt[a + b * n_] += W(a, b);
-        if (t > 0) {  // D_{t-1} += F'WF,  E_t -= W F
-          const Eigen::MatrixXd& F = p_.Ft(t - 1);
-          double* Dp = Dt - static_cast<Eigen::Index>(n_) * n_;
-          double* Et = E_.data() + static_cast<Eigen::Index>(t) * n_ * n_;
-          for (int b = 0; b < n_; ++b)
-            for (int a = 0; a < n_; ++a) {
-              double wf = 0;
-              for (int c = 0; c < n_; ++c) wf += W(a, c) * F(c, b);
-              WF_(a, b) = wf;
-              Et[a + b * n_] -= wf;
-            }
-          for (int b = 0; b < n_; ++b)
-            for (int a = 0; a < n_; ++a) {
-              double s = 0;
-              for (int c = 0; c < n_; ++c) s += F(c, a) * WF_(c, b);
-              Dp[a + b * n_] += s;
-            }
-        }
-      } else {  // D_t += H'WH
-        const Eigen::MatrixXd& H = p_.Ht(t);
-        for (int b = 0; b < n_; ++b)
-          for (int a = 0; a < nz_; ++a) {
-            double wh = 0;
-            for (int c = 0; c < nz_; ++c) wh += W(a, c) * H(c, b);
-            WF_(a, b) = wh;
+          for (int i = 0; i < k; ++i) {
+            const double inv = 1.0 / kd[i];
+            for (int b = 0; b < m; ++b)
+              for (int a = 0; a < m; ++a) W[a + b * m] += f.B(i, a) * f.B(i, b) * inv;
           }
-        for (int b = 0; b < n_; ++b)
-          for (int a = 0; a < n_; ++a) {
-            double s = 0;
-            for (int c = 0; c < nz_; ++c) s += H(c, a) * WF_(c, b);
-            Dt[a + b * n_] += s;
-          }
+        }
+      } else {
+        for (int i = 0; i < k; ++i) kd[i] = BarrierCurvature(term.offset + i);
+        FactorK(term);
+        prep.KinvB = prep.llt.solve(f.B);
+        Eigen::Map<Eigen::MatrixXd>(W, m, m).noalias() = f.B.transpose() * prep.KinvB;
       }
+      AddNewtonBlocks(term, W, D_.data(), E_.data());
     }
   }
 
   // Complementarity residuals R2 = s.*q (+ ds_aff.*dq_aff) - target for coordinate c.
-  void R2(int c, double target, bool corrector, double* r2lo, double* r2hi) const {
+  IDENT_HOT void R2(int c, double target, bool corrector, double* r2lo, double* r2hi) const {
     *r2lo = has_lo_[c] ? slo_(c) * qlo_(c) + (corrector ? xlo_(c) : 0.0) - target : 0.0;
     *r2hi = has_hi_[c] ? shi_(c) * qhi_(c) + (corrector ? xhi_(c) : 0.0) - target : 0.0;
   }
@@ -483,27 +532,38 @@ class Solver {
   // R1 (the linear box residual u + s - hi, -u + s - (-lo)) is kept in the formulas.
   void Direction(double target, bool corrector) {
     dx_ = -R4_;
+    double* kinv = tk2_.data();
+    double* g = g_.data();
     for (const Term& term : terms_) {
-      const int k = term.prep->k, m = term.prep->m;
-      auto rt3 = rt3_.segment(term.offset, k);
+      const Prepared& prep = *term.prep;
+      const int k = prep.k, m = prep.m;
+      double* rt3 = rt3_.data() + term.offset;
       RightHandSide(term, target, corrector, rt3);
-      auto kinv = tk2_.head(k);
       ApplyKinv(term, rt3, kinv);
-      auto g = g_.head(m);
-      g.setZero();
-      AddMatTVec(term.prep->plq->B, kinv.data(), g.data(), 1.0);
-      AddJt(term, g, -1.0, dx_);
+      if (prep.identity_B) {
+        AddJt(term, kinv, -1.0, dx_);
+      } else {
+        for (int i = 0; i < m; ++i) g[i] = 0;
+        AddMatTVec(prep.plq->B.data(), k, m, kinv, g, 1.0);
+        AddJt(term, g, -1.0, dx_);
+      }
     }
     chol_.Solve(dx_);
+    double* rhs = tk_.data();
+    double* r = r_.data();
     for (const Term& term : terms_) {
-      const int k = term.prep->k, m = term.prep->m;
-      auto rt3 = tk_.head(k);
-      rt3 = rt3_.segment(term.offset, k);
-      auto r = r_.head(m);
+      const Prepared& prep = *term.prep;
+      const int k = prep.k, m = prep.m;
+      const double* rt3 = rt3_.data() + term.offset;
+      for (int i = 0; i < k; ++i) rhs[i] = rt3[i];
       Residual(term, dx_, false, r);  // J dx
-      AddMatVec(term.prep->plq->B, r.data(), rt3.data(), 1.0);
-      auto du = du_.segment(term.offset, k);
-      ApplyKinv(term, rt3, du);
+      if (prep.identity_B) {
+        for (int i = 0; i < k; ++i) rhs[i] += r[i];
+      } else {
+        AddMatVec(prep.plq->B.data(), k, m, r, rhs, 1.0);
+      }
+      ApplyKinv(term, rhs, du_.data() + term.offset);
+      if (prep.constant) continue;
       for (int i = 0; i < k; ++i) {
         const int c = term.offset + i;
         double r2lo, r2hi;
@@ -522,8 +582,12 @@ class Solver {
     }
   }
 
-  void RightHandSide(const Term& term, double target, bool corrector, Eigen::Ref<Eigen::VectorXd> rt3) const {
+  IDENT_HOT void RightHandSide(const Term& term, double target, bool corrector, double* rt3) const {
     const int k = term.prep->k;
+    if (term.prep->constant) {  // no bounds: e = 0
+      for (int i = 0; i < k; ++i) rt3[i] = r3_(term.offset + i);
+      return;
+    }
     for (int i = 0; i < k; ++i) {
       const int c = term.offset + i;
       double r2lo, r2hi;
@@ -531,7 +595,7 @@ class Solver {
       double e = 0;
       if (has_hi_[c]) e += (-r2hi + qhi_(c) * (u_(c) + shi_(c) - hi_(c))) / shi_(c);
       if (has_lo_[c]) e -= (-r2lo + qlo_(c) * (-u_(c) + slo_(c) + lo_(c))) / slo_(c);
-      rt3(i) = r3_(c) - e;
+      rt3[i] = r3_(c) - e;
     }
   }
 
@@ -541,7 +605,7 @@ class Solver {
     auto limit = [&a](double value, double delta) {
       if (delta < 0) a = std::min(a, -value / delta);
     };
-    for (int c = 0; c < u_.size(); ++c) {
+    for (int c : bounded_) {
       if (has_lo_[c]) {
         limit(slo_(c), dslo_(c));
         limit(qlo_(c), dqlo_(c));
@@ -557,60 +621,84 @@ class Solver {
   void Step(double a) {
     x_ += a * dx_;
     u_ += a * du_;
-    slo_ += a * dslo_;
-    qlo_ += a * dqlo_;
-    shi_ += a * dshi_;
-    qhi_ += a * dqhi_;
+    for (int c : bounded_) {
+      slo_(c) += a * dslo_(c);
+      qlo_(c) += a * dqlo_(c);
+      shi_(c) += a * dshi_(c);
+      qhi_(c) += a * dqhi_(c);
+    }
   }
 
-  void Finish(MapSmootherResult* res, double z_scale) {
+  // Objective values, the dual point, the reconstruction of x from y and where it is not unique.
+  void Finish(MapSmootherResult* res, double z_scale, double mu) {
+    const int n = this->n();
     res->x = x_;
     res->w.resize(n_, T_ + 1);
-    for (int t = 0; t <= T_; ++t) {
-      res->w.col(t) = x_.col(t);
-      if (t > 0) res->w.col(t) -= p_.Ft(t - 1) * x_.col(t - 1);
-    }
+    for (int t = 0; t <= T_; ++t) Residual(terms_[t], x_, true, res->w.col(t).data());  // w_t = x_t - F x_{t-1}
     res->u.resize(nz_, T_ + 1);
     for (const Term& term : terms_) {
       if (term.process) continue;
       const PlqForm& f = *term.prep->plq;
-      res->u.col(term.t) = f.p + f.B.transpose() * u_.segment(term.offset, term.prep->k);  // u_t in d g_t
+      double* ut = res->u.col(term.t).data();  // u_t = p + B'u in d g_t
+      for (int i = 0; i < nz_; ++i) ut[i] = f.p(i);
+      AddMatTVec(f.B.data(), term.prep->k, nz_, u_.data() + term.offset, ut, 1.0);
     }
     // Dual point: u from the multipliers, y from u by the dynamics of (D) (exact A'y = H'u). Rounding can
     // leave u_t, y_t a hair outside a box dom f*, dom g*: the distance is reported and the point projected.
-    auto project = [&](const Penalty& pen, Eigen::Ref<Eigen::VectorXd> v) {
+    auto project = [&](const Penalty& pen, double* v, int size) {
       double violation = 0;
-      for (int i = 0; i < v.size(); ++i) {
-        const double c = std::clamp(v(i), pen.conjugate_lo()(i), pen.conjugate_hi()(i));
-        violation = std::max(violation, std::abs(c - v(i)));
-        v(i) = c;
+      for (int i = 0; i < size; ++i) {
+        const double c = std::clamp(v[i], pen.conjugate_lo()(i), pen.conjugate_hi()(i));
+        violation = std::max(violation, std::abs(c - v[i]));
+        v[i] = c;
       }
       res->dual_infeasibility = std::max(res->dual_infeasibility, violation);
     };
-    for (int t = 0; t <= T_; ++t) project(p_.gt(t), res->u.col(t));
-    res->y = DualStates(p_, res->u);
-    for (int t = 0; t <= T_; ++t) project(p_.ft(t), res->y.col(t));
-    double dual = 0;
-    for (int t = 0; t <= T_; ++t)
+    for (int t = 0; t <= T_; ++t) project(p_.gt(t), res->u.col(t).data(), nz_);
+    res->y.resize(n_, T_ + 1);
+    for (int t = T_; t >= 0; --t) {  // y_T = H_T'u_T, y_t = F_t'y_{t+1} + H_t'u_t   [BCW Thm 2.5, A'y = H'u]
+      double* yt = res->y.col(t).data();
+      for (int i = 0; i < n; ++i) yt[i] = 0;
+      if (t < T_) AddMatTVec(terms_[t + 1].F, n, n, yt + n, yt, 1.0);
+      AddMatTVec(terms_[T_ + 1 + t].H, nz_, n, res->u.col(t).data(), yt, 1.0);
+    }
+    for (int t = 0; t <= T_; ++t) project(p_.ft(t), res->y.col(t).data(), n);
+    double dual = 0, primal = 0;
+    const double domain_tolerance = 1e-8 * z_scale;
+    double* r = r_.data();
+    for (int t = 0; t <= T_; ++t) {
       dual += p_.z.col(t).dot(res->u.col(t)) - p_.gt(t).Conjugate(res->u.col(t)) - p_.ft(t).Conjugate(res->y.col(t));
+      Residual(terms_[T_ + 1 + t], x_, true, r);  // z_t - H_t x_t
+      primal += p_.ft(t).Value(res->w.col(t), domain_tolerance) +
+                p_.gt(t).Value(Eigen::Map<const Eigen::VectorXd>(r, nz_), domain_tolerance);
+    }
     res->dual = dual;
-    res->primal = PrimalObjective(p_, x_, 1e-8 * z_scale);
+    res->primal = primal;
     res->gap = res->primal - res->dual;
     res->relative_gap = res->gap / std::max(1.0, std::abs(res->primal));
-    // w_t in d f_t*(y_t) is unique where f_t* is differentiable: y_t strictly inside the box dom f_t*,
-    // and for Vapnik (eps |y|) also y_t != 0. On the boundary the normal cone adds freedom, so the
-    // rebuilt states need not equal x (reported via reconstruction_unique).
-    res->reconstruction_unique = true;
+    // Reconstruction w_t in d f_t*(y_t), then x_0 = w_0, x_{t+1} = F_t x_t + w_{t+1}  [BCW sec. 3].
+    res->x_from_dual.resize(n_, T_ + 1);
+    res->nonunique_steps.clear();
+    // The interior point locates a dual state that is degenerate on a kink of f_t* only to O(sqrt(mu)),
+    // so kinks closer than y_tolerance count as reached.
+    const double y_tolerance = std::max(1e-7, 100 * std::sqrt(std::max(mu, 0.0)));
     for (int t = 0; t <= T_; ++t) {
       const Penalty& f = p_.ft(t);
-      for (int i = 0; i < n_; ++i) {
-        const double v = res->y(i, t), lo = f.conjugate_lo()(i), hi = f.conjugate_hi()(i);
-        const double margin = 1e-7 * (1 + std::abs(v));
-        if (v - lo <= margin || hi - v <= margin) res->reconstruction_unique = false;
-        if (f.kind() == Penalty::Kind::kVapnik && std::abs(v) <= margin) res->reconstruction_unique = false;
+      double* xt = res->x_from_dual.col(t).data();
+      f.ConjugateGradient(res->y.col(t), res->x_from_dual.col(t));
+      // d f_t*(y_t) is not a single point if (a) f_t* has a kink within y_tolerance of y_t, or (b) the
+      // primal w_t (an element of d f_t*(y_t) at the optimum) differs from the element just chosen.
+      double w_diff = 0, w_scale = 1;
+      for (int i = 0; i < n; ++i) {
+        w_diff = std::max(w_diff, std::abs(xt[i] - res->w(i, t)));
+        w_scale = std::max({w_scale, std::abs(xt[i]), std::abs(res->w(i, t))});
       }
+      const double y_scale = 1 + res->y.col(t).cwiseAbs().maxCoeff();
+      if (!f.ConjugateIsDifferentiableNear(res->y.col(t), y_tolerance * y_scale) || w_diff > 1e-6 * w_scale)
+        res->nonunique_steps.push_back(t);
+      if (t > 0) AddMatVec(terms_[t].F, n, n, xt - n, xt, 1.0);
     }
-    res->x_from_dual = StatesFromDual(p_, res->y);
+    res->reconstruction_unique = res->nonunique_steps.empty();
     res->max_abs_x_difference = (res->x_from_dual - x_).cwiseAbs().maxCoeff();
   }
 
@@ -618,19 +706,26 @@ class Solver {
   const MapSmootherOptions& o_;
   const int T_, n_, nz_;
   std::map<const Penalty*, std::unique_ptr<Prepared>> prepared_;
-  std::vector<Term> terms_;
+  std::vector<Term> terms_;  // process terms t = 0..T, then measurement terms t = 0..T
   int num_constraints_ = 0;
   double matrix_scale_ = 1;
-  // Per PLQ coordinate: u, slacks and multipliers of lo <= u <= hi, residual R3, Newton direction,
-  // affine cross terms ds.*dq, and K's diagonal.
+  // Per PLQ coordinate: u, slacks and multipliers of lo <= u <= hi, residual R3, R3 - e of the current
+  // direction, Newton direction, affine cross terms ds.*dq, and K's diagonal.
   std::vector<char> has_lo_, has_hi_;  // finite bounds per coordinate
-  Eigen::VectorXd rt3_;                // R3 - e of the current direction (first pass of Direction)
-  Eigen::VectorXd u_, slo_, qlo_, shi_, qhi_, lo_, hi_, r3_, du_, dslo_, dqlo_, dshi_, dqhi_, xlo_, xhi_, kd_;
-  Eigen::MatrixXd x_, R4_, dx_, D_, E_;
-  Eigen::VectorXd r_, v_, g_, tk_, tk2_;
-  Eigen::MatrixXd W_, WF_;
+  std::vector<int> bounded_;           // coordinates with at least one finite bound
+  Eigen::VectorXd u_, slo_, qlo_, shi_, qhi_, lo_, hi_, r3_, rt3_, du_, dslo_, dqlo_, dshi_, dqhi_, xlo_, xhi_, kd_;
+  Eigen::MatrixXd x_, R4_, dx_, D_, E_, base_D_, base_E_;
+  Eigen::VectorXd r_, v_, g_, tk_, tk2_, W_, WF_;
   BlockTridiagonalCholesky chol_;
 };
+
+template <int kN>
+MapSmootherResult Solve(const MapSmootherProblem& problem, const MapSmootherOptions& options) {
+  Solver<kN> solver(problem, options);
+  return solver.Run();
+}
+
+#undef IDENT_HOT
 
 }  // namespace
 
@@ -638,8 +733,13 @@ MapSmootherResult SolveMapSmoother(const MapSmootherProblem& problem, const MapS
   ValidateMapSmootherProblem(problem);
   const std::string error = options.Validate();
   IDENT_REQUIRE(error.empty(), "MapSmootherOptions: {}", error);
-  Solver solver(problem, options);
-  return solver.Run();
+  switch (problem.state_dim()) {  // fixed-size kernels for small state dimensions
+    case 1: return Solve<1>(problem, options);
+    case 2: return Solve<2>(problem, options);
+    case 3: return Solve<3>(problem, options);
+    case 4: return Solve<4>(problem, options);
+    default: return Solve<0>(problem, options);
+  }
 }
 
 }  // namespace ident

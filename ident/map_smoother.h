@@ -95,7 +95,12 @@ struct MapSmootherResult {
   double dual_infeasibility = 0;    // max distance of u_t, y_t outside dom g_t*, dom f_t* before projection
   Eigen::MatrixXd x_from_dual;      // states rebuilt from y: w_t in d f_t*(y_t), then the dynamics
   double max_abs_x_difference = 0;  // max |x - x_from_dual|
-  bool reconstruction_unique = true;  // every f_t* differentiable at y_t (e.g. quadratic f_t): x_from_dual = x
+  // w_t in d f_t*(y_t) determines w_t only where f_t* is differentiable at y_t. nonunique_steps lists the
+  // t where it is not: y_t within tolerance of a kink of f_t* (a finite bound of the box dom f_t*, Vapnik's
+  // y_i = 0, a slope of a piecewise-linear f_t), or the primal w_t differs from the element of d f_t*(y_t)
+  // chosen by the reconstruction. x_from_dual equals x (to rounding) when the list is empty.
+  std::vector<int> nonunique_steps;
+  bool reconstruction_unique = true;  // nonunique_steps is empty
 };
 
 // (P) at x (n x (T+1)); +inf if infeasible. Residuals within `domain_tolerance` of a penalty's domain

@@ -25,6 +25,17 @@ PlqForm Identity(int m, double lo, double hi, double M) {
   return f;
 }
 
+// 1/2 v'A v without a temporary (A symmetric).
+double HalfQuadraticForm(const Eigen::MatrixXd& A, const Eigen::Ref<const Eigen::VectorXd>& v) {
+  double sum = 0;
+  for (Eigen::Index j = 0; j < A.cols(); ++j) {
+    double s = 0;
+    for (Eigen::Index i = 0; i < A.rows(); ++i) s += A(i, j) * v(i);
+    sum += s * v(j);
+  }
+  return 0.5 * sum;
+}
+
 bool IsDiagonal(const Eigen::MatrixXd& M) {
   for (int i = 0; i < M.rows(); ++i)
     for (int j = 0; j < M.cols(); ++j)
@@ -240,7 +251,7 @@ double Penalty::Value(const Eigen::Ref<const Eigen::VectorXd>& r, double domain_
                 r.size());
   double sum = 0;
   switch (kind_) {
-    case Kind::kQuadratic: return 0.5 * r.dot(precision_ * r);
+    case Kind::kQuadratic: return HalfQuadraticForm(precision_, r);
     case Kind::kL1: return r.cwiseAbs().sum();
     case Kind::kHuber:
       for (int i = 0; i < dim_; ++i) {
@@ -282,12 +293,12 @@ double Penalty::Conjugate(const Eigen::Ref<const Eigen::VectorXd>& v) const {
   for (int i = 0; i < dim_; ++i)
     if (!(v(i) >= conj_lo_(i) && v(i) <= conj_hi_(i))) return kInfinity;
   switch (kind_) {
-    case Kind::kQuadratic: return 0.5 * v.dot(matrix_ * v);          // (1/2 r'C^-1 r)* = 1/2 v'C v
+    case Kind::kQuadratic: return HalfQuadraticForm(matrix_, v);  // (1/2 r'C^-1 r)* = 1/2 v'C v
     case Kind::kL1: return 0.0;                                        // indicator of [-1, 1]^m
     case Kind::kHuber: return 0.5 * v.squaredNorm();                   // Lemma 2.8, U = [-kappa, kappa]
     case Kind::kVapnik: return parameter_ * v.cwiseAbs().sum();        // eps |v| on [-1, 1]
     case Kind::kQuantile: return 0.0;                                  // indicator of [tau-1, tau]
-    case Kind::kBoxMonitoring: return 0.5 * v.dot(matrix_ * v);        // Lemma 2.8
+    case Kind::kBoxMonitoring: return HalfQuadraticForm(matrix_, v);  // Lemma 2.8
     case Kind::kPiecewiseLinear: {
       // sup_r { v r - rho(r) } is attained at a knot: rho* (v) = max_j { v k_j - rho(k_j) }.
       double best = -kInfinity;
@@ -299,12 +310,22 @@ double Penalty::Conjugate(const Eigen::Ref<const Eigen::VectorXd>& v) const {
 }
 
 Eigen::VectorXd Penalty::ConjugateGradient(const Eigen::Ref<const Eigen::VectorXd>& v) const {
-  IDENT_REQUIRE(v.size() == dim_, "{} penalty has dimension {} but the dual vector has {} entries", Name(), dim_,
-                v.size());
-  Eigen::VectorXd g = Eigen::VectorXd::Zero(dim_);
+  Eigen::VectorXd g(dim_);
+  ConjugateGradient(v, g);
+  return g;
+}
+
+void Penalty::ConjugateGradient(const Eigen::Ref<const Eigen::VectorXd>& v, Eigen::Ref<Eigen::VectorXd> g) const {
+  IDENT_REQUIRE(v.size() == dim_ && g.size() == dim_,
+                "{} penalty has dimension {} but the dual vector has {} entries (output {})", Name(), dim_, v.size(),
+                g.size());
+  g.setZero();
   switch (kind_) {
     case Kind::kQuadratic:
-    case Kind::kBoxMonitoring: g = matrix_ * v; break;
+    case Kind::kBoxMonitoring:
+      for (int j = 0; j < dim_; ++j)
+        for (int i = 0; i < dim_; ++i) g(i) += matrix_(i, j) * v(j);
+      break;
     case Kind::kHuber: g = v; break;
     case Kind::kVapnik:
       for (int i = 0; i < dim_; ++i) g(i) = v(i) > 0 ? parameter_ : (v(i) < 0 ? -parameter_ : 0.0);
@@ -319,7 +340,29 @@ Eigen::VectorXd Penalty::ConjugateGradient(const Eigen::Ref<const Eigen::VectorX
       break;
     }
   }
-  return g;
+}
+
+bool Penalty::ConjugateIsDifferentiableNear(const Eigen::Ref<const Eigen::VectorXd>& v, double tolerance) const {
+  IDENT_REQUIRE(v.size() == dim_, "{} penalty has dimension {} but the dual vector has {} entries", Name(), dim_,
+                v.size());
+  IDENT_REQUIRE(tolerance >= 0, "tolerance = {}; need >= 0", tolerance);
+  if (kind_ == Kind::kPiecewiseLinear) {
+    // rho* (v) = max_j {v k_j - rho(k_j)} has a kink exactly where v equals the slope of a piece of rho
+    // (two adjacent knots attain the max); pieces with equal slopes form one piece.
+    const int last = static_cast<int>(knots_.size()) - 1;
+    for (int j = 0; j < last; ++j) {
+      const double slope = (values_(j + 1) - values_(j)) / (knots_(j + 1) - knots_(j));
+      if (std::abs(v(0) - slope) <= tolerance) return false;
+    }
+    return true;
+  }
+  // Every other penalty here has rho* smooth on the interior of the box dom rho*: the normal cone of
+  // the box adds a ray at a finite bound.
+  for (int i = 0; i < dim_; ++i) {
+    if (v(i) - conj_lo_(i) <= tolerance || conj_hi_(i) - v(i) <= tolerance) return false;
+    if (kind_ == Kind::kVapnik && parameter_ > 0 && std::abs(v(i)) <= tolerance) return false;  // eps |v_i|
+  }
+  return true;
 }
 
 }  // namespace ident::models

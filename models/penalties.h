@@ -72,6 +72,14 @@ class Penalty {
   double Conjugate(const Eigen::Ref<const Eigen::VectorXd>& v) const;
   // An element of the subdifferential of rho* at v (v must lie in dom rho*).
   Eigen::VectorXd ConjugateGradient(const Eigen::Ref<const Eigen::VectorXd>& v) const;
+  // The same written into `out` (dim() entries; no allocation).
+  void ConjugateGradient(const Eigen::Ref<const Eigen::VectorXd>& v, Eigen::Ref<Eigen::VectorXd> out) const;
+  // True if rho* is differentiable at every point within `tolerance` (max norm) of v, so that
+  // d rho*(v) = {ConjugateGradient(v)} is a single point and r is determined by v through v in d rho(r).
+  // False near the points where d rho*(v) is a segment or a ray: a finite bound of dom rho* (l1,
+  // Huber, quantile, box, Vapnik |v_i| = 1), v_i = 0 for Vapnik with epsilon > 0, and v equal to the
+  // slope of a piece of a piecewise-linear rho (rho* = max_j {v k_j - rho(k_j)} has a kink there).
+  bool ConjugateIsDifferentiableNear(const Eigen::Ref<const Eigen::VectorXd>& v, double tolerance) const;
   // dom rho* is the box [conjugate_lo, conjugate_hi] for every penalty here.
   const Eigen::VectorXd& conjugate_lo() const { return conj_lo_; }
   const Eigen::VectorXd& conjugate_hi() const { return conj_hi_; }

@@ -2,12 +2,14 @@
 // MAP smoothing with convex penalties and the dual control problem (ident/map_smoother.h): prints the
 // primal and dual objective values, the duality gap, the states x (one row per time) and the
 // interior-point iteration count. The model format is described in tools/smooth_model.h.
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <iostream>
 #include <memory>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "ident/common/error.h"
@@ -51,6 +53,7 @@ void RunSmooth(const SmoothOptions& o) {
     j["y"] = Rows(r.y);
     j["max_abs_x_from_dual_difference"] = r.max_abs_x_difference;
     j["reconstruction_unique"] = r.reconstruction_unique;
+    j["nonunique_reconstruction_steps"] = r.nonunique_steps;  // t where d f_t*(y_t) is not a single point
     j["dual_infeasibility"] = r.dual_infeasibility;
     j["solve_seconds"] = seconds;  // SolveMapSmoother alone (no file I/O), for benchmark scripts
     j["solve_cpu_seconds"] = cpu_seconds;
@@ -62,10 +65,15 @@ void RunSmooth(const SmoothOptions& o) {
   fmt::print("interior point: {}\n", r.message);
   fmt::print("primal (P) {:.12g}\ndual   (D) {:.12g}\ngap        {:.3e} (relative {:.3e})\n", r.primal, r.dual, r.gap,
              r.relative_gap);
-  fmt::print("max |x - x from dual| {:.3e}{}\n\n  {:>6}", r.max_abs_x_difference,
-             r.reconstruction_unique ? ""
-                                     : " (w_t in d f_t*(y_t) is not unique: some y_t lie on the boundary of dom f_t*)",
-             "t");
+  fmt::print("max |x - x from dual| {:.3e}\n", r.max_abs_x_difference);
+  if (!r.reconstruction_unique) {
+    const size_t shown = std::min<size_t>(r.nonunique_steps.size(), 20);
+    fmt::print("w_t in d f_t*(y_t) is not unique at {} of {} steps (f_t* has a kink at y_t): t = {}{}\n",
+               r.nonunique_steps.size(), p.T() + 1,
+               fmt::join(r.nonunique_steps.begin(), r.nonunique_steps.begin() + shown, ", "),
+               shown < r.nonunique_steps.size() ? ", ..." : "");
+  }
+  fmt::print("\n  {:>6}", "t");
   for (int i = 0; i < p.state_dim(); ++i) fmt::print(" {:>14}", fmt::format("x{}", i + 1));
   fmt::print("\n");
   for (int t = 0; t <= p.T(); ++t) {

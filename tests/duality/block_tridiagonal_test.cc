@@ -12,7 +12,7 @@ namespace {
 TEST(BlockTridiagonalCholesky, SolveMatchesDenseCholesky) {
   std::mt19937 rng(9);
   std::normal_distribution<double> N(0, 1);
-  for (int n : {1, 2, 3, 5})
+  for (int n : {1, 2, 3, 4, 5})
     for (int blocks : {1, 2, 7}) {
       // A = J'J + I with J block lower bidiagonal: SPD and block tridiagonal.
       const int size = n * blocks;

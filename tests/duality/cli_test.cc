@@ -50,6 +50,24 @@ const char* kModel = R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]],
   "process": {"penalty": "quadratic", "covariance": 1},
   "measurement": {"penalty": "huber", "kappa": 1}})";
 
+TEST(SmoothCommand, ReportsTheStepsWhereTheDualDoesNotDetermineTheStates) {
+  // Total-variation smoothing of a step (tests/duality/dual_reconstruction_test.cc solves it by hand):
+  // y_t = 1 on the boundary of dom f* = [-1, 1] for t = 0..3, inside for t = 4, 5.
+  const std::string model = WriteFile("tv.json", R"({"F": [[1]], "H": [[1]], "initial": {"penalty": "l1"},
+    "process": {"penalty": "l1"}, "measurement": {"penalty": "quadratic", "covariance": 1}})");
+  const std::string data = WriteFile("step.csv", "z\n0\n0\n0\n5\n5\n5\n");
+  const CliResult r = RunCli("smooth --model '" + model + "' '" + data + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_FALSE(j["reconstruction_unique"].get<bool>());
+  EXPECT_EQ(j["nonunique_reconstruction_steps"].get<std::vector<int>>(), (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_NEAR(j["max_abs_x_from_dual_difference"].get<double>(), 14.0 / 3.0, 1e-4);
+  const CliResult text = RunCli("smooth --model '" + model + "' '" + data + "'");
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("not unique at 4 of 6 steps (f_t* has a kink at y_t): t = 0, 1, 2, 3\n"), std::string::npos)
+      << text.out;
+}
+
 TEST(SmoothCommand, JsonReportsObjectivesGapStatesAndIterations) {
   const std::string model = WriteFile("model.json", kModel);
   const std::string data = WriteFile("data.csv", "z\n0.5\n1.2\n3.1\n2.0\n6.5\n");

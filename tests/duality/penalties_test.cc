@@ -120,6 +120,42 @@ TEST(Penalties, FenchelYoungHoldsWithEqualityAtTheConjugateGradient) {
     }
 }
 
+TEST(Penalties, ConjugateIsDifferentiableExactlyWhereTheSupHasOneMaximiser) {
+  // d rho*(v) = argmax_r {v r - rho(r)}: found on a grid (r in [-10, 10], step 2e-3) as the set within
+  // 1e-9 of the max. A single maximiser (width <= 2 grid steps: r* may fall half-way between two grid
+  // points) means rho* is differentiable at v; a
+  // segment or a ray (width > 0.1) means it is not. v runs over a grid (step 0.05) plus every kink of
+  // the conjugates: +-1 (l1), +-0.7 (Huber), 0 and +-1 (Vapnik), -0.7 and 0.3 (quantile), -0.5 and 2
+  // (box), and the piecewise-linear slopes -5/3, -4/7, 3/8, 21/20.
+  std::vector<double> vs = {1.0, -1.0, 0.7, -0.7, 0.0, 0.3, -0.5, 2.0, -5.0 / 3, -4.0 / 7, 3.0 / 8, 21.0 / 20};
+  for (int i = 0; i <= 90; ++i) vs.push_back(-2.2 + 0.05 * i);
+  int unique = 0, not_unique = 0;
+  for (const Penalty& f : ScalarPenalties())
+    for (double v : vs) {
+      if (std::isinf(f.Conjugate(V1(v)))) continue;
+      double best = -kInfinity;
+      for (int i = 0; i <= 10000; ++i) {
+        const double r = -10 + 2e-3 * i;
+        best = std::max(best, v * r - f.Value(V1(r)));
+      }
+      double lo = kInfinity, hi = -kInfinity;
+      for (int i = 0; i <= 10000; ++i) {
+        const double r = -10 + 2e-3 * i;
+        if (v * r - f.Value(V1(r)) >= best - 1e-9 * (1 + std::abs(best))) {
+          lo = std::min(lo, r);
+          hi = std::max(hi, r);
+        }
+      }
+      const double width = hi - lo;
+      const bool single = width < 4.1e-3;
+      ASSERT_TRUE(single || width > 0.1) << f.Name() << " v = " << v << ": width " << width;
+      EXPECT_EQ(f.ConjugateIsDifferentiableNear(V1(v), 1e-4), single) << f.Name() << " v = " << v;
+      (single ? unique : not_unique)++;
+    }
+  EXPECT_GT(unique, 200);
+  EXPECT_GT(not_unique, 20);
+}
+
 TEST(Penalties, NonDiagonalBoxMonitoringMatchesTheMultivariateSup) {
   Eigen::MatrixXd M(2, 2);
   M << 1.0, 0.6, 0.6, 0.5;
