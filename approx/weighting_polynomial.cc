@@ -43,7 +43,7 @@ double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double
 // replaced by bisection whenever it leaves the current bracket (which shrinks at every iterate,
 // keeping P(a) > 0 > P(b)); never an unbracketed step. The error after a step is ≈ K·Δ⁴ with
 // K = |c2|·|c2² − 2c3|, c2 = f''/(2f'), c3 = f'''/(6f'), i.e. K = |f''|·|3f''² − 4f'f'''|/(24|f'|³):
-// stop as soon as K·Δ⁴ ≤ 1e−16·β (or the bracket is 4e−16·β wide). `x` (if inside the bracket) is the
+// stop as soon as K·Δ⁴ ≤ 1e−16·β, or the step itself is ≤ 1e−16·β, or the bracket is 4e−16·β wide. `x` (if inside the bracket) is the
 // first iterate, else the midpoint.
 inline __attribute__((always_inline)) double HouseholderRoot(const std::array<double, 4>& mu, double a, double b, double x, int& iterations) {
   if (!(x > a && x < b)) x = 0.5 * (a + b);
@@ -57,6 +57,7 @@ inline __attribute__((always_inline)) double HouseholderRoot(const std::array<do
     const double d2f = d3f * x + 2 * mu[2];
     const double ff = f * d2f;
     const double next = x - f * (6 * df * df - 3 * ff) / ((6 * df * df - 6 * ff) * df + f * f * d3f);
+    if (std::abs(next - x) <= 1e-16 * x) return next;  // at the root to rounding (x may now be a bracket end)
     if (!(next > a && next < b)) {  // the step left the bracket (or NaN): bisect
       x = 0.5 * (a + b);
       if (b - a <= 4e-16 * b) break;
@@ -84,18 +85,15 @@ inline std::array<double, 4> Coefficients(const WeightingProblem& p) {
 // [spec §7a].
 double AsymptoticGuess(const WeightingProblem& p) { return (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi))); }
 
-// First iterate of SolveWeight: the same limit with its 1/ν correction. With β = b/ν, β·(2 d log H0/dβ)
-// [spec §3] expanded in 1/ν is (k+1) − D·b + b·T(b)/ν + O(1/ν²), D = k + ξ_z − ξ, where
-//   T(b) = T_a + b·T_b,  T_a = (k−δ+2) + (2−δ−ρ)ξ − (1−δ−ρ)ξ_z,  T_b = (ξ − ξ_z)(ξ + ξ_z) − k,
-// so b ≈ b0·(1 + T(b0)/(Dν)), b0 = (k+1)/D, i.e. β ≈ (k+1)·g·(1 + g·T(b0)) with g = 1/(νD): one
-// division, T_a and T_b computed while it runs. Valid while |bξ|, |bξ_z| ≪ ν; a relative correction
-// above 1/4 is dropped.
-double CorrectedGuess(const WeightingProblem& p) {
-  const double k = p.k, d = p.delta, rho = p.rho, xi = p.xi, xz = p.xi_z;
-  const double g = 1 / (p.nu * (k + (xz - xi)));
-  const double t_a = (k - d + 2) + (2 - d - rho) * xi - (1 - d - rho) * xz, t_b = (xi - xz) * (xi + xz) - k;
-  const double relative = g * (t_a + ((k + 1) * p.nu * g) * t_b);
-  return (k + 1) * g * (std::abs(relative) < 0.25 ? 1 + relative : 1);
+// First iterate of SolveWeight: Householder's order-3 step (see HouseholderRoot) from β = 0, where the
+// derivatives are the coefficients themselves (f = μ0, f' = μ1, f'' = 2μ2, f''' = 6μ3): no Horner, one
+// division. The root is small (β ~ (k+1)/(ν(k + ê²/D_y)) [spec §7a]) and the terms μ_iβ^i fall off like
+// 1/ν (ordinary samples) or 1/|ξ| (outliers), so this start is already accurate to O(1/ν³) relative,
+// with the exact ρ, δ, k dependence (unlike the large-ν asymptote) — one more step reaches 1e−16.
+double SmallRootGuess(const std::array<double, 4>& mu) {
+  const double f = mu[0], df = mu[1], d2f = 2 * mu[2], d3f = 6 * mu[3];
+  const double ff = f * d2f;
+  return -f * (6 * df * df - 3 * ff) / ((6 * df * df - 6 * ff) * df + f * f * d3f);
 }
 
 }  // namespace
@@ -224,7 +222,9 @@ WeightSolution SolveWeight(const WeightingProblem& p) {
     if (!std::isfinite(biggest)) return SolveWeightReference(p);
     for (double& m : mu) m /= biggest;
   }
-  const double a = s.beta0, b = s.beta_hi, guess = CorrectedGuess(p);
+  const double a = s.beta0, b = s.beta_hi;
+  double guess = SmallRootGuess(mu);
+  if (!(guess > a && guess < b)) guess = AsymptoticGuess(p);  // e.g. a novel regressor (ξ_z ≪ 0)
   // P strictly decreasing on [a, b] ⇔ P' ≤ 0 there. P' = C + Bβ + Aβ² is ≤ 0 at both ends, and has a
   // positive maximum inside only if it is concave with its vertex inside (P'' = B + 2Aβ falls from > 0
   // at a to < 0 at b) and a positive discriminant B² − 4AC. If not, with P(a) > 0 > P(b) [spec §4] the

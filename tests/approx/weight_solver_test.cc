@@ -190,6 +190,18 @@ TEST(WeightSolver, SpecExamplesWithTwoLocalMaxima) {  // spec §5: the global ma
   EXPECT_NEAR(s.beta, 0.16646152, 1e-8);
 }
 
+TEST(WeightSolver, ConvergesWhenAnIterateLandsOnTheRootExactly) {
+  // Met by the Cauchy estimator at ρ = 32 (kh_benchmark's stream, t = 131): ξ_z ≈ 1 − ρ is the normal
+  // state there. The third iterate has P = +2e−16, becomes the lower bracket end, and its zero step must
+  // end the search instead of triggering ~40 bisections.
+  const WeightingProblem p{.nu = 82.485827516651426, .xi = -26.612085208868031, .xi_z = -26.608029358443186,
+                           .rho = 32, .k = 1, .delta = 1};
+  const WeightSolution fast = SolveWeight(p);
+  EXPECT_LE(fast.iterations, 4);
+  EXPECT_NEAR(fast.beta / SolveWeightReference(p).beta, 1, 1e-14);
+  EXPECT_NEAR(fast.beta / static_cast<double>(LongDoubleRoot(p, fast.beta)), 1, 4 * kEps);
+}
+
 TEST(WeightSolver, OverflowingCoefficientsFallBackToTheScaledReference) {
   // |μ3| ~ ν·|ξξ_z| ~ 1e150 would overflow P'² unscaled.
   const WeightingProblem p{.nu = 9, .xi = -1e75, .xi_z = -1e74, .rho = 3, .k = 1, .delta = 1};
