@@ -43,9 +43,10 @@ double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double
 // replaced by bisection whenever it leaves the current bracket (which shrinks at every iterate,
 // keeping P(a) > 0 > P(b)); never an unbracketed step. The error after a step is ≈ K·Δ⁴ with
 // K = |c2|·|c2² − 2c3|, c2 = f''/(2f'), c3 = f'''/(6f'), i.e. K = |f''|·|3f''² − 4f'f'''|/(24|f'|³):
-// stop as soon as K·Δ⁴ ≤ 1e−16·β, or the step itself is ≤ 1e−16·β, or the bracket is 4e−16·β wide. `x` (if inside the bracket) is the
-// first iterate, else the midpoint.
-inline __attribute__((always_inline)) double HouseholderRoot(const std::array<double, 4>& mu, double a, double b, double x, int& iterations) {
+// stop as soon as K·Δ⁴ ≤ 1e−16·β, or the step itself is ≤ 1e−16·β, or the bracket is 4e−16·β wide.
+// `x` (if inside the bracket) is the first iterate, else the midpoint. Forced inline: it is the hot path.
+inline __attribute__((always_inline)) double HouseholderRoot(const std::array<double, 4>& mu, double a, double b,
+                                                             double x, int& iterations) {
   if (!(x > a && x < b)) x = 0.5 * (a + b);
   const double d3f = 6 * mu[3];
   for (int iter = 0; iter < 400; ++iter) {

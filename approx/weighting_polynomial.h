@@ -29,9 +29,9 @@
 //     O(1/ν³) with no Horner and one division) or, if that lies outside, at the large-ν asymptote of
 //     spec §7a; inside a bracket [a, b] with P(a) > 0 > P(b) that shrinks at every iterate; bisection
 //     whenever a step leaves it; no unbracketed step, no Cardano;
-//   * it stops when the step's own error estimate K·Δβ⁴ (or the step) is below 1e−16·β, i.e. at the accuracy the
-//     reference reaches (and the recursion needs: β enters V(t) = (1−β)Ṽ + βhh', and the spec's vectors
-//     are checked to 1e−9), without the reference's last confirming iteration.
+//   * it stops when the step's own error estimate K·Δβ⁴ (or the step) is below 1e−16·β, i.e. at the
+//     accuracy the reference reaches (and the recursion needs: β enters V(t) = (1−β)Ṽ + βhh', and the
+//     spec's vectors are checked to 1e−9), without the reference's last confirming iteration.
 //   Tests (tests/approx/weight_solver_test.cc): agreement with the reference to 1e−12 relative on 1.2·10⁵
 //   random problems wherever the root is well conditioned, and with a long-double root of the same cubic
 //   to within the rounding floor 16ε·cond where it is not (β → 1 as ν → ν_hard).

@@ -36,7 +36,8 @@ struct RegressionStream {
     for (int t = 0; t < o.length; ++t) {
       for (int i = 0; i < n; ++i) z(i, t) = g(rng);
       y[t] = theta.dot(z.col(t)) + (o.noise == Noise::kCauchy ? c(rng) : o.scale * g(rng));
-      if (o.outlier_fraction > 0 && u(rng) < o.outlier_fraction) y[t] += u(rng) < 0.5 ? -o.outlier_size : o.outlier_size;
+      if (o.outlier_fraction > 0 && u(rng) < o.outlier_fraction)
+        y[t] += u(rng) < 0.5 ? -o.outlier_size : o.outlier_size;
     }
   }
   int length() const { return static_cast<int>(y.size()); }

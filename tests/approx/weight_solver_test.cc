@@ -140,7 +140,8 @@ TEST(WeightSolver, MatchesTheLongDoubleRootOnTheEstimatorsTypicalProblems) {
   for (int i = 0; i < 20000; ++i) {
     const int rho = 1 + i % 32;
     const double xi_z = 1 - rho * u(rng) / 100, e = c(rng) * (u(rng) < 0.05 ? 500 : 1);
-    const WeightingProblem p{.nu = 100, .xi = xi_z - e * e, .xi_z = xi_z, .rho = rho, .k = i % 3 ? 1.0 : 3.0, .delta = 1};
+    const WeightingProblem p{
+        .nu = 100, .xi = xi_z - e * e, .xi_z = xi_z, .rho = rho, .k = i % 3 ? 1.0 : 3.0, .delta = 1};
     const WeightSolution s = SolveWeight(p);
     const long double root = LongDoubleRoot(p, s.beta);
     ASSERT_LE(static_cast<double>(std::abs(s.beta - root) / root), 4 * kEps) << Describe(p);
