@@ -19,9 +19,10 @@ double EvalDP(const std::array<double, 4>& mu, double beta) {
 // Root of P in (a, b) with P(a) > 0 > P(b): Newton from the midpoint, replaced by bisection whenever
 // a step leaves the current bracket; stop when |Δβ| ≤ 4e−16·β [spec §5].
 // `guess` (if inside the bracket) is the first iterate.
-double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double guess) {
+double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double guess, int& iterations) {
   double x = (guess > a && guess < b) ? guess : 0.5 * (a + b);
   for (int iter = 0; iter < 400; ++iter) {
+    ++iterations;
     const double fx = EvalP(mu, x);
     if (fx == 0) return x;
     if (fx > 0) a = x; else b = x;  // keep P(a) > 0 > P(b)
@@ -33,6 +34,67 @@ double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double
     if (step <= 4e-16 * x || b - a <= 4e-16 * b) break;
   }
   return x;
+}
+
+// Root of P in (a, b) with P(a) > 0 > P(b) and P monotone on [a, b], for SolveWeight. Since P is a
+// cubic, its Taylor series at x is exact: P(x+Δ) = f + f'Δ + f''Δ²/2 + f'''Δ³/6 with f''' = 6μ3. Each
+// iterate takes Householder's step of order 3 (quartic convergence)
+//     Δ = −f(6f'² − 3ff'') / (6f'³ − 6ff'f'' + f²f'''),
+// replaced by bisection whenever it leaves the current bracket (which shrinks at every iterate,
+// keeping P(a) > 0 > P(b)); never an unbracketed step. The error after a step is ≈ K·Δ⁴ with
+// K = |c2|·|c2² − 2c3|, c2 = f''/(2f'), c3 = f'''/(6f'), i.e. K = |f''|·|3f''² − 4f'f'''|/(24|f'|³):
+// stop as soon as K·Δ⁴ ≤ 1e−16·β, or the step itself is ≤ 1e−16·β, or the bracket is 4e−16·β wide.
+// `x` (if inside the bracket) is the first iterate, else the midpoint. Forced inline: it is the hot path.
+inline __attribute__((always_inline)) double HouseholderRoot(const std::array<double, 4>& mu, double a, double b,
+                                                             double x, int& iterations) {
+  if (!(x > a && x < b)) x = 0.5 * (a + b);
+  const double d3f = 6 * mu[3];
+  for (int iter = 0; iter < 400; ++iter) {
+    ++iterations;
+    const double f = EvalP(mu, x);
+    if (f == 0) return x;
+    if (f > 0) a = x; else b = x;  // keep P(a) > 0 > P(b)
+    const double df = EvalDP(mu, x);
+    const double d2f = d3f * x + 2 * mu[2];
+    const double ff = f * d2f;
+    const double next = x - f * (6 * df * df - 3 * ff) / ((6 * df * df - 6 * ff) * df + f * f * d3f);
+    if (std::abs(next - x) <= 1e-16 * x) return next;  // at the root to rounding (x may now be a bracket end)
+    if (!(next > a && next < b)) {  // the step left the bracket (or NaN): bisect
+      x = 0.5 * (a + b);
+      if (b - a <= 4e-16 * b) break;
+      continue;
+    }
+    const double step = next - x, step2 = step * step;
+    x = next;
+    if (std::abs(d2f * (3 * d2f * d2f - 4 * df * d3f)) * (step2 * step2) <= 24e-16 * std::abs(df * df * df) * x ||
+        b - a <= 4e-16 * b)
+      break;
+  }
+  return x;
+}
+
+// μ0..μ3 of spec §4 (unscaled); inline for the hot path.
+inline std::array<double, 4> Coefficients(const WeightingProblem& p) {
+  const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho, xi = p.xi, xz = p.xi_z;
+  return {k + 1,                                                                       // μ0
+          -(k * nu + d - 1) + (nu - d - rho + 1 - k) * xi - (nu - d - rho + 2 + k) * xz,  // μ1
+          ((k - 1) * nu + 2 * d + rho - 3) * xi + ((k + 1) * nu - rho) * xz + k * xi * xz,  // μ2
+          (2 - k * nu - d) * xi * xz};                                                 // μ3
+}
+
+// First iterate of the reference: the large-ν limit νβ ≈ b0 = (k+1)/(k + ê²/D_y), ê²/D_y = ξ_z − ξ
+// [spec §7a].
+double AsymptoticGuess(const WeightingProblem& p) { return (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi))); }
+
+// First iterate of SolveWeight: Householder's order-3 step (see HouseholderRoot) from β = 0, where the
+// derivatives are the coefficients themselves (f = μ0, f' = μ1, f'' = 2μ2, f''' = 6μ3): no Horner, one
+// division. The root is small (β ~ (k+1)/(ν(k + ê²/D_y)) [spec §7a]) and the terms μ_iβ^i fall off like
+// 1/ν (ordinary samples) or 1/|ξ| (outliers), so this start is already accurate to O(1/ν³) relative,
+// with the exact ρ, δ, k dependence (unlike the large-ν asymptote) — one more step reaches 1e−16.
+double SmallRootGuess(const std::array<double, 4>& mu) {
+  const double f = mu[0], df = mu[1], d2f = 2 * mu[2], d3f = 6 * mu[3];
+  const double ff = f * d2f;
+  return -f * (6 * df * df - 3 * ff) / ((6 * df * df - 6 * ff) * df + f * f * d3f);
 }
 
 }  // namespace
@@ -47,13 +109,7 @@ double Beta0(const WeightingProblem& p) { return 1 / (p.nu - (p.nu - 1) * std::m
 
 double BetaHi(const WeightingProblem& p) { return (p.k + 1) / (p.k * p.nu + p.delta - 2); }
 
-std::array<double, 4> WeightingCoefficients(const WeightingProblem& p) {
-  const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho, xi = p.xi, xz = p.xi_z;
-  return {k + 1,                                                                       // μ0
-          -(k * nu + d - 1) + (nu - d - rho + 1 - k) * xi - (nu - d - rho + 2 + k) * xz,  // μ1
-          ((k - 1) * nu + 2 * d + rho - 3) * xi + ((k + 1) * nu - rho) * xz + k * xi * xz,  // μ2
-          (2 - k * nu - d) * xi * xz};                                                 // μ3
-}
+std::array<double, 4> WeightingCoefficients(const WeightingProblem& p) { return Coefficients(p); }
 
 double LogH0(const WeightingProblem& p, double beta) {
   const double kappa = (p.k + 1) / 2, n = p.nu - p.delta;
@@ -73,20 +129,13 @@ double LogHFull(const WeightingProblem& p, double beta) {
   return log_essinf + log_integral;
 }
 
-WeightSolution SolveWeight(const WeightingProblem& p) {
-  WeightSolution s;
-  s.beta0 = Beta0(p);
-  s.beta_hi = BetaHi(p);
-  if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]
-    s.beta = s.beta_hi;
-    s.num_maxima = 1;
-    return s;
-  }
-  std::array<double, 4> mu = WeightingCoefficients(p);
-  double scale = 0;
-  for (double m : mu) scale = std::max(scale, std::abs(m));
-  for (double& m : mu) m /= scale;  // does not change the roots
+namespace {
 
+// The pieces of spec §5: [β0, β_hi] split at the real roots of P' in (β0, β_hi); every + → − sign
+// change of P on a piece [lo, hi] gives a candidate root(lo, hi, P(lo), P(hi)); the candidate with the
+// largest log H0 wins. `mu` may be scaled by any positive factor.
+template <class Root>
+void SolveOnPieces(const WeightingProblem& p, const std::array<double, 4>& mu, WeightSolution& s, Root root) {
   // Break points: β0, β_hi and the real roots of P' = μ1 + 2μ2β + 3μ3β² inside (β0, β_hi).
   std::array<double, 4> pts{s.beta0, s.beta_hi, 0, 0};
   int npts = 2;
@@ -109,14 +158,12 @@ WeightSolution SolveWeight(const WeightingProblem& p) {
   for (int i = 1; i < npts; ++i)  // insertion sort of at most 4 points
     for (int j = i; j > 0 && pts[j] < pts[j - 1]; --j) std::swap(pts[j], pts[j - 1]);
 
-  // First Newton iterate: the large-ν limit νβ ≈ (k+1)/(k + ê²/D_y), ê²/D_y = ξ_z − ξ [spec §7a].
-  const double guess = (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi)));
   std::array<double, 4> candidates{};
   int nc = 0;
   double pa = EvalP(mu, pts[0]);
   for (int i = 0; i + 1 < npts; ++i) {
     const double pb = EvalP(mu, pts[i + 1]);
-    if (pa > 0 && pb < 0) candidates[nc++] = BracketedRoot(mu, pts[i], pts[i + 1], guess);
+    if (pa > 0 && pb < 0) candidates[nc++] = root(pts[i], pts[i + 1], pa, pb);
     pa = pb;
   }
   if (EvalP(mu, s.beta_hi) >= 0) candidates[nc++] = s.beta_hi;  // h = 0 (or rounding at the upper end)
@@ -135,6 +182,68 @@ WeightSolution SolveWeight(const WeightingProblem& p) {
       if (v > best_value) best_value = v, s.beta = candidates[i];
     }
   }
+}
+
+}  // namespace
+
+WeightSolution SolveWeightReference(const WeightingProblem& p) {
+  WeightSolution s;
+  s.beta0 = Beta0(p);
+  s.beta_hi = BetaHi(p);
+  if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]
+    s.beta = s.beta_hi;
+    s.num_maxima = 1;
+    return s;
+  }
+  std::array<double, 4> mu = Coefficients(p);
+  double scale = 0;
+  for (double m : mu) scale = std::max(scale, std::abs(m));
+  for (double& m : mu) m /= scale;  // does not change the roots
+  const double guess = AsymptoticGuess(p);
+  SolveOnPieces(p, mu, s,
+                [&](double a, double b, double, double) { return BracketedRoot(mu, a, b, guess, s.iterations); });
+  return s;
+}
+
+WeightSolution SolveWeight(const WeightingProblem& p) {
+  WeightSolution s;
+  s.beta0 = Beta0(p);
+  s.beta_hi = BetaHi(p);
+  if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]
+    s.beta = s.beta_hi;
+    s.num_maxima = 1;
+    return s;
+  }
+  std::array<double, 4> mu = Coefficients(p);
+  // Scaling changes neither the roots nor the steps; it only guards the squares below against
+  // overflow (|ξξ_z| ~ 1e28 is routine [spec §5]; 1e60 is not).
+  const double biggest =
+      std::max(std::max(std::abs(mu[0]), std::abs(mu[1])), std::max(std::abs(mu[2]), std::abs(mu[3])));
+  if (!(biggest < 1e60)) {
+    if (!std::isfinite(biggest)) return SolveWeightReference(p);
+    for (double& m : mu) m /= biggest;
+  }
+  const double a = s.beta0, b = s.beta_hi;
+  double guess = SmallRootGuess(mu);
+  if (!(guess > a && guess < b)) guess = AsymptoticGuess(p);  // e.g. a novel regressor (ξ_z ≪ 0)
+  // P strictly decreasing on [a, b] ⇔ P' ≤ 0 there. P' = C + Bβ + Aβ² is ≤ 0 at both ends, and has a
+  // positive maximum inside only if it is concave with its vertex inside (P'' = B + 2Aβ falls from > 0
+  // at a to < 0 at b) and a positive discriminant B² − 4AC. If not, with P(a) > 0 > P(b) [spec §4] the
+  // root is unique: no square root, no pieces, no log H0.
+  const double A = 3 * mu[3], B = 2 * mu[2], C = mu[1];
+  const double dpa = (A * a + B) * a + C, dpb = (A * b + B) * b + C;
+  const bool interior_max = B + 2 * A * a > 0 && B + 2 * A * b < 0 && B * B - 4 * A * C > 0;
+  if (dpa <= 0 && dpb <= 0 && !interior_max && EvalP(mu, a) > 0 && EvalP(mu, b) < 0) {
+    s.beta = HouseholderRoot(mu, a, b, guess, s.iterations);
+    s.num_maxima = 1;
+    return s;
+  }
+  // Otherwise the pieces of spec §5 (P' has roots inside, or rounding at an end); each piece starts at
+  // the asymptote if it lies inside, else at its regula-falsi point.
+  SolveOnPieces(p, mu, s, [&](double lo, double hi, double plo, double phi) {
+    const double x = (guess > lo && guess < hi) ? guess : lo + plo / (plo - phi) * (hi - lo);
+    return HouseholderRoot(mu, lo, hi, x, s.iterations);
+  });
   return s;
 }
 

@@ -4,58 +4,44 @@
 // tables give cauchy / RLS and student / RLS per ρ, measured in this run. Goal (issue 3): cauchy ≤ 1.3× RLS.
 //
 //   ./build/bench/kh_benchmark --benchmark_min_time=0.2
-#include <random>
-
 #include <Eigen/Core>
 #include <benchmark/benchmark.h>
 
 #include "bench/support/ratio_reporter.h"
+#include "bench/support/regression_stream.h"
 #include "ident/rls.h"
 #include "ident/student_regression.h"
 
 namespace {
 
 constexpr double kForgetting = 0.99;
-constexpr int kStreamLength = 4096;
 
 // y = θ'z + 0.1·Cauchy, θ and z standard normal; 5 % of the samples get an extra ±50 outlier.
-struct Stream {
-  explicit Stream(int n) : z(n, kStreamLength), y(kStreamLength) {
-    std::mt19937_64 rng(20261123 + n);
-    std::normal_distribution<double> g;
-    std::cauchy_distribution<double> c(0, 0.1);
-    std::uniform_real_distribution<double> u(0, 1);
-    Eigen::VectorXd theta(n);
-    for (int i = 0; i < n; ++i) theta[i] = g(rng);
-    for (int t = 0; t < kStreamLength; ++t) {
-      for (int i = 0; i < n; ++i) z(i, t) = g(rng);
-      y[t] = theta.dot(z.col(t)) + c(rng) + (u(rng) < 0.05 ? (u(rng) < 0.5 ? -50 : 50) : 0);
-    }
-  }
-  Eigen::MatrixXd z;
-  Eigen::VectorXd y;
-};
+ident::bench::RegressionStream MakeStream(int n) {
+  return ident::bench::RegressionStream(
+      n, {.noise = ident::bench::Noise::kCauchy, .scale = 0.1, .outlier_fraction = 0.05, .outlier_size = 50});
+}
 
 template <class E>
-void Run(benchmark::State& state, E& est, const Stream& s) {
+void Run(benchmark::State& state, E& est, const ident::bench::RegressionStream& s) {
   int t = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(est.Update(s.y[t], s.z.col(t)));
-    t = (t + 1) % kStreamLength;
+    t = (t + 1) % s.length();
   }
   benchmark::DoNotOptimize(est.parameters());
 }
 
 void BM_LdRls(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const Stream s(n);
+  const ident::bench::RegressionStream s = MakeStream(n);
   ident::RecursiveLeastSquares rls(n, {.forgetting = {.factor = kForgetting}});
   Run(state, rls, s);
 }
 
 void BM_Student(benchmark::State& state, double k) {
   const int n = static_cast<int>(state.range(0));
-  const Stream s(n);
+  const ident::bench::RegressionStream s = MakeStream(n);
   ident::StudentRegressionOptions o;
   o.dof = k;
   o.forgetting.factor = kForgetting;

@@ -4,58 +4,43 @@
 // in this run. Goal (foundation issue): LD ≤ 1.2× dense at every n.
 //
 //   ./build/bench/ld_rls_benchmark --benchmark_min_time=0.2
-#include <random>
-#include <vector>
-
 #include <Eigen/Core>
 #include <benchmark/benchmark.h>
 
 #include "bench/support/ratio_reporter.h"
+#include "bench/support/regression_stream.h"
 #include "ident/dense_rls.h"
 #include "ident/rls.h"
 
 namespace {
 
 constexpr double kForgetting = 0.99;
-constexpr int kStreamLength = 4096;
 
-// A fixed stream of (y, z) with y = θ'z + e, θ and z standard normal, e ~ N(0, 0.1²).
-struct Stream {
-  explicit Stream(int n) : z(n, kStreamLength), y(kStreamLength) {
-    std::mt19937_64 rng(20261123 + n);
-    std::normal_distribution<double> g;
-    Eigen::VectorXd theta(n);
-    for (int i = 0; i < n; ++i) theta[i] = g(rng);
-    for (int t = 0; t < kStreamLength; ++t) {
-      for (int i = 0; i < n; ++i) z(i, t) = g(rng);
-      y[t] = theta.dot(z.col(t)) + 0.1 * g(rng);
-    }
-  }
-  Eigen::MatrixXd z;
-  Eigen::VectorXd y;
-};
+// A fixed stream of (y, z) with y = θ'z + e, θ and z standard normal, e ~ N(0, 0.1²)
+// (bench/support/regression_stream.h).
+const ident::bench::StreamOptions kGaussian{.noise = ident::bench::Noise::kGaussian, .scale = 0.1};
 
 void BM_LdRls(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const Stream s(n);
+  const ident::bench::RegressionStream s(n, kGaussian);
   ident::RecursiveLeastSquares rls(n, {.forgetting = {.factor = kForgetting}});
   int t = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(rls.Update(s.y[t], s.z.col(t)));
-    t = (t + 1) % kStreamLength;
+    t = (t + 1) % s.length();
   }
   benchmark::DoNotOptimize(rls.parameters());
 }
 
 void BM_DenseRls(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
-  const Stream s(n);
+  const ident::bench::RegressionStream s(n, kGaussian);
   ident::BasicDenseRls<> dense(ident::RegressionPrior::Flat(n), kForgetting);
   int t = 0;
   for (auto _ : state) {
     dense.Update(s.y[t], s.z.col(t));
     benchmark::ClobberMemory();
-    t = (t + 1) % kStreamLength;
+    t = (t + 1) % s.length();
   }
   benchmark::DoNotOptimize(dense.parameters());
 }

@@ -9,7 +9,8 @@
 //   }
 //
 // Benchmarks are matched by name "<family>/<arg>"; the ratio uses CPU time per iteration (on a loaded
-// machine wall time includes waiting for a core; CPU time does not).
+// machine wall time includes waiting for a core; CPU time does not). With --benchmark_repetitions=N the
+// table uses the median of the N repetitions (robust to a neighbour's burst on a shared machine).
 #pragma once
 
 #include <cstdio>
@@ -33,11 +34,16 @@ class RatioReporter : public benchmark::ConsoleReporter {
 
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& run : runs) {
-      if (run.run_type != Run::RT_Iteration || run.error_occurred) continue;
-      const std::string name = run.benchmark_name();
+      if (run.error_occurred) continue;
+      // With --benchmark_repetitions=N the median over the repetitions is used, else the single run.
+      const bool median = run.run_type == Run::RT_Aggregate && run.aggregate_name == "median";
+      if (run.run_type != Run::RT_Iteration && !median) continue;
+      std::string name = run.run_name.function_name;
+      if (!run.run_name.args.empty()) name += "/" + run.run_name.args;
       const auto slash = name.find('/');
       if (slash == std::string::npos) continue;
-      times_[name.substr(0, slash)][name.substr(slash + 1)] = run.GetAdjustedCPUTime();
+      auto& slot = times_[name.substr(0, slash)][name.substr(slash + 1)];
+      if (median || run.repetitions <= 1) slot = run.GetAdjustedCPUTime();
     }
     ConsoleReporter::ReportRuns(runs);
   }
