@@ -7,7 +7,8 @@
 #   IDENT_FUZZ_SECONDS=10 .ci/fuzz.sh csv_fuzzer rls_fuzzer
 #
 # Environment: IDENT_FUZZ_SECONDS (default 60) per target, IDENT_FUZZ_BUILD (default build-fuzz),
-# IDENT_FUZZ_OUT (default $IDENT_FUZZ_BUILD/runs), CXX (default clang++), IDENT_FUZZ_JOBS (default 2).
+# IDENT_FUZZ_OUT (default $IDENT_FUZZ_BUILD/runs), CXX (default clang++), IDENT_FUZZ_JOBS (default 2: build
+# parallelism and the number of targets fuzzed at the same time).
 # Prints one summary line per target: name, executions, corpus size, result.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -35,25 +36,39 @@ else
   for src in "$root"/fuzz/*_fuzzer.cc; do targets+=("$(basename "$src" .cc)"); done
 fi
 
-failed=0
-total=0
-for t in "${targets[@]}"; do
-  work="$out/$t"
+# Runs one target on a copy of its seed corpus; writes "<execs> <corpus size> <status>" to $work/result.
+run_target() {
+  local t="$1" work="$out/$1"
   rm -rf "$work" && mkdir -p "$work/corpus"
-  seeds="$root/fuzz/corpus/$t"
+  local seeds="$root/fuzz/corpus/$t"
   [ -d "$seeds" ] && cp -r "$seeds"/. "$work/corpus/"
-  log="$work/log.txt"
-  status=ok
+  local log="$work/log.txt" status=ok
   # -timeout: one input taking > 10 s is a hang; -rss_limit_mb: runaway memory is a finding.
   if ! "$build/$t" "$work/corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
         -artifact_prefix="$work/" -print_final_stats=1 >"$log" 2>&1; then
     status="FAILED (see $log)"
-    failed=1
   fi
+  local execs
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
-  total=$((total + ${execs:-0}))
-  corpus=$(ls "$work/corpus" | wc -l)
-  printf '%-24s %12s execs  corpus %5s  %s\n' "$t" "${execs:-0}" "$corpus" "$status"
+  echo "${execs:-0} $(ls "$work/corpus" | wc -l) $status" >"$work/result"
+}
+
+# $jobs targets at a time (one core each), so the whole run takes about ceil(targets/jobs) x seconds.
+running=0
+for t in "${targets[@]}"; do
+  run_target "$t" &
+  running=$((running + 1))
+  if [ "$running" -ge "$jobs" ]; then wait -n || true; running=$((running - 1)); fi
+done
+wait || true
+
+failed=0
+total=0
+for t in "${targets[@]}"; do
+  read -r execs corpus status <"$out/$t/result" || { execs=0; corpus=0; status="FAILED (no result)"; }
+  [ "$status" = ok ] || failed=1
+  total=$((total + execs))
+  printf '%-24s %12s execs  corpus %5s  %s\n' "$t" "$execs" "$corpus" "$status"
 done
 printf '%-24s %12s execs  findings: %s\n' "total" "$total" "$([ $failed = 0 ] && echo none || echo YES)"
 exit $failed

@@ -1,6 +1,7 @@
 // Cost per step of the log-concave observers on the MEMS accelerometer (2 states, threshold sensor):
 // grid Bayesian observer (128² and 256² nodes), log-concave Gaussian filter (exact tilted moments and
 // the first-passage/σ_o variant's Gaussian reading), square-root Kalman filter, bound tracker.
+// Filters in both forms: dynamic sizes and fixed-size (BasicKalmanFilter<2>, BasicLcGaussianFilter<2>).
 // Readings alternate 0 / 0 / ... / ±1 as in a run with events, precomputed before timing.
 #include <random>
 #include <vector>
@@ -67,10 +68,11 @@ void BM_GridObserver(benchmark::State& state) {
 }
 BENCHMARK(BM_GridObserver)->Arg(64)->Arg(128)->Arg(256)->Unit(benchmark::kMicrosecond);
 
+template <class Filter>
 void BM_LcGaussianFilterExact(benchmark::State& state) {
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
   ident::models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
-  ident::LcGaussianFilter f(Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
+  Filter f(Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
   const Run& run = MemsRun();
   size_t k = 0;
   for (auto _ : state) {
@@ -81,13 +83,15 @@ void BM_LcGaussianFilterExact(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_LcGaussianFilterExact)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_LcGaussianFilterExact, ident::LcGaussianFilter)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_LcGaussianFilterExact, ident::BasicLcGaussianFilter<2>)->Unit(benchmark::kMicrosecond);
 
+template <class Filter>
 void BM_LcGaussianFilterEventVariant(benchmark::State& state) {
   // The study's lc_gaussian column: Gaussian readings (first passage / σ_o) or exact half-line moments.
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
   ident::models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
-  ident::LcGaussianFilter f(Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
+  Filter f(Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
   const Eigen::Vector2d c(1, 0);
   const Run& run = MemsRun();
   size_t k = 0;
@@ -109,11 +113,13 @@ void BM_LcGaussianFilterEventVariant(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_LcGaussianFilterEventVariant)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_LcGaussianFilterEventVariant, ident::LcGaussianFilter)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_LcGaussianFilterEventVariant, ident::BasicLcGaussianFilter<2>)->Unit(benchmark::kMicrosecond);
 
+template <class Filter>
 void BM_KalmanFilter(benchmark::State& state) {
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
-  ident::KalmanFilter kf(Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
+  Filter kf(Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
   const Eigen::Vector2d c(1, 0);
   const Run& run = MemsRun();
   size_t k = 0;
@@ -125,7 +131,8 @@ void BM_KalmanFilter(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_KalmanFilter)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_KalmanFilter, ident::KalmanFilter)->Unit(benchmark::kMicrosecond);
+BENCHMARK_TEMPLATE(BM_KalmanFilter, ident::BasicKalmanFilter<2>)->Unit(benchmark::kMicrosecond);
 
 void BM_CovarianceBoundTracker(benchmark::State& state) {
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);

@@ -13,6 +13,10 @@
 namespace ident {
 namespace {
 
+// At most 3 × 3 (1 to 3 states): Eigen keeps these on the stack.
+using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 3, 3>;
+using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
+
 // Smallest m' ≥ m of the form 2^a 3^b 5^c (fast sizes for the FFT).
 int NiceFftSize(int m) {
   for (int s = std::max(m, 1);; ++s) {
@@ -72,7 +76,10 @@ GridObserver::GridObserver(const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0,
   }
   Normalise();
   UpdateMoments();
-  for (int i = 0; i < dim_; ++i) fft_.fwd(line_out_.data(), line_in_.data(), np_[i]);  // build FFT plans now
+  for (int i = 0; i < dim_; ++i) {  // build the forward and inverse FFT plans now: steps allocate nothing
+    fft_.fwd(line_out_.data(), line_in_.data(), np_[i]);
+    fft_.inv(line_out_.data(), line_in_.data(), np_[i]);
+  }
 }
 
 GridObserver::GridObserver(models::LinearStateSpace model, std::shared_ptr<const models::MeasurementFunction> measurement,
@@ -109,10 +116,12 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
   if (model.num_states() != dim_ || u.size() != model.num_inputs() || !u.allFinite()) {
     return {StepStatus::kRejectedInvalid};
   }
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(model.A);
+  // Small matrices live on the stack (at most 3 × 3): no heap allocation per step.
+  Eigen::FullPivLU<SmallMatrix> lu(model.A);
   if (!lu.isInvertible()) return {StepStatus::kRejectedInvalid};
-  const Eigen::MatrixXd Ainv = lu.inverse();
-  const Eigen::VectorXd shift = model.B * u;
+  const SmallMatrix Ainv = lu.inverse();
+  SmallVector shift(dim_);
+  shift.noalias() = model.B * u;
   // Support box of the current density (nodes above support_level · max). No extra margin: a margin
   // would compound from step to step and the grid would keep coarsening.
   const double level = options_.support_level * *std::max_element(p_.begin(), p_.end());
@@ -127,7 +136,7 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
       hi[i] = std::max(hi[i], j);
     }
   }
-  Eigen::VectorXd mid(dim_), half(dim_);
+  SmallVector mid(dim_), half(dim_);
   for (int i = 0; i < dim_; ++i) {
     const double a = origin_[i] + lo[i] * spacing_[i];
     const double b = origin_[i] + hi[i] * spacing_[i];
@@ -135,8 +144,10 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
     half(i) = 0.5 * (b - a);
   }
   // Image of the box under x ↦ A x + B u, widened by the process noise.
-  const Eigen::VectorXd new_mid = model.A * mid + shift;
-  const Eigen::VectorXd new_half = model.A.cwiseAbs() * half;
+  SmallVector new_mid(dim_), new_half(dim_);
+  new_mid.noalias() = model.A * mid;
+  new_mid += shift;
+  new_half.noalias() = model.A.cwiseAbs() * half;
   const auto old_origin = origin_;
   const auto old_spacing = spacing_;
   for (int i = 0; i < dim_; ++i) {
@@ -147,10 +158,11 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
   }
   // (1): f^d(x) = f_{k−1}(A⁻¹(x − B u)), multilinear interpolation in fractional old indices
   //      f = f0 + Σ_i j_i G(:, i).
-  Eigen::VectorXd new_origin(dim_);
-  for (int i = 0; i < dim_; ++i) new_origin(i) = origin_[i];
-  Eigen::VectorXd f0 = Ainv * (new_origin - shift);
-  Eigen::MatrixXd G = Ainv;
+  SmallVector new_origin(dim_);
+  for (int i = 0; i < dim_; ++i) new_origin(i) = origin_[i] - shift(i);
+  SmallVector f0(dim_);
+  f0.noalias() = Ainv * new_origin;
+  SmallMatrix G = Ainv;
   for (int j = 0; j < dim_; ++j) {
     f0(j) = (f0(j) - old_origin[j]) / old_spacing[j];
     for (int i = 0; i < dim_; ++i) G(j, i) *= spacing_[i] / old_spacing[j];

@@ -6,26 +6,39 @@
 //                  k = P c / σ²,  m ← m + k (μ_s − c'm),  P ← P − k k' (σ² − v_s)   (exact for g(c'x))
 //   Log-likelihood: Σ log Z (the predictive probability/density of each reading).
 //   Log-concavity of g makes the tilted density unimodal and v_s ≤ σ² (it is in LC(1/σ²), Thm 1 + 2),
-//   so P stays positive semidefinite; we additionally keep P ≥ min_variance · c c' along c.
+//   so P stays positive semidefinite (v_s is clipped to σ² against round-off).
 //
 // On its own, applied at every step, this is the assumed-density filter (moment matching). It is
 // exact after one reading but on the MEMS threshold sensor it treats successive, strongly dependent
 // y = 0 readings as independent and collapses; see ident/mems_study.h for the event model variants.
 //
+// Real time (issue 7): BasicLcGaussianFilter<N> uses Eigen fixed-size types for N ≥ 1 and
+// preallocated workspaces for N = Eigen::Dynamic (alias LcGaussianFilter). Predict, Correct, ApplyTilt
+// and Update are noexcept and allocate nothing after construction (the closed-form tilts of the
+// threshold sensor, quantiser and Gaussian allocate nothing; the quadrature tilts do not either, but
+// take ~100× longer); failure is a StepReport status with the state untouched.
+// Flops per step for n states, m inputs: Predict 4n³ + 2n² + 2nm (A P A' + P_N, mean);
+// Correct 2n² (Pc) + 2n (c'Pc, c'm) + 3n² (mean, rank-one downdate, symmetrisation) + the scalar tilt
+// (closed form: two erfc and a few exp/log) ≈ 4n³ + 7n² + 2nm per step (n = 2, m = 1: ≈ 66 flops + tilt).
+//
 // Example:
 //   auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
 //   ident::models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
-//   ident::LcGaussianFilter f(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity());
+//   ident::BasicLcGaussianFilter<2> f(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity());  // or LcGaussianFilter
 //   f.Predict(model, u);
-//   f.Correct(sensor, y);
+//   ident::StepReport r = f.Correct(sensor, y);
 //
 // [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "ident/common/error.h"
 #include "ident/common/step_report.h"
 #include "ident/state_observer.h"
 #include "models/measurement.h"
@@ -33,33 +46,158 @@
 
 namespace ident {
 
-class LcGaussianFilter {
+template <int N = Eigen::Dynamic>
+class BasicLcGaussianFilter {
  public:
-  // Throws InvalidArgument if sizes differ, entries are not finite or P0 is not positive definite.
-  LcGaussianFilter(const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0);
-  // Convenience for Update(): a fixed model and measurement function.
-  LcGaussianFilter(models::LinearStateSpace model, std::shared_ptr<const models::ProjectedMeasurement> measurement,
-                   const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0);
+  using StateVector = Eigen::Matrix<double, N, 1>;
+  using StateMatrix = Eigen::Matrix<double, N, N>;
 
-  StepReport Predict(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u);
+  // Throws InvalidArgument if sizes differ, entries are not finite or P0 is not positive definite.
+  BasicLcGaussianFilter(const Eigen::Ref<const Eigen::VectorXd>& m0, const Eigen::Ref<const Eigen::MatrixXd>& P0);
+  // Convenience for Update(): a fixed model and measurement function.
+  BasicLcGaussianFilter(models::LinearStateSpace model,
+                        std::shared_ptr<const models::ProjectedMeasurement> measurement,
+                        const Eigen::Ref<const Eigen::VectorXd>& m0, const Eigen::Ref<const Eigen::MatrixXd>& P0);
+
+  // Eqs. (1)-(2). kRejectedInvalid for a model or u of the wrong size or non-finite u.
+  StepReport Predict(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u) noexcept;
   // Exact tilted-moment update. kRejectedInvalid if y is not a possible reading; kNumericalFailure
   // (state unchanged) if the reading has probability 0 to double precision under the prediction.
-  StepReport Correct(const models::ProjectedMeasurement& measurement, double y);
+  StepReport Correct(const models::ProjectedMeasurement& measurement, double y) noexcept;
   // The update for given moments of the tilted density along c (used by event models).
-  StepReport ApplyTilt(const Eigen::Ref<const Eigen::VectorXd>& c, const models::TiltedMoments& t);
-  StepReport Update(const StateSpaceItem& item);
+  StepReport ApplyTilt(const Eigen::Ref<const Eigen::VectorXd>& c, const models::TiltedMoments& t) noexcept;
+  // Predict + Correct with the stored model and measurement (the whole step or nothing);
+  // kRejectedInvalid without a stored model.
+  StepReport Update(const StateSpaceItem& item) noexcept;
 
-  const Eigen::VectorXd& mean() const { return m_; }
-  const Eigen::MatrixXd& covariance() const { return P_; }
+  const StateVector& mean() const { return m_; }
+  const StateMatrix& covariance() const { return P_; }
   double log_likelihood() const { return log_likelihood_; }
   int num_states() const { return static_cast<int>(m_.size()); }
 
  private:
-  Eigen::VectorXd m_, k_;
-  Eigen::MatrixXd P_, tmp_;
+  StateVector m_, k_, m_new_, m_bak_;
+  StateMatrix P_, tmp_, P_new_, P_bak_;
   double log_likelihood_ = 0.0;
   models::LinearStateSpace model_;
   std::shared_ptr<const models::ProjectedMeasurement> measurement_;
 };
+
+using LcGaussianFilter = BasicLcGaussianFilter<Eigen::Dynamic>;
+
+// ---------------------------------------------------------------------------------------------------
+// Implementation.
+
+template <int N>
+BasicLcGaussianFilter<N>::BasicLcGaussianFilter(const Eigen::Ref<const Eigen::VectorXd>& m0,
+                                                const Eigen::Ref<const Eigen::MatrixXd>& P0) {
+  const auto n = m0.size();
+  IDENT_REQUIRE(n >= 1 && m0.allFinite(), "m0 must be a non-empty finite vector");
+  IDENT_REQUIRE(N == Eigen::Dynamic || n == N, "m0 has {} entries; this filter has {} states", n, N);
+  IDENT_REQUIRE(P0.rows() == n && P0.cols() == n && P0.allFinite(), "P0 is {}×{}; need finite {}×{}", P0.rows(),
+                P0.cols(), n, n);
+  IDENT_REQUIRE(Eigen::LLT<Eigen::MatrixXd>(P0).info() == Eigen::Success, "P0 is not positive definite");
+  m_ = m0;
+  P_ = P0;
+  k_.resize(n);
+  m_new_.resize(n);
+  m_bak_.resize(n);
+  tmp_.resize(n, n);
+  P_new_.resize(n, n);
+  P_bak_.resize(n, n);
+}
+
+template <int N>
+BasicLcGaussianFilter<N>::BasicLcGaussianFilter(models::LinearStateSpace model,
+                                                std::shared_ptr<const models::ProjectedMeasurement> measurement,
+                                                const Eigen::Ref<const Eigen::VectorXd>& m0,
+                                                const Eigen::Ref<const Eigen::MatrixXd>& P0)
+    : BasicLcGaussianFilter(m0, P0) {
+  model.Validate();
+  IDENT_REQUIRE(measurement != nullptr, "measurement must not be null");
+  IDENT_REQUIRE(model.num_states() == num_states() && measurement->num_states() == num_states(),
+                "model ({}) and measurement ({}) must have {} states", model.num_states(), measurement->num_states(),
+                num_states());
+  model_ = std::move(model);
+  measurement_ = std::move(measurement);
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::Predict(const models::LinearStateSpace& model,
+                                             const Eigen::Ref<const Eigen::VectorXd>& u) noexcept {
+  const int n = num_states();
+  if (model.A.rows() != n || model.A.cols() != n || model.B.rows() != n || model.process_noise.rows() != n ||
+      model.process_noise.cols() != n || u.size() != model.num_inputs() || !u.allFinite()) {
+    return {StepStatus::kRejectedInvalid};
+  }
+  m_new_.noalias() = model.A * m_;                                    // eq. (1) for the mean
+  if (model.num_inputs() > 0) m_new_.noalias() += model.B * u;
+  tmp_.noalias() = model.A * P_;
+  P_new_.noalias() = tmp_ * model.A.transpose();
+  P_new_ += model.process_noise;                                      // eq. (2): P_N adds
+  if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
+  m_ = m_new_;
+  P_ = P_new_;
+  return {StepStatus::kUpdated};
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::ApplyTilt(const Eigen::Ref<const Eigen::VectorXd>& c,
+                                               const models::TiltedMoments& t) noexcept {
+  const int n = num_states();
+  if (c.size() != n || !c.allFinite()) return {StepStatus::kRejectedInvalid};
+  if (!t.ok || !std::isfinite(t.mean) || !(t.variance >= 0) || !std::isfinite(t.log_normalizer)) {
+    return {StepStatus::kNumericalFailure};
+  }
+  k_.noalias() = P_ * c;
+  const double s2 = c.dot(k_);
+  if (!(s2 > 0) || !std::isfinite(s2)) return {StepStatus::kNumericalFailure};
+  const double prior_mean = c.dot(m_);
+  k_ /= s2;                                                           // k = P c / σ²
+  m_new_ = m_ + k_ * (t.mean - prior_mean);                           // m ← m + k (μ_s − c'm)
+  P_new_ = P_;
+  P_new_.noalias() -= (s2 - std::min(t.variance, s2)) * k_ * k_.transpose();   // P ← P − k k'(σ² − v_s)
+  for (int i = 0; i < n; ++i) {                                       // symmetrise against round-off
+    for (int j = 0; j < i; ++j) P_new_(i, j) = P_new_(j, i) = 0.5 * (P_new_(i, j) + P_new_(j, i));
+  }
+  if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
+  m_ = m_new_;
+  P_ = P_new_;
+  log_likelihood_ += t.log_normalizer;
+  StepReport report{StepStatus::kUpdated};
+  report.prediction_error = t.mean - prior_mean;
+  return report;
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::Correct(const models::ProjectedMeasurement& measurement, double y) noexcept {
+  if (measurement.num_states() != num_states() || !std::isfinite(y)) return {StepStatus::kRejectedInvalid};
+  try {  // measurement functions are user-extensible and Boost.Math may throw on overflow
+    if (!measurement.IsValidOutput(y)) return {StepStatus::kRejectedInvalid};
+    const auto& c = measurement.c();
+    k_.noalias() = P_ * c;
+    const double s2 = c.dot(k_);
+    if (!(s2 > 0) || !std::isfinite(s2)) return {StepStatus::kNumericalFailure};
+    return ApplyTilt(c, measurement.Tilt(y, c.dot(m_), s2));
+  } catch (...) {
+    return {StepStatus::kNumericalFailure};
+  }
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::Update(const StateSpaceItem& item) noexcept {
+  if (measurement_ == nullptr) return {StepStatus::kRejectedInvalid};
+  m_bak_ = m_;
+  P_bak_ = P_;
+  const double ll = log_likelihood_;
+  const StepReport predicted = Predict(model_, item.u);
+  if (!predicted.updated()) return predicted;
+  const StepReport corrected = Correct(*measurement_, item.y);
+  if (!corrected.updated()) m_ = m_bak_, P_ = P_bak_, log_likelihood_ = ll;  // the whole step or nothing
+  return corrected;
+}
+
+extern template class BasicLcGaussianFilter<Eigen::Dynamic>;
+extern template class BasicLcGaussianFilter<2>;
 
 }  // namespace ident

@@ -75,7 +75,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   gopt.points = {o.grid_points, o.grid_points};
   GridObserver grid(m0, P0, gopt);
   KalmanFilter tuned(m0, P0), tuned13(m0, P0);
-  LcGaussianFilter plain(m0, P0), event(m0, P0), event_trunc(m0, P0);
+  LcGaussianFilter plain(m0, P0), event(m0, P0), event_trunc(m0, P0), event_capped(m0, P0);
   CovarianceBoundTracker bound(P0);
 
   std::mt19937_64 rng(o.seed);
@@ -84,7 +84,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   Eigen::Vector2d x(0.0, v_ref), w;
   Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
   double y_prev = 0, direction = 1;
-  Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_bound;
+  Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_capped, acc_bound;
   int events_counted = 0;
 
   // Gaussian reading of x1 at `value` with variance r, as tilted moments (exact for a Gaussian).
@@ -101,6 +101,20 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     const double v = f.mean()(1);
     gaussian_reading(f, side * (o.threshold + outward * o.h * std::abs(v) / 2),
                      o.h * o.h * (v * v + f.covariance()(1, 1)) / 12 + 1e-12);
+  };
+
+  // Exact interval reading with its information capped at the σ_o rate h/σ_o² (p11 = 1/3): the tilted
+  // moments (μ_t, v_t) of N(c'm, σ²) on the reading's interval equal a Gaussian reading z with variance
+  // r = v_t σ²/(σ² − v_t), z = c'm + (μ_t − c'm)(σ² + r)/σ²; the reading is applied with
+  // max(r, σ_o²/h) at z. Far from the thresholds r → ∞ (no pull toward 0); near them at most the
+  // stationary information rate of [1, sec. V-B], so dependent repeated readings cannot collapse P.
+  auto capped_reading = [&](LcGaussianFilter& f, double y) {
+    const double s2 = f.covariance()(0, 0), m = f.mean()(0);
+    const auto t = sensor->Tilt(y, m, s2);
+    if (!t.ok || !(t.variance < s2)) return;
+    const double r = t.variance * s2 / (s2 - t.variance);
+    const double z = m + (t.mean - m) * (s2 + r) / s2;
+    gaussian_reading(f, z, std::max(r, r_zero13));
   };
 
   for (int k = 0; k < o.steps; ++k) {
@@ -128,13 +142,16 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     plain.Correct(*sensor, y);
     event.Predict(model, u);
     event_trunc.Predict(model, u);
+    event_capped.Predict(model, u);
     if (crossing || leaving) {
       const double side = crossing ? y : y_prev, outward = crossing ? 1.0 : -1.0;
       first_passage(event, side, outward);
       first_passage(event_trunc, side, outward);
+      first_passage(event_capped, side, outward);
     } else {
       gaussian_reading(event, y * o.threshold, r_zero13);   // y = 0: x1 = 0; outside: x1 = ±T
       event_trunc.Correct(*sensor, y);
+      capped_reading(event_capped, y);
     }
     bound.Predict(model);
     if (crossing) bound.UpdateStrength(c, 1.0 / result.sigma_m2);   // modified event measurement
@@ -150,6 +167,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       acc_plain.Add(plain.mean()(1) - x(1), plain.covariance()(1, 1));
       acc_event.Add(event.mean()(1) - x(1), event.covariance()(1, 1));
       acc_trunc.Add(event_trunc.mean()(1) - x(1), event_trunc.covariance()(1, 1));
+      acc_capped.Add(event_capped.mean()(1) - x(1), event_capped.covariance()(1, 1));
       acc_bound.Add(0.0, bound.covariance()(1, 1));
     }
     if (o.record_trace) {
@@ -174,6 +192,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   result.observers.push_back(acc_plain.Result("lc_plain"));
   result.observers.push_back(acc_event.Result("lc_event"));
   result.observers.push_back(acc_trunc.Result("lc_event_trunc"));
+  result.observers.push_back(acc_capped.Result("lc_event_capped"));
   MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n), (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n)};
   result.observers.push_back(b);
   return result;

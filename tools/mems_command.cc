@@ -32,7 +32,7 @@ struct MemsCommandOptions {
 // The columns of the Fig. 9 table: (csv name, observer name in the study).
 const std::vector<std::pair<std::string, std::string>> kColumns = {
     {"grid", "grid"},         {"tuned_kalman", "tuned_kalman"}, {"tuned_kalman_13", "tuned_kalman_13"},
-    {"lc_gaussian", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"},
+    {"lc_gaussian", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"}, {"lc_event_capped", "lc_event_capped"},
     {"bound", "bound"}};
 
 void RunMems(const MemsCommandOptions& o) {

@@ -1,0 +1,323 @@
+// Real-time variants of the observers (issue 7 item 1): noexcept steps, zero heap allocations over 10⁴
+// steps after construction (counted, including Eigen's malloc calls), the state untouched whenever a
+// step is not kUpdated, and fixed-size filters that equal an independent textbook recursion.
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <gtest/gtest.h>
+
+#include "ident/grid_observer.h"
+#include "ident/kalman_filter.h"
+#include "ident/lc_gaussian_filter.h"
+#include "models/measurement.h"
+#include "models/state_space.h"
+#include "tests/support/alloc_counter.h"
+
+namespace ident {
+namespace {
+
+models::LinearStateSpace Model2d() {
+  Eigen::MatrixXd A(2, 2), B(2, 1), Q(2, 2);
+  A << 0.95, 0.2, -0.1, 0.9;
+  B << 0.1, 0.5;
+  Q << 0.05, 0.01, 0.01, 0.08;
+  return models::LinearStateSpace::Make(A, B, Q);
+}
+
+struct Data {
+  std::vector<StateSpaceItem> items;
+};
+
+// Linear-Gaussian data y = c'x + e, e ~ N(0, r), input sin(0.3k).
+Data Simulate(const models::LinearStateSpace& model, const Eigen::Vector2d& c, double r, int steps, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal;
+  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  Data d;
+  for (int k = 0; k < steps; ++k) {
+    Eigen::VectorXd u(1);
+    u(0) = std::sin(0.3 * k);
+    x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
+    d.items.push_back({u, c.dot(x) + std::sqrt(r) * normal(rng)});
+  }
+  return d;
+}
+
+template <class M>
+bool SameBits(const M& a, const M& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Kalman filter, fixed-size and dynamic.
+
+template <class F>
+class KalmanRealtime : public ::testing::Test {};
+using KalmanVariants = ::testing::Types<BasicKalmanFilter<2>, BasicKalmanFilter<Eigen::Dynamic>>;
+TYPED_TEST_SUITE(KalmanRealtime, KalmanVariants);
+
+TYPED_TEST(KalmanRealtime, StepsAreNoexceptAndAllocateNothingOver10kSteps) {
+  const auto model = Model2d();
+  const Eigen::Vector2d c(1.0, 0.5);
+  const auto data = Simulate(model, c, 0.2, 10000, 3);
+  TypeParam kf(model, models::GaussianMeasurement(c, 0.2), Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity());
+  TypeParam twin(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity());
+  static_assert(noexcept(kf.Update(data.items[0])));
+  const Eigen::Ref<const Eigen::VectorXd> u_ref(data.items[0].u), c_ref(c);  // no conversion in noexcept()
+  static_assert(noexcept(kf.Predict(model, u_ref)));
+  static_assert(noexcept(kf.Correct(c_ref, 0.2, 1.0)));
+  typename TypeParam::StateMatrix P(2, 2);
+  int updated = 0;
+  {
+    testing::AllocationCounter count;
+    for (const auto& d : data.items) {
+      updated += kf.Update(d).updated();
+      updated += twin.Predict(model, d.u).updated();      // explicit Predict + scalar Correct
+      updated += twin.Correct(c, 0.2, d.y).updated();
+      kf.CovarianceInto(P);
+    }
+    EXPECT_EQ(count.allocations(), 0);
+  }
+  EXPECT_EQ(updated, 30000);
+  EXPECT_LT((kf.mean() - twin.mean()).norm(), 1e-12);
+  EXPECT_TRUE(std::isfinite(kf.log_likelihood()));
+}
+
+// Independent reference: the textbook covariance-form Kalman filter, written out here.
+TYPED_TEST(KalmanRealtime, EqualsTheTextbookCovarianceFormIncludingLogLikelihood) {
+  const auto model = Model2d();
+  const Eigen::Vector2d c(0.7, -0.4);
+  const double r = 0.3;
+  const auto data = Simulate(model, c, r, 300, 5);
+  Eigen::Vector2d m0(0.5, -1.0);
+  Eigen::Matrix2d P0;
+  P0 << 2.0, 0.3, 0.3, 1.0;
+  TypeParam kf(model, models::GaussianMeasurement(c, r), m0, P0);
+  Eigen::Vector2d x = m0;
+  Eigen::Matrix2d P = P0;
+  const Eigen::Matrix2d A = model.A, Q = model.process_noise;
+  const Eigen::Vector2d B = model.B.col(0);
+  double ll = 0;
+  for (const auto& d : data.items) {
+    ASSERT_TRUE(kf.Update(d).updated());
+    x = A * x + B * d.u(0);
+    P = A * P * A.transpose() + Q;
+    const double s = c.dot(P * c) + r;
+    const double e = d.y - c.dot(x);
+    ll += -0.5 * (std::log(2 * std::numbers::pi * s) + e * e / s);
+    const Eigen::Vector2d k = P * c / s;
+    x += k * e;
+    P -= k * k.transpose() * s;
+  }
+  EXPECT_LT((Eigen::Vector2d(kf.mean()) - x).norm(), 1e-10);
+  EXPECT_LT((Eigen::Matrix2d(kf.covariance()) - P).norm(), 1e-12);
+  EXPECT_NEAR(kf.log_likelihood(), ll, 1e-8);
+}
+
+TYPED_TEST(KalmanRealtime, RejectedOrFailedStepsLeaveTheStateBitIdentical) {
+  const auto model = Model2d();
+  const Eigen::Vector2d c(1.0, 0.0);
+  TypeParam kf(Eigen::Vector2d(1e10, 1e10), Eigen::Matrix2d::Identity());
+  kf.Predict(model, Eigen::VectorXd::Ones(1));
+  kf.Correct(c, 0.5, 3.0);
+  const Eigen::Vector2d x = kf.mean();
+  const Eigen::Matrix2d S = kf.covariance_factor();
+  const double ll = kf.log_likelihood();
+  auto unchanged = [&] {
+    return SameBits(Eigen::Vector2d(kf.mean()), x) && SameBits(Eigen::Matrix2d(kf.covariance_factor()), S) &&
+           SameBits(Eigen::Matrix<double, 1, 1>(ll), Eigen::Matrix<double, 1, 1>(kf.log_likelihood()));
+  };
+  EXPECT_EQ(kf.Correct(c, 0.5, std::nan("")).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(kf.Correct(c, 0.0, 1.0).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(kf.Correct(Eigen::Vector3d::Ones(), 0.5, 1.0).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(kf.Predict(model, Eigen::VectorXd::Ones(2)).status, StepStatus::kRejectedInvalid);
+  Eigen::VectorXd nan_u(1);
+  nan_u(0) = std::nan("");
+  EXPECT_EQ(kf.Predict(model, nan_u).status, StepStatus::kRejectedInvalid);
+  models::LinearStateSpace blow_up = model;   // A x overflows to Inf
+  blow_up.A = 1e300 * Eigen::Matrix2d::Identity();
+  EXPECT_EQ(kf.Predict(blow_up, Eigen::VectorXd::Zero(1)).status, StepStatus::kNumericalFailure);
+  const Eigen::Vector2d huge_c(-1e298, 0.0);                                        // y − c'x overflows
+  EXPECT_EQ(kf.Correct(huge_c, 1.0, 1e308).status, StepStatus::kNumericalFailure);
+  EXPECT_EQ(kf.Update({Eigen::VectorXd::Zero(1), 1.0}).status, StepStatus::kRejectedInvalid);  // no stored model
+  EXPECT_TRUE(unchanged());
+  // Update is all or nothing: a failing correction also undoes its prediction.
+  TypeParam stored(model, models::GaussianMeasurement(huge_c, 1.0), Eigen::Vector2d(1e10, 1e10),
+                   Eigen::Matrix2d::Identity());
+  const Eigen::Vector2d before = stored.mean();
+  EXPECT_EQ(stored.Update({Eigen::VectorXd::Zero(1), 1e308}).status, StepStatus::kNumericalFailure);
+  EXPECT_TRUE(SameBits(Eigen::Vector2d(stored.mean()), before));
+}
+
+TEST(KalmanRealtime, FixedSizeFilterRejectsAPriorOfTheWrongSize) {
+  EXPECT_THROW(BasicKalmanFilter<2>(Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()), InvalidArgument);
+  EXPECT_THROW(BasicLcGaussianFilter<2>(Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()), InvalidArgument);
+}
+
+// Singular process noise (noise on the velocity only): the pivoted LDLᵀ square root must give P_N back.
+TEST(KalmanRealtime, SingularProcessNoiseIsHandledExactly) {
+  Eigen::MatrixXd A(2, 2), B(2, 1), Q = Eigen::MatrixXd::Zero(2, 2);
+  A << 1, 0.1, 0, 1;
+  B << 0.005, 0.1;
+  Q(1, 1) = 0.3;
+  const auto model = models::LinearStateSpace::Make(A, B, Q);
+  Eigen::Matrix2d P0;
+  P0 << 1.0, 0.2, 0.2, 0.5;
+  BasicKalmanFilter<2> kf(Eigen::Vector2d::Zero(), P0);
+  ASSERT_TRUE(kf.Predict(model, Eigen::VectorXd::Zero(1)).updated());
+  const Eigen::Matrix2d expected = A * P0 * A.transpose() + Q;
+  EXPECT_LT((kf.covariance() - expected).norm(), 1e-14);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Log-concave Gaussian filter, fixed-size and dynamic.
+
+template <class F>
+class LcGaussianRealtime : public ::testing::Test {};
+using LcVariants = ::testing::Types<BasicLcGaussianFilter<2>, BasicLcGaussianFilter<Eigen::Dynamic>>;
+TYPED_TEST_SUITE(LcGaussianRealtime, LcVariants);
+
+TYPED_TEST(LcGaussianRealtime, StepsAreNoexceptAndAllocateNothingOver10kSteps) {
+  // MEMS accelerometer with the threshold sensor (closed-form tilt) and a ping-pong input.
+  const auto model = models::MemsAccelerometerDynamics(0.01, 1.0);
+  const Eigen::Vector2d c(1.0, 0.0);
+  auto sensor = std::make_shared<models::ThresholdSensor>(c, 1.0);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
+  Eigen::Vector2d x(0, 2);
+  std::vector<StateSpaceItem> items;
+  double u = 0, dir = 1;
+  for (int k = 0; k < 10000; ++k) {
+    x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
+    const double y = sensor->Measure(x);
+    items.push_back({Eigen::VectorXd::Constant(1, u), y});
+    if (y != 0) dir = -y;
+    u = y != 0 ? -y * 32 : -(x(1) - dir * 4) / 0.125;
+  }
+  Eigen::Matrix2d P0;
+  P0 << 0.3, 0, 0, 1;
+  TypeParam f(model, sensor, Eigen::Vector2d(0, 2), P0);
+  TypeParam g(Eigen::Vector2d(0, 2), P0);
+  static_assert(noexcept(f.Update(items[0])));
+  static_assert(noexcept(g.Correct(*sensor, 0.0)));
+  const Eigen::Ref<const Eigen::VectorXd> c_ref(c);
+  const models::TiltedMoments no_tilt;
+  static_assert(noexcept(g.ApplyTilt(c_ref, no_tilt)));
+  const models::GaussianMeasurement gauss(c, 0.5);
+  int updated = 0;
+  {
+    testing::AllocationCounter count;
+    for (const auto& d : items) {
+      updated += f.Update(d).updated();
+      updated += g.Predict(model, d.u).updated();
+      updated += g.Correct(gauss, d.y).updated();
+    }
+    EXPECT_EQ(count.allocations(), 0);
+  }
+  EXPECT_EQ(updated, 30000);
+  EXPECT_TRUE(f.mean().allFinite() && f.covariance().allFinite());
+}
+
+// With a Gaussian measurement the exact tilt is the Kalman update: compare with the textbook recursion.
+TYPED_TEST(LcGaussianRealtime, WithGaussianReadingsEqualsTheTextbookKalmanFilter) {
+  const auto model = Model2d();
+  const Eigen::Vector2d c(0.7, -0.4);
+  const double r = 0.3;
+  const auto data = Simulate(model, c, r, 300, 9);
+  TypeParam f(model, std::make_shared<models::GaussianMeasurement>(c, r), Eigen::Vector2d::Zero(),
+              Eigen::Matrix2d::Identity());
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d P = Eigen::Matrix2d::Identity();
+  for (const auto& d : data.items) {
+    ASSERT_TRUE(f.Update(d).updated());
+    x = model.A * x + model.B * d.u;
+    P = model.A * P * model.A.transpose() + model.process_noise;
+    const double s = c.dot(P * c) + r;
+    const Eigen::Vector2d k = P * c / s;
+    x += k * (d.y - c.dot(x));
+    P -= k * k.transpose() * s;
+  }
+  EXPECT_LT((Eigen::Vector2d(f.mean()) - x).norm(), 1e-10);
+  EXPECT_LT((Eigen::Matrix2d(f.covariance()) - P).norm(), 1e-12);
+}
+
+// A measurement function whose tilt throws (user code, or a Boost.Math overflow error).
+class ThrowingMeasurement final : public models::ProjectedMeasurement {
+ public:
+  ThrowingMeasurement() : ProjectedMeasurement(Eigen::Vector2d(1, 0)) {}
+  std::string name() const override { return "throwing"; }
+  double LogLikelihoodScalar(double, double) const override { return 0; }
+  double ScalarStrength(double) const override { return 0; }
+  bool IsValidOutput(double) const override { return true; }
+  models::TiltedMoments Tilt(double, double, double) const override { throw std::overflow_error("boom"); }
+};
+
+TYPED_TEST(LcGaussianRealtime, RejectedOrFailedStepsLeaveTheStateBitIdentical) {
+  const auto model = models::MemsAccelerometerDynamics(0.01, 1.0);
+  const Eigen::Vector2d c(1.0, 0.0);
+  models::ThresholdSensor sensor(c, 1.0);
+  TypeParam f(Eigen::Vector2d(0, 1), 0.01 * Eigen::Matrix2d::Identity());
+  f.Predict(model, Eigen::VectorXd::Zero(1));
+  f.Correct(sensor, 0.0);
+  const Eigen::Vector2d m = f.mean();
+  const Eigen::Matrix2d P = f.covariance();
+  const double ll = f.log_likelihood();
+  auto unchanged = [&] {
+    return SameBits(Eigen::Vector2d(f.mean()), m) && SameBits(Eigen::Matrix2d(f.covariance()), P) &&
+           SameBits(Eigen::Matrix<double, 1, 1>(ll), Eigen::Matrix<double, 1, 1>(f.log_likelihood()));
+  };
+  EXPECT_EQ(f.Correct(sensor, 0.5).status, StepStatus::kRejectedInvalid);             // not a sensor output
+  EXPECT_EQ(f.Correct(sensor, std::nan("")).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.Correct(ThrowingMeasurement(), 0.0).status, StepStatus::kNumericalFailure);
+  EXPECT_EQ(f.ApplyTilt(c, models::TiltedMoments{}).status, StepStatus::kNumericalFailure);  // ok = false
+  EXPECT_EQ(f.ApplyTilt(Eigen::Vector3d::Ones(), {0.0, 0.0, 1.0, true}).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.ApplyTilt(Eigen::Vector2d::Zero(), {0.0, 0.0, 1.0, true}).status, StepStatus::kNumericalFailure);
+  EXPECT_EQ(f.Predict(model, Eigen::VectorXd::Ones(3)).status, StepStatus::kRejectedInvalid);
+  models::LinearStateSpace blow_up = model;
+  blow_up.A = 1e300 * Eigen::Matrix2d::Identity();
+  EXPECT_EQ(f.Predict(blow_up, Eigen::VectorXd::Zero(1)).status, StepStatus::kNumericalFailure);  // P overflows
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), 0.0}).status, StepStatus::kRejectedInvalid);      // no model
+  EXPECT_TRUE(unchanged());
+  // Update is all or nothing.
+  TypeParam stored(model, std::make_shared<ThrowingMeasurement>(), Eigen::Vector2d(0, 1), Eigen::Matrix2d::Identity());
+  EXPECT_EQ(stored.Update({Eigen::VectorXd::Zero(1), 0.0}).status, StepStatus::kNumericalFailure);
+  EXPECT_TRUE(SameBits(Eigen::Vector2d(stored.mean()), Eigen::Vector2d(0, 1)));
+  EXPECT_TRUE(SameBits(Eigen::Matrix2d(stored.covariance()), Eigen::Matrix2d(Eigen::Matrix2d::Identity())));
+}
+
+// ------------------------------------------------------------------------------------------------
+// Grid observer: FFT plans and buffers are built at construction and reused by every step.
+
+TEST(GridObserverRealtime, StepsAllocateNothingAfterConstruction) {
+  for (const int dim : {1, 2}) {
+    const auto mems = models::MemsAccelerometerDynamics(0.01, 1.0);
+    models::LinearStateSpace model = mems;
+    Eigen::VectorXd c = Eigen::VectorXd::Unit(dim, 0);
+    if (dim == 1) model = models::LinearStateSpace::Make(Eigen::MatrixXd::Constant(1, 1, 0.99),
+                                                         Eigen::MatrixXd::Constant(1, 1, 0.1),
+                                                         Eigen::MatrixXd::Constant(1, 1, 0.01));
+    auto sensor = std::make_shared<models::ThresholdSensor>(c, 1.0);
+    GridObserverOptions opt;
+    opt.points.assign(dim, 32);
+    GridObserver grid(model, sensor, Eigen::VectorXd::Zero(dim), 0.3 * Eigen::MatrixXd::Identity(dim, dim), opt);
+    std::vector<StateSpaceItem> items;
+    for (int k = 0; k < 300; ++k) items.push_back({Eigen::VectorXd::Constant(1, std::sin(0.05 * k)), k % 50 == 0 ? 1.0 : 0.0});
+    int updated = 0;
+    {
+      testing::AllocationCounter count;
+      for (const auto& d : items) updated += grid.Update(d).updated();
+      EXPECT_EQ(count.allocations(), 0) << dim << "-D";
+    }
+    EXPECT_GT(updated, 250) << dim << "-D";
+  }
+}
+
+}  // namespace
+}  // namespace ident

@@ -1,0 +1,151 @@
+// Run-time selection of observers by name: each name builds the observer it documents (same numbers as
+// the concrete class on the same data, and on a linear-Gaussian model all three agree with the Kalman
+// filter to the grid's discretisation error), options reach the observer, and every bad spec, option or
+// problem is refused with a message naming the observer and the option.
+#include <cmath>
+#include <memory>
+#include <random>
+#include <string>
+
+#include <Eigen/Cholesky>
+#include <gtest/gtest.h>
+
+#include "ident/common/error.h"
+#include "ident/grid_observer.h"
+#include "ident/kalman_filter.h"
+#include "ident/lc_gaussian_filter.h"
+#include "ident/observer_registry.h"
+
+namespace ident {
+namespace {
+
+// Expects `what` to contain `part` (printed in full on failure).
+#define EXPECT_CONTAINS(what, part) EXPECT_NE(std::string(what).find(part), std::string::npos) << (what)
+
+models::LinearStateSpace Model2d() {
+  Eigen::MatrixXd A(2, 2), B(2, 1), Q(2, 2);
+  A << 0.95, 0.2, -0.1, 0.9;
+  B << 0.1, 0.5;
+  Q << 0.05, 0.01, 0.01, 0.08;
+  return models::LinearStateSpace::Make(A, B, Q);
+}
+
+std::vector<StateSpaceItem> Simulate(const models::LinearStateSpace& model, const Eigen::Vector2d& c, double r,
+                                     int steps, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal;
+  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  std::vector<StateSpaceItem> items;
+  for (int k = 0; k < steps; ++k) {
+    const Eigen::VectorXd u = Eigen::VectorXd::Constant(1, std::sin(0.3 * k));
+    x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
+    items.push_back({u, c.dot(x) + std::sqrt(r) * normal(rng)});
+  }
+  return items;
+}
+
+ObserverProblem GaussianProblem() {
+  return {Model2d(), std::make_shared<models::GaussianMeasurement>(Eigen::Vector2d(1.0, 0.5), 0.2),
+          Eigen::Vector2d(0.0, 0.0), Eigen::Matrix2d::Identity()};
+}
+
+std::string ErrorOf(const std::string& spec, const ObserverProblem& problem) {
+  try {
+    MakeStateObserver(ParseObserverSpec(spec), problem);
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+TEST(ObserverRegistry, ListsTheThreeObservers) {
+  EXPECT_EQ(StateObserverNames(), (std::vector<std::string>{"kalman", "lc_gaussian", "grid"}));
+}
+
+TEST(ObserverRegistry, EachNameBuildsTheDocumentedObserver) {
+  const auto problem = GaussianProblem();
+  const auto items = Simulate(problem.model, Eigen::Vector2d(1.0, 0.5), 0.2, 60, 4);
+  auto kalman = MakeStateObserver(ParseObserverSpec("kalman"), problem);
+  auto lc = MakeStateObserver(ParseObserverSpec("lc_gaussian"), problem);
+  auto grid = MakeStateObserver(ParseObserverSpec("grid:points=96"), problem);
+  EXPECT_EQ(kalman->name(), "kalman");
+  EXPECT_EQ(lc->name(), "lc_gaussian");
+  EXPECT_EQ(grid->name(), "grid");
+  const auto& gaussian = static_cast<const models::GaussianMeasurement&>(*problem.measurement);
+  KalmanFilter direct(problem.model, gaussian, problem.x0, problem.P0);
+  GridObserverOptions gopt;
+  gopt.points = {96, 96};
+  GridObserver grid_direct(problem.model, problem.measurement, problem.x0, problem.P0, gopt);
+  // Reference covariance form, written out here.
+  Eigen::Vector2d x = problem.x0;
+  Eigen::Matrix2d P = problem.P0;
+  const Eigen::Vector2d c(1.0, 0.5);
+  for (const auto& d : items) {
+    ASSERT_TRUE(kalman->Update(d).updated());
+    ASSERT_TRUE(lc->Update(d).updated());
+    ASSERT_TRUE(grid->Update(d).updated());
+    direct.Update(d);
+    grid_direct.Update(d);
+    x = problem.model.A * x + problem.model.B * d.u;
+    P = problem.model.A * P * problem.model.A.transpose() + problem.model.process_noise;
+    const double s = c.dot(P * c) + 0.2;
+    const Eigen::Vector2d k = P * c / s;
+    x += k * (d.y - c.dot(x));
+    P -= k * k.transpose() * s;
+  }
+  EXPECT_EQ(kalman->num_states(), 2);
+  EXPECT_LT((kalman->mean() - direct.mean()).norm(), 1e-15);
+  EXPECT_LT((kalman->mean() - x).norm(), 1e-10);
+  EXPECT_LT((lc->mean() - x).norm(), 1e-10);
+  EXPECT_LT((lc->covariance() - P).norm(), 1e-12);
+  EXPECT_LT((grid->mean() - grid_direct.mean()).norm(), 1e-15);   // options reached the grid observer
+  // Grid against the Kalman filter to its discretisation error (as in observers_agree_test).
+  const auto& g = static_cast<StateObserverModel<GridObserver>&>(*grid).get();
+  const double d2 = std::max(g.spacing(0) * g.spacing(0), g.spacing(1) * g.spacing(1));
+  EXPECT_LT((grid->mean() - x).cwiseAbs().maxCoeff(), 0.5 * std::sqrt(d2));
+  EXPECT_LT((grid->covariance() - P).cwiseAbs().maxCoeff(), 3 * d2);
+  EXPECT_EQ(g.points(0), 96);
+}
+
+TEST(ObserverRegistry, GridTakesPointsPerAxisAndItsOtherOptions) {
+  auto grid = MakeStateObserver(ParseObserverSpec("grid:points=40x24,noise_sigmas=5,initial_sigmas=7,padding=10"),
+                                GaussianProblem());
+  const auto& g = static_cast<StateObserverModel<GridObserver>&>(*grid).get();
+  EXPECT_EQ(g.points(0), 40);
+  EXPECT_EQ(g.points(1), 24);
+  EXPECT_NEAR(g.axis(0, 39) - g.axis(0, 0), 2 * 7.0, 1e-12);   // prior sd 1, ±initial_sigmas
+}
+
+TEST(ObserverRegistry, BadSpecsOptionsAndProblemsNameTheObserverAndOption) {
+  const auto problem = GaussianProblem();
+  EXPECT_CONTAINS(ErrorOf("kalmann", problem), "unknown observer 'kalmann' (known: kalman, lc_gaussian, grid)");
+  EXPECT_CONTAINS(ErrorOf("kalman:points=3", problem), "observer 'kalman' takes no options; got 'points'");
+  EXPECT_CONTAINS(ErrorOf("lc_gaussian:x=1", problem), "observer 'lc_gaussian' takes no options; got 'x'");
+  EXPECT_CONTAINS(ErrorOf("grid:point=64", problem), "observer 'grid' has no option 'point'");
+  EXPECT_CONTAINS(ErrorOf("grid:points=abc", problem), "option points = 'abc' is not a finite number");
+  EXPECT_CONTAINS(ErrorOf("grid:points=6.5", problem), "option points = '6.5' is not an integer");
+  EXPECT_CONTAINS(ErrorOf("grid:points=4", problem), "observer 'grid': option points = 4; need 8 <= points");
+  EXPECT_CONTAINS(ErrorOf("grid:points=8x8x8", problem), "has 3 counts; need 1 or 2");
+  EXPECT_CONTAINS(ErrorOf("grid:noise_sigmas=-1", problem), "option noise_sigmas = -1; need >= 0");
+  EXPECT_CONTAINS(ErrorOf("grid:support_level=nan", problem), "support_level = 'nan' is not a finite number");
+  EXPECT_CONTAINS(ErrorOf("grid:points", problem), "'points' is not key=value");
+  EXPECT_CONTAINS(ErrorOf("grid:points=8,points=9", problem), "option points given twice");
+  EXPECT_CONTAINS(ErrorOf(":points=8", problem), "has no name");
+  auto threshold = problem;
+  threshold.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
+  EXPECT_CONTAINS(ErrorOf("kalman", threshold), "'kalman' needs a linear-Gaussian measurement; 'threshold'");
+  EXPECT_NO_THROW(MakeStateObserver(ParseObserverSpec("lc_gaussian"), threshold));
+  auto bad_prior = problem;
+  bad_prior.P0 = Eigen::Matrix2d::Zero();
+  EXPECT_CONTAINS(ErrorOf("kalman", bad_prior), "P0 is not positive definite");
+  auto four = problem;
+  four.x0 = Eigen::Vector4d::Zero();
+  EXPECT_CONTAINS(ErrorOf("grid", four), "observer 'grid' handles 1 to 3 states; the problem has 4");
+  auto null_meas = problem;
+  null_meas.measurement = nullptr;
+  EXPECT_CONTAINS(ErrorOf("lc_gaussian", null_meas), "measurement must not be null");
+}
+
+}  // namespace
+}  // namespace ident
