@@ -4,7 +4,10 @@
 //
 // Stream: y(t) = θ'z(t) + e(t), ρ = 4, z(t) ~ N(0, I) white (persistently exciting),
 //         e(t) ~ N(0, 0.1²) except with probability 1 % a gross outlier e(t) ~ N(0, 10²) (100 σ).
-// Estimator: LD-form RLS with exponential forgetting λ = 0.999 (window ≈ 1000 samples).
+// Estimators, each with exponential forgetting λ = 0.999 (window ≈ 1000 samples):
+//   - LD-form RLS (ident/rls.h);
+//   - the Kárný–Hangos Cauchy estimator (ident/student_regression.h, k = 1, δ = 1) with the spec §8
+//     prior (`exact`: ν(0) = ρ+k+δ, V(0) = diag(1, 1e-3·I)); both use V(t) = (1−β)Ṽ + βhh'.
 // Checks:
 //   - min over every step of min_i d_i (D stays positive) and the number of steps not taken;
 //   - max over every step after the first window of ‖θ̂ − θ‖ (parameter error bounded);
@@ -26,6 +29,7 @@
 
 #include "ident/ld_factor.h"
 #include "ident/rls.h"
+#include "ident/student_regression.h"
 
 namespace {
 
@@ -130,6 +134,16 @@ int main(int argc, char** argv) {
     const Worst w = Run(rls, updates, check_every, seed, kLambda);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ok &= Report("LD-form RLS", w, updates, s);
+  }
+  {
+    ident::StudentRegressionOptions options;  // Cauchy: k = 1, δ = 1
+    options.exact = true;                     // spec §8 prior, no data-driven start-up
+    options.forgetting.factor = kLambda;
+    ident::BasicStudentRegression<kRho> cauchy(kRho, options);
+    const auto start = std::chrono::steady_clock::now();
+    const Worst w = Run(cauchy, updates, check_every, seed, kLambda);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ok &= Report("Cauchy (Karny-Hangos, k = 1)", w, updates, s);
   }
   return ok ? 0 : 1;
 }

@@ -1,6 +1,7 @@
 // ident datasets [--json]: the bundled records with rows, columns, size and suggested structure.
 #include <iostream>
 #include <memory>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -20,11 +21,15 @@ std::string HumanSize(std::uintmax_t bytes) {
 
 void RunDatasets(bool json) {
   const std::vector<DatasetInfo> index = LoadDatasetIndex();
+  // Every file is read before anything is printed: a missing one is one error line, no partial table.
+  std::vector<CsvShape> shapes;
+  for (const DatasetInfo& d : index) shapes.push_back(ReadCsvShape(d.path));
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
   if (!json)
     fmt::print("{:<26} {:>7} {:>8}  {:<44} {}\n", "name", "rows", "size", "columns", "suggested structure");
-  for (const DatasetInfo& d : index) {
-    const CsvShape shape = ReadCsvShape(d.path);
+  for (std::size_t i = 0; i < index.size(); ++i) {
+    const DatasetInfo& d = index[i];
+    const CsvShape& shape = shapes[i];
     const std::string args = StructureArguments(d.structure);
     if (json) {
       nlohmann::ordered_json e;

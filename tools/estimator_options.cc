@@ -103,6 +103,9 @@ std::string ResolveDataPath(const std::string& name) {
     for (const std::string& candidate : {dir + "/" + name, dir + "/" + name + ".csv"})
       if (fs::is_regular_file(candidate, ec)) return candidate;
   }
+  // A bare name that is neither a file nor a dataset: say so, instead of the reader's "cannot open".
+  if (name.find('.') == std::string::npos)
+    throw DataError(fmt::format("no file or bundled dataset '{}' (`ident datasets` lists the bundled ones)", name));
   return name;  // the reader reports "cannot open"
 }
 

@@ -4,6 +4,7 @@
 // (RMS velocity error of each observer against the measured mean time between events) and writes the
 // Fig. 8 variance traces (--trace CSV, and the second panel of --plot). See ident/mems_study.h.
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -37,8 +38,9 @@ const std::vector<std::pair<std::string, std::string>> kColumns = {
 void RunMems(const MemsCommandOptions& o) {
   IDENT_REQUIRE(!o.t_targets.empty(), "--t-mean needs at least one value");
   for (double t : o.t_targets) IDENT_REQUIRE(std::isfinite(t) && t > 0, "--t-mean value {} must be > 0", t);
-  std::vector<MemsStudyResult> results;
-  for (size_t i = 0; i < o.t_targets.size(); ++i) {
+  // Every option and output file is checked before the study runs, so a bad one costs no time and
+  // leaves stdout empty.
+  auto study_options = [&](size_t i) {
     MemsStudyOptions s;
     s.t_target = o.t_targets[i];
     s.steps = o.steps;
@@ -49,8 +51,24 @@ void RunMems(const MemsCommandOptions& o) {
     s.record_trace = i == 0 && (!o.trace.empty() || !o.plot.empty());
     const std::string problem = s.Validate();
     IDENT_REQUIRE(problem.empty(), "{} (from --t-mean/--steps/--grid-points/--h)", problem);
-    results.push_back(RunMemsStudy(s));
+    return s;
+  };
+  for (size_t i = 0; i < o.t_targets.size(); ++i) study_options(i);
+  std::ofstream csv_file, trace_file;
+  if (!o.csv.empty()) {
+    csv_file.open(o.csv);
+    IDENT_REQUIRE(csv_file.good(), "cannot write --csv file '{}'", o.csv);
   }
+  if (!o.trace.empty()) {
+    trace_file.open(o.trace);
+    IDENT_REQUIRE(trace_file.good(), "cannot write --trace file '{}'", o.trace);
+  }
+  if (!o.plot.empty()) {
+    const std::string ext = std::filesystem::path(o.plot).extension().string();
+    IDENT_REQUIRE(ext == ".svg" || ext == ".png", "--plot file '{}': need a .svg or .png name", o.plot);
+  }
+  std::vector<MemsStudyResult> results;
+  for (size_t i = 0; i < o.t_targets.size(); ++i) results.push_back(RunMemsStudy(study_options(i)));
   // Fig. 9 analogue.
   std::cout << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {}x{} grid)\n", o.h,
                            o.steps, o.grid_points, o.grid_points);
@@ -70,8 +88,7 @@ void RunMems(const MemsCommandOptions& o) {
                            "first-passage event model + sigma_o(p11 = 1/3) for y = 0\n",
                            results.front().sigma_o);
   if (!o.csv.empty()) {
-    std::ofstream f(o.csv);
-    IDENT_REQUIRE(f.good(), "cannot write --csv file '{}'", o.csv);
+    std::ofstream& f = csv_file;
     f << "t_mean,t_target,events";
     for (const auto& [col, name] : kColumns) f << ",rms_" << col;
     for (const auto& [col, name] : kColumns) f << ",calibration_" << col;
@@ -87,8 +104,7 @@ void RunMems(const MemsCommandOptions& o) {
   }
   const MemsTrace& tr = results.front().trace;
   if (!o.trace.empty()) {
-    std::ofstream f(o.trace);
-    IDENT_REQUIRE(f.good(), "cannot write --trace file '{}'", o.trace);
+    std::ofstream& f = trace_file;
     f << "t,x1,y,var_grid,var_tuned_kalman,var_lc_gaussian,var_bound\n";
     for (size_t k = 0; k < tr.t.size(); ++k)
       f << fmt::format("{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", tr.t[k], tr.x1[k], tr.y[k], tr.var_grid[k],

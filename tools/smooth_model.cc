@@ -1,6 +1,8 @@
 #include "tools/smooth_model.h"
 
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 
@@ -153,12 +155,15 @@ void ParseSmoothModel(const Json& model, const std::string& source, MapSmootherP
 }
 
 MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::string& data_path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(model_path, ec))
+    throw DataError(fmt::format("cannot read '{}': it is a directory", model_path));
   std::ifstream in(model_path);
   if (!in) throw DataError(fmt::format("cannot open '{}'", model_path));
   Json model;
   try {
     model = Json::parse(in);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // parse errors, and numbers beyond double (1e999)
     throw DataError(fmt::format("{}: not valid JSON ({})", model_path, e.what()));
   }
   const io::DataTable table = io::ReadCsv(data_path);
@@ -177,6 +182,10 @@ MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::s
   MapSmootherProblem p;
   p.z.resize(cols.size(), table.num_rows());
   for (size_t i = 0; i < cols.size(); ++i) p.z.row(i) = table.values.col(cols[i]).transpose();
+  if (!std::isfinite(p.z.squaredNorm()))  // the penalties square residuals of this size
+    throw DataError(fmt::format("{}: the measurements' sum of squares is beyond 1e308 (values near 1e308?); "
+                                "rescale the data",
+                                data_path));
   ParseSmoothModel(model, model_path, &p);
   return p;
 }

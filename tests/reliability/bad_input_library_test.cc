@@ -9,12 +9,21 @@
 #include <gtest/gtest.h>
 
 #include "ident/common/error.h"
+#include "approx/logconcave_mle.h"
 #include "ident/estimator_registry.h"
+#include "ident/grid_observer.h"
+#include "ident/kalman_filter.h"
+#include "ident/lc_gaussian_filter.h"
+#include "ident/map_smoother.h"
+#include "ident/student_regression.h"
 #include "ident/io/csv.h"
 #include "ident/ld_factor.h"
 #include "ident/regression_prior.h"
 #include "ident/rls.h"
 #include "models/arx.h"
+#include "models/measurement.h"
+#include "models/penalties.h"
+#include "models/state_space.h"
 #include "tools/data_source.h"
 #include "tools/fit.h"
 
@@ -154,6 +163,137 @@ TEST(StreamingFit, CountsDataRowsLikeTheReader) {
   }
   EXPECT_EQ(tools::CountCsvDataRows(path), 3);
   EXPECT_EQ(io::ReadCsv(path).num_rows(), 3);
+}
+
+// ---- the libraries behind smooth, logcondens, mems and the Student/Cauchy estimators --------------
+
+// A valid MAP smoothing problem: n = 2, nz = 1, T = 3.
+MapSmootherProblem SmoothProblem() {
+  MapSmootherProblem p;
+  p.F = {(Eigen::MatrixXd(2, 2) << 1, 1, 0, 1).finished()};
+  p.H = {(Eigen::MatrixXd(1, 2) << 1, 0).finished()};
+  p.z = (Eigen::MatrixXd(1, 4) << 0.5, 1.2, 3.1, 2.0).finished();
+  p.process = {models::Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2))};
+  p.measurement = {models::Penalty::L1(1)};
+  return p;
+}
+
+TEST(BadInputLibrary, MapSmootherProblemDimensionsAreCheckedByName) {
+  EXPECT_NO_THROW(ValidateMapSmootherProblem(SmoothProblem()));
+  MapSmootherProblem p = SmoothProblem();
+  p.F = {Eigen::MatrixXd::Identity(3, 3)};
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "F[0] is 3x3; need 2x2");
+  p = SmoothProblem();
+  p.F = {Eigen::MatrixXd::Identity(2, 2), Eigen::MatrixXd::Identity(2, 2)};  // T = 3 needs 1 or 3
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "F has 2 matrices; need 1 or T = 3");
+  p = SmoothProblem();
+  p.H = {Eigen::MatrixXd::Ones(2, 2)};  // z has 1 row
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "H[0] is 2x2; need 1x2");
+  p = SmoothProblem();
+  p.process = {models::Penalty::L1(3)};
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "process penalty 0 has dimension 3; the state has 2");
+  p = SmoothProblem();
+  p.measurement = {models::Penalty::L1(2)};
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "measurement penalty 0 has dimension 2; z has 1 rows");
+  p = SmoothProblem();
+  p.z(0, 2) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "z has a non-finite entry");
+  p = SmoothProblem();
+  p.z.resize(1, 0);
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "z has no time steps");
+  p = SmoothProblem();
+  p.F[0](0, 1) = std::numeric_limits<double>::infinity();
+  EXPECT_INVALID(ValidateMapSmootherProblem(p), "F[0] has a non-finite entry");
+  EXPECT_INVALID(SolveMapSmoother(p), "F[0] has a non-finite entry");  // the solver checks too
+}
+
+TEST(BadInputLibrary, PenaltyParametersAreCheckedByName) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_INVALID(models::Penalty::Huber(0), "huber kappa = 0; need kappa > 0");
+  EXPECT_INVALID(models::Penalty::Huber(-1), "huber kappa = -1");
+  EXPECT_INVALID(models::Penalty::Huber(nan), "huber kappa = nan");
+  EXPECT_INVALID(models::Penalty::Vapnik(-0.5), "vapnik epsilon = -0.5; need epsilon >= 0");
+  EXPECT_INVALID(models::Penalty::Quantile(0), "quantile tau = 0; need 0 < tau < 1");
+  EXPECT_INVALID(models::Penalty::Quantile(1), "quantile tau = 1");
+  EXPECT_INVALID(models::Penalty::L1(0), "penalty dimension = 0; need >= 1");
+  EXPECT_INVALID(models::Penalty::Quadratic(-Eigen::MatrixXd::Identity(1, 1)), "covariance is not positive definite");
+  EXPECT_INVALID(models::Penalty::Quadratic((Eigen::MatrixXd(2, 2) << 1, 2, 0, 1).finished()), "covariance");
+  EXPECT_INVALID(models::Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 3)), "covariance is 2x3");
+  EXPECT_INVALID(models::Penalty::PiecewiseLinear(Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 0)),
+                 "piecewise_linear knots must increase strictly");
+  EXPECT_INVALID(models::Penalty::PiecewiseLinear(Eigen::Vector3d(0, 1, 2), Eigen::Vector2d(0, 0)),
+                 "piecewise_linear has 3 knots but 2 values");
+  EXPECT_INVALID(models::Penalty::PiecewiseLinear(Eigen::Vector3d(-1, 0, 1), Eigen::Vector3d(0, 1, 0)),
+                 "piecewise_linear");  // not convex
+  EXPECT_INVALID(models::Penalty::BoxMonitoring(Eigen::VectorXd::Constant(1, 1), Eigen::VectorXd::Constant(1, -1),
+                                                Eigen::MatrixXd::Identity(1, 1)),
+                 "box");
+  EXPECT_INVALID(models::Penalty::BoxMonitoring(Eigen::VectorXd::Zero(2), Eigen::VectorXd::Ones(2),
+                                                Eigen::MatrixXd::Identity(1, 1)),
+                 "M is 1x1; need 2x2");
+}
+
+TEST(BadInputLibrary, LogConcaveMleInputsAreChecked) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  EXPECT_INVALID(approx::FitLogConcaveMle({}), "at least 2 distinct sample values, got 0");
+  EXPECT_INVALID(approx::FitLogConcaveMle({2.0}), "at least 2 distinct sample values, got 1");
+  EXPECT_INVALID(approx::FitLogConcaveMle({2.0, 2.0, 2.0}), "at least 2 distinct sample values, got 1");
+  EXPECT_INVALID(approx::FitLogConcaveMle({1.0, nan, 2.0}), "sample 1 = nan is not finite");
+  EXPECT_INVALID(approx::FitLogConcaveMle({1.0, 2.0, -inf}), "sample 2 = -inf is not finite");
+  EXPECT_INVALID(approx::FitLogConcaveMle({-1.7e308, 0.0, 1.7e308}), "samples");  // range beyond double
+  approx::LogConcaveMleOptions o;
+  o.max_iterations = 0;
+  EXPECT_INVALID(approx::FitLogConcaveMle({1.0, 2.0}, o), "max_iterations = 0");
+  o = {};
+  o.tolerance = 0;
+  EXPECT_INVALID(approx::FitLogConcaveMle({1.0, 2.0}, o), "tolerance = 0");
+}
+
+TEST(BadInputLibrary, ObserverModelsAreCheckedByName) {
+  const Eigen::Vector2d m0(0, 0);
+  const Eigen::Matrix2d P0 = Eigen::Matrix2d::Identity();
+  EXPECT_INVALID(KalmanFilter(m0, -P0), "P0 is not positive definite");
+  EXPECT_INVALID(KalmanFilter(m0, Eigen::Matrix3d::Identity()), "P0 is 3×3");
+  EXPECT_INVALID(LcGaussianFilter(Eigen::Vector2d(0, std::numeric_limits<double>::quiet_NaN()), P0), "m0");
+  EXPECT_INVALID(GridObserver(m0, -P0), "P0 is not positive definite");
+  EXPECT_INVALID(models::LinearStateSpace::Make(Eigen::MatrixXd::Identity(2, 3), Eigen::MatrixXd::Zero(2, 0),
+                                                Eigen::MatrixXd::Identity(2, 2)),
+                 "A is 2×3");
+  EXPECT_INVALID(models::LinearStateSpace::Make(Eigen::MatrixXd::Identity(2, 2), Eigen::MatrixXd::Zero(2, 0),
+                                                -Eigen::MatrixXd::Identity(2, 2)),
+                 "process_noise");
+  EXPECT_INVALID(models::MemsAccelerometerDynamics(0, 1), "sampling period h = 0");
+  EXPECT_INVALID(models::MemsAccelerometerDynamics(0.01, -1), "noise intensity sigma^2 = -1");
+  EXPECT_INVALID(models::GaussianMeasurement(Eigen::Vector2d(1, 0), -1), "noise_variance = -1");
+  EXPECT_INVALID(models::ThresholdSensor(Eigen::Vector2d(1, 0), 0), "threshold = 0");
+  EXPECT_INVALID(models::UniformQuantizer(Eigen::Vector2d(1, 0), -0.1), "quantizer step = -0.1");
+  EXPECT_INVALID(models::GaussianMeasurement(Eigen::Vector2d(0, 0), 1), "c");
+  // A model of the wrong size for the filter.
+  const models::LinearStateSpace three = models::LinearStateSpace::Make(
+      Eigen::MatrixXd::Identity(3, 3), Eigen::MatrixXd::Zero(3, 0), Eigen::MatrixXd::Identity(3, 3));
+  EXPECT_INVALID(KalmanFilter(three, models::GaussianMeasurement(Eigen::Vector3d(1, 0, 0), 1), m0, P0), "");
+}
+
+TEST(BadInputLibrary, StudentDofAndDeltaAreCheckedByName) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const double dof : {0.0, -1.0, nan}) {
+    StudentRegressionOptions o;
+    o.dof = dof;
+    EXPECT_INVALID(StudentRegression(3, o), "dof = ");
+  }
+  StudentRegressionOptions o;
+  o.delta = 2;
+  EXPECT_INVALID(StudentRegression(3, o), "delta = 2; need 0 or 1");
+  o = {};
+  o.forgetting.factor = 1.5;
+  EXPECT_INVALID(StudentRegression(3, o), "forgetting = 1.5");
+  EXPECT_INVALID(StudentRegression(0), "number of parameters = 0");
+  EstimatorSettings s;
+  s.name = "student";
+  s.dof = 0.0;
+  EXPECT_INVALID(MakeRegressionEstimator(s, 3), "dof = 0");
+  s.dof = -2.0;
+  EXPECT_INVALID(MakeRegressionEstimator(s, 3), "dof = -2");
 }
 
 }  // namespace

@@ -10,9 +10,11 @@
 #include <gtest/gtest.h>
 
 #include "fuzz/csv_property.h"
+#include "fuzz/logcondens_property.h"
 #include "fuzz/prior_json_property.h"
 #include "fuzz/rls_property.h"
 #include "fuzz/student_property.h"
+#include "fuzz/smooth_model_property.h"
 
 namespace ident::testing {
 namespace {
@@ -48,6 +50,29 @@ TEST(FuzzCorpus, RlsPropertiesHoldOnEveryCommittedInput) {
 
 TEST(FuzzCorpus, StudentPropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("student_fuzzer", &fuzz::StudentProperty), 6);
+}
+
+TEST(FuzzCorpus, SmoothModelReaderPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("smooth_model_fuzzer", &fuzz::SmoothModelProperty), 14);
+}
+
+TEST(FuzzCorpus, LogConcaveMlePropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("logcondens_fuzzer", &fuzz::LogcondensProperty), 14);
+}
+
+// The replay is only as strong as its checks: a corpus input that breaks each property on purpose.
+TEST(FuzzCorpus, PropertiesFlagViolations) {
+  // An accepted model whose problem has an H of the wrong width must be flagged by the independent check.
+  MapSmootherProblem p;
+  p.F = {Eigen::MatrixXd::Identity(2, 2)};
+  p.H = {Eigen::MatrixXd::Ones(1, 2), Eigen::MatrixXd::Ones(1, 3)};
+  p.z = Eigen::MatrixXd::Zero(1, 2);
+  p.process = {models::Penalty::L1(2)};
+  p.measurement = {models::Penalty::L1(1)};
+  EXPECT_EQ(fuzz::SmoothModelProblemIsConsistent(p, 1, 1), "every H is finite nz x n");
+  p.H.pop_back();
+  EXPECT_EQ(fuzz::SmoothModelProblemIsConsistent(p, 1, 1), "");
+  EXPECT_EQ(fuzz::SmoothModelProblemIsConsistent(p, 2, 1), "every H is finite nz x n");
 }
 
 }  // namespace
