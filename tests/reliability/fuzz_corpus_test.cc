@@ -11,6 +11,7 @@
 
 #include "fuzz/csv_property.h"
 #include "fuzz/logcondens_property.h"
+#include "fuzz/observer_property.h"
 #include "fuzz/prior_json_property.h"
 #include "fuzz/rls_property.h"
 #include "fuzz/student_property.h"
@@ -50,6 +51,14 @@ TEST(FuzzCorpus, RlsPropertiesHoldOnEveryCommittedInput) {
 
 TEST(FuzzCorpus, StudentPropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("student_fuzzer", &fuzz::StudentProperty), 6);
+}
+
+TEST(FuzzCorpus, KalmanFilterPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("kalman_fuzzer", &fuzz::KalmanProperty), 10);
+}
+
+TEST(FuzzCorpus, LcGaussianFilterPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("lc_gaussian_fuzzer", &fuzz::LcGaussianProperty), 10);
 }
 
 TEST(FuzzCorpus, SmoothModelReaderPropertiesHoldOnEveryCommittedInput) {
