@@ -130,7 +130,8 @@ BasicKalmanFilter<N>::BasicKalmanFilter(const Eigen::Ref<const Eigen::VectorXd>&
   noise_cached_ = StateMatrix::Constant(n, n, std::numeric_limits<double>::quiet_NaN());  // never equal: first
   noise_sqrt_.resize(n, n);                                                                 // Predict factors P_N
   noise_tmp_.resize(n, n);
-  noise_ldlt_ = Eigen::LDLT<StateMatrix>(n);
+  // Sizes the LDLᵀ workspace and sets its status (LDLT(n) leaves the status uninitialised: UBSan).
+  noise_ldlt_.compute(StateMatrix::Identity(n, n));
   pre_.resize(2 * n, n);
   qr_ = Eigen::HouseholderQR<Eigen::Matrix<double, kTwoN, N>>(2 * n, n);
   pre1_.resize(n + 1, n + 1);
