@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include <Eigen/Cholesky>
@@ -60,6 +61,7 @@ GridObserver::GridObserver(const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0,
   }
   p_.assign(total_, 0.0);
   q_.assign(total_, 0.0);
+  p_saved_.assign(total_, 0.0);
   buf_.assign(padded_total_, 0.0);
   kernel_.assign(padded_total_, 0.0);
   const int max_np = *std::max_element(np_.begin(), np_.end());
@@ -68,14 +70,16 @@ GridObserver::GridObserver(const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0,
   mean_.resize(dim_);
   x_.resize(dim_);
   cov_.resize(dim_, dim_);
+  mean_saved_.resize(dim_);
+  cov_saved_.resize(dim_, dim_);
   const Eigen::MatrixXd Pinv = llt.solve(Eigen::MatrixXd::Identity(dim_, dim_));
   for (int idx = 0; idx < total_; ++idx) {
     NodeCoordinates(idx, x_);
     const Eigen::VectorXd d = x_ - m0;
     p_[idx] = std::exp(-0.5 * d.dot(Pinv * d));
   }
-  Normalise();
-  UpdateMoments();
+  IDENT_REQUIRE(Normalise() && UpdateMoments(),
+                "the prior N(m0, P0) cannot be represented on the grid in double precision (m0, P0 too large?)");
   for (int i = 0; i < dim_; ++i) {  // build the forward and inverse FFT plans now: steps allocate nothing
     fft_.fwd(line_out_.data(), line_in_.data(), np_[i]);
     fft_.inv(line_out_.data(), line_in_.data(), np_[i]);
@@ -113,15 +117,19 @@ StepReport GridObserver::Predict(const models::LinearStateSpace& model, const Ei
 
 StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                                      const LogDensity* log_noise) {
-  if (model.num_states() != dim_ || u.size() != model.num_inputs() || !u.allFinite()) {
+  if (model.A.rows() != dim_ || model.A.cols() != dim_ || model.B.rows() != dim_ ||
+      model.process_noise.rows() != dim_ || model.process_noise.cols() != dim_ || u.size() != model.num_inputs() ||
+      !u.allFinite() || !model.A.allFinite() || !model.B.allFinite() || !model.process_noise.allFinite()) {
     return {StepStatus::kRejectedInvalid};
   }
   // Small matrices live on the stack (at most 3 × 3): no heap allocation per step.
   Eigen::FullPivLU<SmallMatrix> lu(model.A);
   if (!lu.isInvertible()) return {StepStatus::kRejectedInvalid};
   const SmallMatrix Ainv = lu.inverse();
+  if (!Ainv.allFinite()) return {StepStatus::kRejectedInvalid};  // singular to double precision
   SmallVector shift(dim_);
   shift.noalias() = model.B * u;
+  Save();
   // Support box of the current density (nodes above support_level · max). No extra margin: a margin
   // would compound from step to step and the grid would keep coarsening.
   const double level = options_.support_level * *std::max_element(p_.begin(), p_.end());
@@ -155,6 +163,12 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
                                new_half(i) + options_.noise_sigmas * std::sqrt(std::max(0.0, model.process_noise(i, i))));
     origin_[i] = new_mid(i) - hw;
     spacing_[i] = 2 * hw / (n_[i] - 1);
+    // The box beyond double range (huge A, B u or noise): no representable grid.
+    if (!std::isfinite(origin_[i]) || !(spacing_[i] > 0) || !std::isfinite(spacing_[i]) ||
+        !std::isfinite(origin_[i] + (n_[i] - 1) * spacing_[i])) {
+      Restore();
+      return {StepStatus::kNumericalFailure};
+    }
   }
   // (1): f^d(x) = f_{k−1}(A⁻¹(x − B u)), multilinear interpolation in fractional old indices
   //      f = f0 + Σ_i j_i G(:, i).
@@ -179,7 +193,7 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
       for (int j = 0; j < dim_; ++j) f[j] += ji * G(j, i);
     }
     for (int j = 0; j < dim_ && inside; ++j) {
-      if (f[j] < 0 || f[j] > n_[j] - 1) { inside = false; break; }
+      if (!(f[j] >= 0 && f[j] <= n_[j] - 1)) { inside = false; break; }  // also NaN (no int cast of NaN)
       base[j] = std::min(static_cast<int>(f[j]), n_[j] - 2);
       w[j] = f[j] - base[j];
     }
@@ -201,9 +215,7 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
   p_.swap(q_);
   // (2): convolution with f_N.
   Convolve(model.process_noise, log_noise);
-  if (!Normalise()) return {StepStatus::kNumericalFailure};
-  UpdateMoments();
-  return {StepStatus::kUpdated};
+  return Commit();
 }
 
 void GridObserver::Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* log_noise) {
@@ -287,13 +299,42 @@ bool GridObserver::Normalise() {
   for (double v : p_) sum += v;
   double cell = 1;
   for (int i = 0; i < dim_; ++i) cell *= spacing_[i];
+  // A cell volume outside the normal doubles, or a sum that is 0, NaN or infinite: not normalisable.
+  if (!(cell >= std::numeric_limits<double>::min()) || !std::isfinite(cell)) return false;
   if (!(sum > 0) || !std::isfinite(sum)) return false;
   const double scale = 1.0 / (sum * cell);
-  for (double& v : p_) v *= scale;
-  return true;
+  if (!(scale > 0) || !std::isfinite(scale)) return false;
+  bool finite = true;
+  for (double& v : p_) {
+    v *= scale;
+    finite = finite && std::isfinite(v);
+  }
+  return finite;
 }
 
-void GridObserver::UpdateMoments() {
+void GridObserver::Save() {
+  std::copy(p_.begin(), p_.end(), p_saved_.begin());
+  origin_saved_ = origin_;
+  spacing_saved_ = spacing_;
+  mean_saved_ = mean_;
+  cov_saved_ = cov_;
+}
+
+void GridObserver::Restore() {
+  std::copy(p_saved_.begin(), p_saved_.end(), p_.begin());
+  origin_ = origin_saved_;
+  spacing_ = spacing_saved_;
+  mean_ = mean_saved_;
+  cov_ = cov_saved_;
+}
+
+StepReport GridObserver::Commit() {
+  if (Normalise() && UpdateMoments()) return {StepStatus::kUpdated};
+  Restore();
+  return {StepStatus::kNumericalFailure};
+}
+
+bool GridObserver::UpdateMoments() {
   double cell = 1;
   for (int i = 0; i < dim_; ++i) cell *= spacing_[i];
   mean_.setZero();
@@ -311,6 +352,7 @@ void GridObserver::UpdateMoments() {
     cov_.noalias() += p_[idx] * x_ * x_.transpose();
   }
   cov_ *= cell;
+  return mean_.allFinite() && cov_.allFinite();
 }
 
 StepReport GridObserver::Correct(const models::MeasurementFunction& measurement, double y) {
@@ -321,13 +363,13 @@ StepReport GridObserver::Correct(const models::MeasurementFunction& measurement,
     if (p_[idx] == 0) { q_[idx] = -std::numeric_limits<double>::infinity(); continue; }
     NodeCoordinates(idx, x_);
     q_[idx] = measurement.LogLikelihood(y, x_);
+    if (std::isnan(q_[idx])) return {StepStatus::kNumericalFailure};  // density unchanged
     max_log = std::max(max_log, q_[idx]);
   }
   if (!std::isfinite(max_log)) return {StepStatus::kNumericalFailure};  // density unchanged
+  Save();
   for (int idx = 0; idx < total_; ++idx) p_[idx] *= std::exp(q_[idx] - max_log);
-  if (!Normalise()) return {StepStatus::kNumericalFailure};
-  UpdateMoments();
-  return {StepStatus::kUpdated};
+  return Commit();
 }
 
 StepReport GridObserver::Update(const StateSpaceItem& item) {

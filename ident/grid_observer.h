@@ -65,6 +65,12 @@ class GridObserver {
   GridObserver(models::LinearStateSpace model, std::shared_ptr<const models::MeasurementFunction> measurement,
                const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0, const GridObserverOptions& options = {});
 
+  // Predict and Correct are each the whole step or nothing: kRejectedInvalid for a model or input
+  // of the wrong size, non-finite entries, a singular A, or a reading that is not a possible output;
+  // kNumericalFailure when the result would not be a finite, normalisable density with finite moments
+  // (e.g. a grid beyond double range, a NaN likelihood, or a reading whose likelihood vanishes on
+  // every node). In both cases the density, the grid and the moments are left bit-for-bit unchanged.
+  //
   // Eqs. (1)-(2) with Gaussian process noise N(0, model.process_noise). A must be invertible.
   StepReport Predict(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u);
   // Eqs. (1)-(2) with any log-concave noise density (log f_N, need not be normalised); the box is
@@ -73,6 +79,7 @@ class GridObserver {
                      const LogDensity& log_noise);
   // Eq. (3). kNumericalFailure (density unchanged) if f_M(y, ·) vanishes on every grid node with mass.
   StepReport Correct(const models::MeasurementFunction& measurement, double y);
+  // Predict, then Correct if the prediction was taken (a failed Correct keeps the prediction).
   StepReport Update(const StateSpaceItem& item);
 
   const Eigen::VectorXd& mean() const { return mean_; }
@@ -91,14 +98,21 @@ class GridObserver {
   void Interpolate(const Eigen::MatrixXd& Ainv, const Eigen::VectorXd& shift);
   void Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* log_noise);
   bool Normalise();
-  void UpdateMoments();
+  bool UpdateMoments();  // false if a moment is not finite
+  // Completes a step: normalise and update the moments, or restore the saved state (kNumericalFailure).
+  StepReport Commit();
+  void Save();
+  void Restore();
   void NodeCoordinates(int index, Eigen::VectorXd& x) const;
 
   GridObserverOptions options_;
   int dim_ = 0, total_ = 0, padded_total_ = 0;
   std::array<int, 3> n_{1, 1, 1}, np_{1, 1, 1};
   std::array<double, 3> origin_{}, spacing_{1, 1, 1};
-  std::vector<double> p_, q_;
+  std::vector<double> p_, q_, p_saved_;
+  std::array<double, 3> origin_saved_{}, spacing_saved_{};
+  Eigen::VectorXd mean_saved_;
+  Eigen::MatrixXd cov_saved_;
   std::vector<std::complex<double>> buf_, line_in_, line_out_, kernel_;
   Eigen::FFT<double> fft_;
   Eigen::VectorXd mean_, x_;

@@ -34,13 +34,18 @@ TiltedMoments NarrowStandardMoments(double a, double b) {
   return {std::log(z) + LogPhi(a), mean, var, true};
 }
 
-// Standard normal restricted to [a, b] (a < b, either may be infinite).
-TiltedMoments StandardTruncatedMoments(double a, double b) {
-  if (b <= 0) {  // reflect the lower tail onto the upper one
-    TiltedMoments t = StandardTruncatedMoments(-b, -a);
-    t.mean = -t.mean;
-    return t;
+// The result if it is a valid set of moments (finite log Z and mean, 0 ≤ variance < ∞), else {}
+// (ok = false): Z underflowed or rounding broke a moment.
+TiltedMoments Checked(const TiltedMoments& t) {
+  if (!t.ok || !std::isfinite(t.log_normalizer) || !std::isfinite(t.mean) || !(t.variance >= 0) ||
+      !std::isfinite(t.variance)) {
+    return {};
   }
+  return t;
+}
+
+// Standard normal restricted to [a, b] with b > 0 and a < b (a may be −∞, b may be +∞).
+TiltedMoments UpperStandardTruncatedMoments(double a, double b) {
   double log_z;
   if (a >= 10 && (b - a) * a > 40) {
     // Far upper tail, effectively a half-line (the mass beyond b is below e^(−40) of Z): moments from the
@@ -91,14 +96,24 @@ double LogNormalTail(double x) {
   return LogPhi(x) - std::log(f);
 }
 
+// No recursion: b ≤ 0 is reflected once onto (−b, −a), whose upper bound −a > −b ≥ 0 (the fuzz
+// finding: reflecting a = b = 0 onto itself recursed for ever).
+TiltedMoments StandardTruncatedMoments(double a, double b) {
+  if (!(a < b)) return {};  // also NaN
+  if (b > 0) return Checked(UpperStandardTruncatedMoments(a, b));
+  TiltedMoments t = Checked(UpperStandardTruncatedMoments(-b, -a));  // the lower tail, mirrored
+  t.mean = -t.mean;
+  return t;
+}
+
 TiltedMoments TruncatedNormalMoments(double mean, double variance, double lo, double hi) {
   IDENT_REQUIRE(variance > 0 && std::isfinite(variance) && std::isfinite(mean),
                 "prior mean = {}, variance = {}; need finite mean and variance > 0", mean, variance);
-  IDENT_REQUIRE(lo < hi, "interval [{}, {}] is empty", lo, hi);
   const double sd = std::sqrt(variance);
-  TiltedMoments t = StandardTruncatedMoments((lo - mean) / sd, (hi - mean) / sd);
+  // An empty or NaN interval gives a < b false after standardising, hence ok = false (no mass).
+  const TiltedMoments t = StandardTruncatedMoments((lo - mean) / sd, (hi - mean) / sd);
   if (!t.ok) return {};
-  return {t.log_normalizer, mean + sd * t.mean, variance * t.variance, true};
+  return Checked({t.log_normalizer, mean + sd * t.mean, variance * t.variance, true});
 }
 
 // ---- ProjectedMeasurement -------------------------------------------------------------------------

@@ -89,7 +89,14 @@ class ProjectedMeasurement : public MeasurementFunction {
 };
 
 // N(s; m, v) truncated to [lo, hi] (lo may be −∞, hi may be +∞): closed form, stable in both tails.
+// Throws InvalidArgument unless mean is finite and 0 < variance < ∞. An interval without mass — empty
+// or a single point (lo ≥ hi), a NaN bound, or one so narrow or so far out that Z underflows (also
+// after standardising: (lo − m)/√v = (hi − m)/√v) — gives ok = false, never NaN moments with ok = true.
 TiltedMoments TruncatedNormalMoments(double mean, double variance, double lo, double hi);
+// The standard normal N(0, 1) truncated to [a, b]. Total: ok = false (and NaN moments) if a ≥ b
+// (e.g. a = b = 0, a = b = ±∞), a or b is NaN, or Z underflows; otherwise finite log Z, a mean in
+// [a, b] and a variance ≥ 0.
+TiltedMoments StandardTruncatedMoments(double a, double b);
 // log P(Z > x) for standard normal Z, accurate far into the upper tail.
 double LogNormalTail(double x);
 

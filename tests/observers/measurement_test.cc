@@ -3,10 +3,14 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <string>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
 #include "ident/common/error.h"
+#include "ident/common/step_report.h"
+#include "ident/lc_gaussian_filter.h"
 #include "models/measurement.h"
 
 namespace ident::models {
@@ -105,6 +109,91 @@ TEST(TiltedMoments, ReadingFarInTheTailStaysFiniteInLogSpaceAndBadInputThrows) {
   EXPECT_THROW(sensor.Tilt(2.0, 0.0, 1.0), ident::InvalidArgument);
   EXPECT_THROW(sensor.Tilt(0.0, 0.0, -1.0), ident::InvalidArgument);
   EXPECT_THROW(ThresholdSensor(kC, 0.0), ident::InvalidArgument);
+}
+
+// Degenerate intervals (the lc_gaussian_fuzzer finding: a = b = 0 recursed for ever). An interval
+// without mass has no moments: ok = false and NaN fields, never NaN moments with ok = true.
+void ExpectNoMass(const TiltedMoments& t, const std::string& what) {
+  EXPECT_FALSE(t.ok) << what;
+  EXPECT_TRUE(std::isnan(t.log_normalizer) && std::isnan(t.mean) && std::isnan(t.variance)) << what;
+}
+
+TEST(TruncatedMoments, EmptyPointAndNanIntervalsHaveNoMass) {
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  ExpectNoMass(StandardTruncatedMoments(0.0, 0.0), "a = b = 0");
+  ExpectNoMass(StandardTruncatedMoments(-0.0, 0.0), "a = -0, b = +0");
+  ExpectNoMass(StandardTruncatedMoments(0.0, -0.0), "a = +0, b = -0");
+  ExpectNoMass(StandardTruncatedMoments(1.5, 1.5), "a = b = 1.5");
+  ExpectNoMass(StandardTruncatedMoments(-2.0, -2.0), "a = b = -2");
+  ExpectNoMass(StandardTruncatedMoments(0.5, -0.5), "a > b around 0 (reflects onto itself)");
+  ExpectNoMass(StandardTruncatedMoments(3.0, 1.0), "a > b > 0");
+  ExpectNoMass(StandardTruncatedMoments(-1.0, -3.0), "0 > a > b");
+  ExpectNoMass(StandardTruncatedMoments(nan, 1.0), "a NaN");
+  ExpectNoMass(StandardTruncatedMoments(-1.0, nan), "b NaN");
+  ExpectNoMass(StandardTruncatedMoments(nan, nan), "both NaN");
+  ExpectNoMass(StandardTruncatedMoments(inf, inf), "a = b = +inf");
+  ExpectNoMass(StandardTruncatedMoments(-inf, -inf), "a = b = -inf");
+  ExpectNoMass(StandardTruncatedMoments(inf, -inf), "a = +inf, b = -inf");
+  // Z = Φ(5e-324) − Φ(0) ≈ 2e-324 underflows: no mass in double precision.
+  ExpectNoMass(StandardTruncatedMoments(0.0, 5e-324), "Z underflows");
+}
+
+TEST(TruncatedMoments, InfiniteBoundsGiveTheClosedForms) {
+  const double inf = std::numeric_limits<double>::infinity();
+  // The whole line: N(0, 1) itself.
+  const TiltedMoments all = StandardTruncatedMoments(-inf, inf);
+  ASSERT_TRUE(all.ok);
+  EXPECT_NEAR(all.log_normalizer, 0.0, 1e-15);
+  EXPECT_NEAR(all.mean, 0.0, 1e-15);
+  EXPECT_NEAR(all.variance, 1.0, 1e-15);
+  // Half-normal: Z = 1/2, mean ±√(2/π), variance 1 − 2/π.
+  const double half_mean = std::sqrt(2 / std::numbers::pi), half_var = 1 - 2 / std::numbers::pi;
+  for (const auto& [a, b, sign] : {std::tuple{0.0, inf, 1.0}, std::tuple{-inf, 0.0, -1.0}, std::tuple{-inf, -0.0, -1.0}}) {
+    const TiltedMoments t = StandardTruncatedMoments(a, b);
+    ASSERT_TRUE(t.ok) << a << " " << b;
+    EXPECT_NEAR(t.log_normalizer, std::log(0.5), 1e-14) << a << " " << b;
+    EXPECT_NEAR(t.mean, sign * half_mean, 1e-14) << a << " " << b;
+    EXPECT_NEAR(t.variance, half_var, 1e-14) << a << " " << b;
+  }
+  // A lower tail (−∞, −40]: the mirror image of the Mills-ratio asymptotics above.
+  const TiltedMoments low = StandardTruncatedMoments(-inf, -40.0);
+  ASSERT_TRUE(low.ok);
+  EXPECT_NEAR(low.mean, -(40 + 1 / 40.0 - 2 / 64000.0), 20 / std::pow(40.0, 5));
+}
+
+TEST(TruncatedMoments, IntervalThatCollapsesWhenStandardisedHasNoMassAndTheFilterRejectsTheStep) {
+  // N(0, 1e300) on [0, 1e-200]: standardised (0/1e150, 1e-200/1e150) = (0, 0), the finding's a = b = 0.
+  ExpectNoMass(TruncatedNormalMoments(0.0, 1e300, 0.0, 1e-200), "collapsed to a = b = 0");
+  ExpectNoMass(TruncatedNormalMoments(0.0, 1.0, 2.0, 2.0), "lo = hi");
+  ExpectNoMass(TruncatedNormalMoments(0.0, 1.0, 2.0, 1.0), "lo > hi");
+  ExpectNoMass(TruncatedNormalMoments(0.0, 1.0, std::numeric_limits<double>::quiet_NaN(), 1.0), "lo NaN");
+  EXPECT_THROW(TruncatedNormalMoments(0.0, 0.0, 0.0, 1.0), ident::InvalidArgument);  // the prior is checked
+  // A threshold sensor with T = 1e-200 reading 0 under the prior N(0, 1e300): the same collapse.
+  ThresholdSensor sensor(kC, 1e-200);
+  ExpectNoMass(sensor.Tilt(0.0, 0.0, 1e300), "threshold sensor");
+  // A quantiser cell that rounds to a point: y = 1e300, Δ = 1 gives [y − ½, y + ½] = [y, y].
+  UniformQuantizer q(kC, 1.0);
+  ASSERT_TRUE(q.IsValidOutput(1e300));
+  ExpectNoMass(q.Tilt(1e300, 1e300, 1.0), "quantiser cell of zero width");
+}
+
+TEST(TruncatedMoments, FilterReportsAReadingWithoutMassAsANumericalFailureAndKeepsItsState) {
+  // The route of the fuzz finding: LcGaussianFilter::Correct → ThresholdSensor::Tilt →
+  // StandardTruncatedMoments(0, 0). Now the step is refused through the status, state bit-identical.
+  LcGaussianFilter filter(Eigen::VectorXd::Constant(1, 0.0), Eigen::MatrixXd::Constant(1, 1, 1e300));
+  const Eigen::VectorXd m0 = filter.mean();
+  const Eigen::MatrixXd p0 = filter.covariance();
+  const double ll0 = filter.log_likelihood();
+  ThresholdSensor sensor(kC, 1e-200);
+  const StepReport r = filter.Correct(sensor, 0.0);
+  EXPECT_EQ(r.status, StepStatus::kNumericalFailure);
+  EXPECT_TRUE(filter.mean() == m0 && filter.covariance() == p0 && filter.log_likelihood() == ll0);
+  // A reading with mass is then taken as usual: N(0, 1e300) given |s| < 1 has mean 0 (by symmetry).
+  // (Its variance 1/3 is lost in P − (σ² − v_s) = 1e300 − (1e300 − 1/3): not asserted here.)
+  ThresholdSensor unit(kC, 1.0);
+  ASSERT_TRUE(filter.Correct(unit, 0.0).updated());
+  EXPECT_NEAR(filter.mean()(0), 0.0, 1e-12);
+  EXPECT_GE(filter.covariance()(0, 0), 0.0);
 }
 
 TEST(OptimalQuantizer, PartitionOfUnityAndStrongLogConcavity8Ln2) {

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "fuzz/csv_property.h"
+#include "fuzz/grid_observer_property.h"
 #include "fuzz/logcondens_property.h"
 #include "fuzz/observer_property.h"
 #include "fuzz/prior_json_property.h"
@@ -58,7 +59,21 @@ TEST(FuzzCorpus, KalmanFilterPropertiesHoldOnEveryCommittedInput) {
 }
 
 TEST(FuzzCorpus, LcGaussianFilterPropertiesHoldOnEveryCommittedInput) {
-  EXPECT_GE(ReplayCorpus("lc_gaussian_fuzzer", &fuzz::LcGaussianProperty), 10);
+  EXPECT_GE(ReplayCorpus("lc_gaussian_fuzzer", &fuzz::LcGaussianProperty), 11);
+}
+
+// The first lc_gaussian_fuzzer finding (unbounded recursion in StandardTruncatedMoments on an interval
+// that standardises to a = b = 0): a stack overflow before the fix, now the step is refused.
+TEST(FuzzCorpus, LcGaussianStackOverflowReproducerHolds) {
+  const std::string path = "fuzz/corpus/lc_gaussian_fuzzer/crash-stack-overflow-truncated-moments-empty-interval";
+  std::ifstream in(path, std::ios::binary);
+  ASSERT_TRUE(in) << path;
+  const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(fuzz::LcGaussianProperty(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()), "");
+}
+
+TEST(FuzzCorpus, GridObserverPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("grid_observer_fuzzer", &fuzz::GridObserverProperty), 40);
 }
 
 TEST(FuzzCorpus, SmoothModelReaderPropertiesHoldOnEveryCommittedInput) {
