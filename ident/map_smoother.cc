@@ -363,7 +363,7 @@ class Solver {
     } else {
       const double* zt = p_.z.data() + static_cast<Eigen::Index>(t) * nz_;
       for (int i = 0; i < nz_; ++i) out[i] = include_constant ? zt[i] : 0.0;
-      AddMatVec(term.H, nz_, n, xt, out, -1.0);
+      AddMatVec<0, kN>(term.H, nz_, n, xt, out, -1.0);
     }
   }
 
@@ -375,7 +375,7 @@ class Solver {
       for (int i = 0; i < n; ++i) ot[i] += sign * g[i];
       if (term.F) AddMatTVec<kN, kN>(term.F, n, n, g, ot - n, -sign);
     } else {
-      AddMatTVec(term.H, nz_, n, g, ot, -sign);
+      AddMatTVec<0, kN>(term.H, nz_, n, g, ot, -sign);
     }
   }
 
@@ -457,7 +457,7 @@ class Solver {
         AddMatVec(prep.Kinv.data(), k, k, in, out, 1.0);
     } else if (prep.plq->diagonal_M) {
       const double* kd = kd_.data() + term.offset;
-      for (int i = 0; i < k; ++i) out[i] = in[i] / kd[i];
+      for (int i = 0; i < k; ++i) out[i] = in[i] * kd[i];  // kd = 1 / (M_ii + D_ii) here
     } else {
       FactorK(term);
       Eigen::Map<Eigen::VectorXd>(out, k) = prep.llt.solve(Eigen::Map<const Eigen::VectorXd>(in, k));
@@ -527,13 +527,14 @@ class Solver {
       const int m = prep.m, k = prep.k;
       double* kd = kd_.data() + term.offset;
       if (f.diagonal_M) {
-        for (int i = 0; i < k; ++i) kd[i] = BarrierCurvature(term.offset + i) + f.M(i, i);
+        // diagonal M: kd holds the reciprocal diagonal of K = M + D (ApplyKinv multiplies)
+        for (int i = 0; i < k; ++i) kd[i] = 1.0 / (BarrierCurvature(term.offset + i) + f.M(i, i));
         for (int i = 0; i < m * m; ++i) W[i] = 0;
         if (prep.identity_B) {
-          for (int i = 0; i < k; ++i) W[i + i * m] = 1.0 / kd[i];
+          for (int i = 0; i < k; ++i) W[i + i * m] = kd[i];
         } else {
           for (int i = 0; i < k; ++i) {
-            const double inv = 1.0 / kd[i];
+            const double inv = kd[i];
             for (int b = 0; b < m; ++b)
               for (int a = 0; a < m; ++a) W[a + b * m] += f.B(i, a) * f.B(i, b) * inv;
           }
@@ -748,7 +749,8 @@ class Solver {
   int num_constraints_ = 0;
   double matrix_scale_ = 1;
   // Per PLQ coordinate: u, slacks and multipliers of lo <= u <= hi, residual R3, R3 - e of the current
-  // direction, Newton direction, affine cross terms ds.*dq, and K's diagonal.
+  // direction, Newton direction, affine cross terms ds.*dq, and K's diagonal (its reciprocal for
+  // diagonal M).
   std::vector<char> has_lo_, has_hi_;  // finite bounds per coordinate
   std::vector<int> bounded_;           // coordinates with at least one finite bound
   // All of these live in arena_ (placement-constructed maps).
