@@ -178,6 +178,11 @@ IDENT_HOT void AddMatTVec(const double* A, int r_runtime, int c_runtime, const d
 // per-step loops unroll); kN = 0 is the run-time-size fallback. All work arrays are allocated by the
 // constructor; an iteration allocates nothing (except the dense K of non-diagonal box monitoring
 // functions, which Eigen's LLT factors in place).
+// Terms without finite bounds ("constant": quadratic penalties) carry no multipliers: their R3 = B r - b - M u
+// is linear and stays 0 from a start with R3 = 0, so u = K^-1 (B r - b) is kept implicitly and only the
+// terms with bounds (active_) have coordinate arrays and enter the Newton right-hand sides. The work arrays
+// share one WorkArena block (huge pages for large T: first touches of small pages cost more than the
+// arithmetic on virtual machines).
 template <int kN>
 class Solver {
  public:
