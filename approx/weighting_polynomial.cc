@@ -1,5 +1,7 @@
 #include "approx/weighting_polynomial.h"
 
+#include "approx/weight_fast_path.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -8,13 +10,11 @@
 namespace ident::approx {
 namespace {
 
-// P(β) by Horner with the (scaled) coefficients.
-double EvalP(const std::array<double, 4>& mu, double beta) {
-  return ((mu[3] * beta + mu[2]) * beta + mu[1]) * beta + mu[0];
-}
-double EvalDP(const std::array<double, 4>& mu, double beta) {
-  return (3 * mu[3] * beta + 2 * mu[2]) * beta + mu[1];
-}
+using internal::Coefficients;
+using internal::EvalDP;
+using internal::EvalP;
+using internal::HouseholderRoot;
+using internal::SmallRootGuess;
 
 // Root of P in (a, b) with P(a) > 0 > P(b): Newton from the midpoint, replaced by bisection whenever
 // a step leaves the current bracket; stop when |Δβ| ≤ 4e−16·β [spec §5].
@@ -36,66 +36,9 @@ double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double
   return x;
 }
 
-// Root of P in (a, b) with P(a) > 0 > P(b) and P monotone on [a, b], for SolveWeight. Since P is a
-// cubic, its Taylor series at x is exact: P(x+Δ) = f + f'Δ + f''Δ²/2 + f'''Δ³/6 with f''' = 6μ3. Each
-// iterate takes Householder's step of order 3 (quartic convergence)
-//     Δ = −f(6f'² − 3ff'') / (6f'³ − 6ff'f'' + f²f'''),
-// replaced by bisection whenever it leaves the current bracket (which shrinks at every iterate,
-// keeping P(a) > 0 > P(b)); never an unbracketed step. The error after a step is ≈ K·Δ⁴ with
-// K = |c2|·|c2² − 2c3|, c2 = f''/(2f'), c3 = f'''/(6f'), i.e. K = |f''|·|3f''² − 4f'f'''|/(24|f'|³):
-// stop as soon as K·Δ⁴ ≤ 1e−16·β, or the step itself is ≤ 1e−16·β, or the bracket is 4e−16·β wide.
-// `x` (if inside the bracket) is the first iterate, else the midpoint. Forced inline: it is the hot path.
-inline __attribute__((always_inline)) double HouseholderRoot(const std::array<double, 4>& mu, double a, double b,
-                                                             double x, int& iterations) {
-  if (!(x > a && x < b)) x = 0.5 * (a + b);
-  const double d3f = 6 * mu[3];
-  for (int iter = 0; iter < 400; ++iter) {
-    ++iterations;
-    const double f = EvalP(mu, x);
-    if (f == 0) return x;
-    if (f > 0) a = x; else b = x;  // keep P(a) > 0 > P(b)
-    const double df = EvalDP(mu, x);
-    const double d2f = d3f * x + 2 * mu[2];
-    const double ff = f * d2f;
-    const double next = x - f * (6 * df * df - 3 * ff) / ((6 * df * df - 6 * ff) * df + f * f * d3f);
-    if (std::abs(next - x) <= 1e-16 * x) return next;  // at the root to rounding (x may now be a bracket end)
-    if (!(next > a && next < b)) {  // the step left the bracket (or NaN): bisect
-      x = 0.5 * (a + b);
-      if (b - a <= 4e-16 * b) break;
-      continue;
-    }
-    const double step = next - x, step2 = step * step;
-    x = next;
-    if (std::abs(d2f * (3 * d2f * d2f - 4 * df * d3f)) * (step2 * step2) <= 24e-16 * std::abs(df * df * df) * x ||
-        b - a <= 4e-16 * b)
-      break;
-  }
-  return x;
-}
-
-// μ0..μ3 of spec §4 (unscaled); inline for the hot path.
-inline std::array<double, 4> Coefficients(const WeightingProblem& p) {
-  const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho, xi = p.xi, xz = p.xi_z;
-  return {k + 1,                                                                       // μ0
-          -(k * nu + d - 1) + (nu - d - rho + 1 - k) * xi - (nu - d - rho + 2 + k) * xz,  // μ1
-          ((k - 1) * nu + 2 * d + rho - 3) * xi + ((k + 1) * nu - rho) * xz + k * xi * xz,  // μ2
-          (2 - k * nu - d) * xi * xz};                                                 // μ3
-}
-
 // First iterate of the reference: the large-ν limit νβ ≈ b0 = (k+1)/(k + ê²/D_y), ê²/D_y = ξ_z − ξ
 // [spec §7a].
 double AsymptoticGuess(const WeightingProblem& p) { return (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi))); }
-
-// First iterate of SolveWeight: Householder's order-3 step (see HouseholderRoot) from β = 0, where the
-// derivatives are the coefficients themselves (f = μ0, f' = μ1, f'' = 2μ2, f''' = 6μ3): no Horner, one
-// division. The root is small (β ~ (k+1)/(ν(k + ê²/D_y)) [spec §7a]) and the terms μ_iβ^i fall off like
-// 1/ν (ordinary samples) or 1/|ξ| (outliers), so this start is already accurate to O(1/ν³) relative,
-// with the exact ρ, δ, k dependence (unlike the large-ν asymptote) — one more step reaches 1e−16.
-double SmallRootGuess(const std::array<double, 4>& mu) {
-  const double f = mu[0], df = mu[1], d2f = 2 * mu[2], d3f = 6 * mu[3];
-  const double ff = f * d2f;
-  return -f * (6 * df * df - 3 * ff) / ((6 * df * df - 6 * ff) * df + f * f * d3f);
-}
 
 }  // namespace
 
@@ -105,9 +48,9 @@ double NuHard(int rho, double k, int delta) {
 
 double NuRobust(int rho, double k, int delta) { return rho + k + delta - 1; }
 
-double Beta0(const WeightingProblem& p) { return 1 / (p.nu - (p.nu - 1) * std::min(0.0, p.xi)); }
+double Beta0(const WeightingProblem& p) { return Beta0Inline(p); }
 
-double BetaHi(const WeightingProblem& p) { return (p.k + 1) / (p.k * p.nu + p.delta - 2); }
+double BetaHi(const WeightingProblem& p) { return BetaHiInline(p); }
 
 std::array<double, 4> WeightingCoefficients(const WeightingProblem& p) { return Coefficients(p); }
 
@@ -207,6 +150,8 @@ WeightSolution SolveWeightReference(const WeightingProblem& p) {
 
 WeightSolution SolveWeight(const WeightingProblem& p) {
   WeightSolution s;
+  if (internal::SolveWeightCommon(p, WeightConstants(p), s)) return s;  // the usual case (weight_fast_path.h)
+  s = {};
   s.beta0 = Beta0(p);
   s.beta_hi = BetaHi(p);
   if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]

@@ -21,9 +21,11 @@
 // largest log H0. SolveWeight() returns the same maximin root faster — it is the estimators' hot path
 // (about 2× faster; 1.05–2.1 instead of 3.6–9.6 iterations on the estimators' inputs for ρ = 2…32,
 // bench/weight_benchmark.cc):
-//   * a sign test on P' and P'' at the bracket ends (no square root) proves in the usual case that P
-//     decreases on [β0, β_hi], so the root is unique and log H0 is never evaluated; otherwise the
-//     pieces of spec §5 are formed and compared exactly as in the reference;
+//   * a bound on P' over [0, β_hi] or, failing that, a sign test on P' and P'' at the bracket ends (no
+//     square root) proves in the usual case that P decreases on [β0, β_hi], so the root is unique and
+//     log H0 is never evaluated; otherwise the pieces of spec §5 are formed and compared exactly as in
+//     the reference. That usual case is approx/weight_fast_path.h, inline for the estimators
+//     (SolveWeightInline: the same bits as SolveWeight);
 //   * on each piece: Householder's step of order 3 (quartic convergence; P is a cubic, so its Taylor
 //     series is exact), started at that same step taken from β = 0 (the root is O(1/ν): accurate to
 //     O(1/ν³) with no Horner and one division) or, if that lies outside, at the large-ν asymptote of

@@ -54,6 +54,8 @@ class ExtendedInformation {
     const int n = V_.size();
     h_.resize(n);
     g_.resize(n);
+    inv_d_.resize(n);
+    q_sum_.resize(n);
     theta_.resize(n - 1);
     theta_valid_ = false;
   }
@@ -96,18 +98,28 @@ class ExtendedInformation {
   Innovation Prepare(double y, const Eigen::MatrixBase<Derived>& z) {
     h_(0) = y;
     h_.tail(h_.size() - 1) = z;
-    V_.SolveTransposed(h_, g_);
     if constexpr (!WithXi) {
+      V_.SolveTransposed(h_, g_);
       constexpr double nan = std::numeric_limits<double>::quiet_NaN();
       return {nan, nan, g_(0)};
     }
+    // r_i = 1/d_i need not wait for g; the running sums Q_j = Σ_{i≥j} g_i² r_i give ξ_z = 1 − Q_1,
+    // ξ = ξ_z − g_0² r_0, and are kept with r for PlanApply<true>() (LdFactor::PlanUpdateFromSums).
     const auto& d = V_.d();
+    const Eigen::Index n = g_.size();
+    for (Eigen::Index i = 0; i < n; ++i) inv_d_(i) = 1 / d(i);
+    V_.SolveTransposed(h_, g_);
     double zeta = 0;
-    for (Eigen::Index i = 1; i < g_.size(); ++i) zeta += g_(i) * g_(i) / d(i);
+    for (Eigen::Index i = n - 1; i >= 1; --i) {
+      zeta += g_(i) * g_(i) * inv_d_(i);
+      q_sum_(i) = zeta;
+    }
+    const double e2 = g_(0) * g_(0) * inv_d_(0);
+    q_sum_(0) = zeta + e2;
     Innovation in;
     in.prediction_error = g_(0);
     in.xi_z = 1 - zeta;
-    in.xi = in.xi_z - g_(0) * g_(0) / d(0);
+    in.xi = in.xi_z - e2;
     return in;
   }
 
@@ -119,7 +131,15 @@ class ExtendedInformation {
   // Step 5 in two phases (see LdFactor::PlanUpdate): the plan gives the new d (and what bounds the
   // new L) in O(ρ) from the g of Prepare(), without changing anything, so that a guard can decide
   // before the state is touched (ident/step_guard.h); the commit applies it.
-  typename LdFactor<Dim>::Plan PlanApply(double beta) noexcept { return V_.PlanUpdate(1 - beta, beta, g_); }
+  // WithXi = true: after Prepare<true>(), from the reciprocals and sums it kept (same plan, fewer
+  // divisions after β is known; LdFactor::PlanUpdateFromSums).
+  template <bool WithXi = false>
+  typename LdFactor<Dim>::Plan PlanApply(double beta) noexcept {
+    if constexpr (WithXi)
+      return V_.PlanUpdateFromSums(1 - beta, beta, g_, inv_d_, q_sum_);
+    else
+      return V_.PlanUpdate(1 - beta, beta, g_);
+  }
   // `h_bound` ≥ max_i |h_i| (e.g. the 2-norm of h), for the factor's bound on max|L|.
   void CommitApply(double nu_new, double h_bound) noexcept {
     g_ = h_;
@@ -193,6 +213,7 @@ class ExtendedInformation {
   Vector h_, g_;
   mutable ParamVector theta_;
   mutable bool theta_valid_ = false;
+  Vector inv_d_, q_sum_;  // Prepare<true>: 1/d_i and Σ_{j≥i} g_j²/d_j, for PlanApply<true>
 };
 
 }  // namespace ident

@@ -16,6 +16,8 @@
 //   CommitUpdate(a)       (from SolveTransposed): the plan computes the new d and the multipliers
 //                         b_j in O(n) without touching the factor (so a caller can check the result
 //                         first, see ident/step_guard.h); the commit applies it, ~2n^2 flops.
+//   PlanUpdateFromSums    the same plan from 1/d_j and Σ_{i≥j} g_i²/d_i formed beforehand (one division
+//                         per j once c is known; the Kárný–Hangos estimators, whose c comes last)
 //   OffDiagonalBound()    an upper bound on max |L_ij| (i != j): exact after Factorize/SetIdentity/
 //                         RankOneUpdate (recomputed lazily, O(n^2)), grown by CommitUpdate in O(1)
 //   SolveTransposed(h, g) solves L' g = h (back substitution, row-oriented), ~n^2/2 flops
@@ -124,6 +126,42 @@ class LdFactor {
   template <class Derived>
   Plan PlanUpdate(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
     Plan p = PlanPrefixSum(s, c, g);
+    if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) p = PlanChained(s, c, g);
+    plan_ = p;
+    return p;
+  }
+
+  // The same plan when the caller already has, from the back substitution g = L'^{-1} a, the
+  // reciprocals r_j = 1/d_j and the running sums Q_j = Σ_{i≥j} g_i² r_i (ExtendedInformation::Prepare
+  // forms them for ξ, ξ_z [spec §6]). In terms of W_j = s + c Q_j (W_n = s; W_j = cs·u_j of the
+  // prefix-sum form above) the sweep is
+  //   dn_j = d_j W_j · (s/W_{j+1}),   b_j = c g_j r_j / W_j,
+  // so once c is known only one FMA and one division per j remain, none of them chained (the
+  // Kárný–Hangos weight c = β(t) is known only after ξ, ξ_z are: this keeps the divisions 1/d_j and
+  // the running sum off the path from β to the update). Falls back to the c-form if that overflows.
+  template <class DerivedG, class DerivedR, class DerivedQ>
+  Plan PlanUpdateFromSums(double s, double c, const Eigen::MatrixBase<DerivedG>& g,
+                          const Eigen::MatrixBase<DerivedR>& inv_d, const Eigen::MatrixBase<DerivedQ>& q_sum) noexcept {
+    const Eigen::Index n = d_.size();
+    Plan p;
+    p.min_d = std::numeric_limits<double>::infinity();
+    sweep_end_ = 0;
+    double ratio_next = 1;  // s/W_{j+1} (= 1 for j = n−1)
+    for (Eigen::Index j = n - 1; j >= 0; --j) {
+      const double w = s + c * q_sum(j);
+      const double rw = 1 / w;
+      const double gj = g(j);
+      const double dn = d_(j) * w * ratio_next;
+      const double b = c * gj * inv_d(j) * rw;
+      ratio_next = s * rw;
+      d_next_(j) = dn;
+      b_(j) = b;
+      p.min_d = std::min(p.min_d, dn);
+      p.max_d = std::max(p.max_d, dn);
+      p.d_sum += dn;
+      p.max_b = std::max(p.max_b, std::abs(b));
+      p.g_abs_sum += std::abs(gj);
+    }
     if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) p = PlanChained(s, c, g);
     plan_ = p;
     return p;

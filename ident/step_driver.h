@@ -101,7 +101,7 @@ class StepDriver {
       o.report.status = StepStatus::kNumericalFailure;
       return o;
     }
-    const auto plan = stats.PlanApply(beta);
+    const auto plan = stats.template PlanApply<WithXi>(beta);
     switch (guard_.Judge(stats, plan, nu, x.h_norm, d_min)) {
       case StepGuard<Dim>::Verdict::kHealthy:
         stats.CommitApply(nu, x.h_norm);

@@ -11,10 +11,14 @@
 //            (multivariate t with ν−δ−ρ+2 d.o.f.) [spec §2]; β(t), ν(t) of the last step; a predictive
 //            t distribution of the next y (see Predictive()).
 //   Cost per Update() (flops as counted in ident/rls.h; m = ρ+1): the statistics steps of RLS without
-//            β = 1/ν, plus ξ, ξ_z (m divisions, 2m adds/multiplies) — 3ρ² + 20ρ + 33 flops (ρ = 4: 161) —
-//            plus the weighting-cubic root, a ρ-independent cost (logs and a bracketed iteration,
-//            approx/weighting_polynomial.h); stabilised forgetting adds ≈ (2/3)m³ + 4m² and a copy of
-//            L, d. No allocation after construction (also not at the start-up restart).
+//            β = 1/ν, except that the back substitution also forms r_i = 1/d_i and the running sums
+//            Q_j = Σ_{i≥j} g_i² r_i (ξ_z = 1 − Q_1, ξ = 1 − Q_0; m divisions, 3m + 2 adds/multiplies) and
+//            the plan of the update is taken from them (LdFactor::PlanUpdateFromSums: 11m + 1 instead of
+//            12m + 2, m divisions instead of 2m + 1) — 3ρ² + 20ρ + 34 flops (ρ = 4: 162), 2m divisions —
+//            plus the weighting-cubic root, a ρ-independent cost (a bracketed iteration, usually one
+//            Householder step; approx/weight_fast_path.h, inline); stabilised forgetting adds
+//            ≈ (2/3)m³ + 4m² and a copy of L, d. No allocation after construction (also not at the
+//            start-up restart).
 //   Real-time loop features (as RLS, ident/rls.h): set_enabled/enabled, Skip(), Reset() (noexcept,
 //            allocation-free, back to a freshly built estimator's state), set_forgetting(λ) (refused
 //            if inadmissible), CovarianceInto(P) (caller-owned ρ x ρ, ≈ (5/6)ρ³ flops).
@@ -46,6 +50,7 @@
 #include <Eigen/Core>
 #include <fmt/core.h>
 
+#include "approx/weight_fast_path.h"
 #include "approx/weighting_polynomial.h"
 #include "ident/common/error.h"
 #include "ident/common/step_report.h"
@@ -209,7 +214,8 @@ class BasicStudentRegression {
   double Weight(double nu, const Innovation& in) noexcept {
     if (!(nu > nu_hard_)) return std::numeric_limits<double>::quiet_NaN();
     const approx::WeightingProblem problem{nu, in.xi, in.xi_z, num_parameters(), options_.dof, options_.delta};
-    const approx::WeightSolution w = approx::SolveWeight(problem);
+    if (!(nu == weight_constants_.nu)) weight_constants_.Set(problem);  // ν(t) settles under forgetting
+    const approx::WeightSolution w = approx::SolveWeightInline(problem, weight_constants_);  // = SolveWeight
     details_ = {in.xi, in.xi_z, w.beta0, w.beta_hi, w.num_maxima};
     return w.ok ? w.beta : std::numeric_limits<double>::quiet_NaN();
   }
@@ -313,6 +319,7 @@ class BasicStudentRegression {
   double nu_hard_ = approx::NuHard(stats_.num_parameters(), options_.dof, options_.delta);
   double last_beta_ = std::numeric_limits<double>::quiet_NaN();
   StudentStepDetails details_;
+  approx::WeightConstants weight_constants_;  // of the last ν(t) (Weight())
   bool enabled_ = true;
   int window_size_ = 0, window_count_ = 0;  // data-driven start-up (0 = off)
   Eigen::MatrixXd window_;                  // W x (ρ+1): y, z of the first W samples
