@@ -2,7 +2,8 @@
 
 # Warnings for our own targets (not for consumers).
 function(ident_set_warnings target)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wno-maybe-uninitialized)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic
+                                           $<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>)
 endfunction()
 
 # ident_add_layer(<target> <alias> <dir> DEPS ...): a static library made of every .cc file in <dir>

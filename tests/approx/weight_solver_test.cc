@@ -16,14 +16,13 @@
 #include <gtest/gtest.h>
 
 #include "approx/weighting_polynomial.h"
+#include "tests/approx/cubic_test_util.h"
 
 namespace ident::approx {
 namespace {
 
-double EvalP(const std::array<double, 4>& mu, double b) { return ((mu[3] * b + mu[2]) * b + mu[1]) * b + mu[0]; }
-double AbsTerms(const std::array<double, 4>& mu, double b) {
-  return std::abs(mu[0]) + std::abs(mu[1] * b) + std::abs(mu[2] * b * b) + std::abs(mu[3] * b * b * b);
-}
+using testing::AbsTerms;
+using testing::EvalP;
 
 std::string Describe(const WeightingProblem& p) {
   char buf[256];

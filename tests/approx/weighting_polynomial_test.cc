@@ -1,6 +1,7 @@
 // The weighting cubic, its bracket and the root selection of spec §4–§5, checked against the maximin
 // objective itself (dense grid over both branches + golden-section refinement) [spec §10.1–§10.6, §10.9].
 #include "approx/weighting_polynomial.h"
+#include "tests/approx/cubic_test_util.h"
 
 #include <cmath>
 #include <random>
@@ -10,10 +11,8 @@
 namespace ident::approx {
 namespace {
 
-double EvalP(const std::array<double, 4>& mu, double b) { return ((mu[3] * b + mu[2]) * b + mu[1]) * b + mu[0]; }
-double AbsTerms(const std::array<double, 4>& mu, double b) {
-  return std::abs(mu[0]) + std::abs(mu[1] * b) + std::abs(mu[2] * b * b) + std::abs(mu[3] * b * b * b);
-}
+using testing::AbsTerms;
+using testing::EvalP;
 
 // Random admissible problems: ν ∈ (1.01, 50)·ν_hard, ξ ≤ ξ_z ≤ 1 over many decades.
 std::vector<WeightingProblem> RandomProblems(unsigned seed, int count, bool extreme = true) {

@@ -258,7 +258,8 @@ TEST(StudentRegression, GrossOutliersGetNegligibleWeightInliersNormalWeight) {  
   std::vector<double> outlier_weights;
   int outliers = 0;
   for (int t = 0; t < 2000; ++t) {
-    const Eigen::Vector2d z(g(rng), g(rng));
+    const double z1 = g(rng), z0 = g(rng);  // drawn in a fixed order (argument order is unspecified)
+    const Eigen::Vector2d z(z0, z1);
     const bool outlier = u(rng) < 0.1;
     double e = 0.5 * g(rng);
     if (outlier) e += (u(rng) < 0.5 ? -1 : 1) * (10 + 40 * u(rng));

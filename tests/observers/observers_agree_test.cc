@@ -15,6 +15,7 @@
 #include "ident/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
+#include "tests/observers/linear_gaussian_data.h"
 
 namespace ident {
 namespace {
@@ -42,13 +43,7 @@ Sim Simulate(const models::LinearStateSpace& model, const Eigen::VectorXd& c, do
   return s;
 }
 
-models::LinearStateSpace Model2d() {
-  Eigen::MatrixXd A(2, 2), B(2, 1), Q(2, 2);
-  A << 0.95, 0.2, -0.1, 0.9;
-  B << 0.1, 0.5;
-  Q << 0.05, 0.01, 0.01, 0.08;
-  return models::LinearStateSpace::Make(A, B, Q);
-}
+using testing::Model2d;
 
 TEST(KalmanFilter, SquareRootFormMatchesTextbookCovarianceFormAndBatchLikelihood) {
   const auto model = Model2d();

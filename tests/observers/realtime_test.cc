@@ -16,37 +16,20 @@
 #include "ident/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
+#include "tests/observers/linear_gaussian_data.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {
 namespace {
 
-models::LinearStateSpace Model2d() {
-  Eigen::MatrixXd A(2, 2), B(2, 1), Q(2, 2);
-  A << 0.95, 0.2, -0.1, 0.9;
-  B << 0.1, 0.5;
-  Q << 0.05, 0.01, 0.01, 0.08;
-  return models::LinearStateSpace::Make(A, B, Q);
-}
+using testing::Model2d;
 
+// Linear-Gaussian data y = c'x + e, e ~ N(0, r), input sin(0.3k).
 struct Data {
   std::vector<StateSpaceItem> items;
 };
-
-// Linear-Gaussian data y = c'x + e, e ~ N(0, r), input sin(0.3k).
 Data Simulate(const models::LinearStateSpace& model, const Eigen::Vector2d& c, double r, int steps, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
-  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
-  Eigen::Vector2d x = Eigen::Vector2d::Zero();
-  Data d;
-  for (int k = 0; k < steps; ++k) {
-    Eigen::VectorXd u(1);
-    u(0) = std::sin(0.3 * k);
-    x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
-    d.items.push_back({u, c.dot(x) + std::sqrt(r) * normal(rng)});
-  }
-  return d;
+  return {testing::SimulateLinearGaussian(model, c, r, steps, seed)};
 }
 
 template <class M>

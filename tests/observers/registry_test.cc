@@ -15,6 +15,7 @@
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
 #include "ident/observer_registry.h"
+#include "tests/observers/linear_gaussian_data.h"
 
 namespace ident {
 namespace {
@@ -22,28 +23,7 @@ namespace {
 // Expects `what` to contain `part` (printed in full on failure).
 #define EXPECT_CONTAINS(what, part) EXPECT_NE(std::string(what).find(part), std::string::npos) << (what)
 
-models::LinearStateSpace Model2d() {
-  Eigen::MatrixXd A(2, 2), B(2, 1), Q(2, 2);
-  A << 0.95, 0.2, -0.1, 0.9;
-  B << 0.1, 0.5;
-  Q << 0.05, 0.01, 0.01, 0.08;
-  return models::LinearStateSpace::Make(A, B, Q);
-}
-
-std::vector<StateSpaceItem> Simulate(const models::LinearStateSpace& model, const Eigen::Vector2d& c, double r,
-                                     int steps, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal;
-  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
-  Eigen::Vector2d x = Eigen::Vector2d::Zero();
-  std::vector<StateSpaceItem> items;
-  for (int k = 0; k < steps; ++k) {
-    const Eigen::VectorXd u = Eigen::VectorXd::Constant(1, std::sin(0.3 * k));
-    x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
-    items.push_back({u, c.dot(x) + std::sqrt(r) * normal(rng)});
-  }
-  return items;
-}
+using testing::Model2d;
 
 ObserverProblem GaussianProblem() {
   return {Model2d(), std::make_shared<models::GaussianMeasurement>(Eigen::Vector2d(1.0, 0.5), 0.2),
@@ -65,7 +45,7 @@ TEST(ObserverRegistry, ListsTheThreeObservers) {
 
 TEST(ObserverRegistry, EachNameBuildsTheDocumentedObserver) {
   const auto problem = GaussianProblem();
-  const auto items = Simulate(problem.model, Eigen::Vector2d(1.0, 0.5), 0.2, 60, 4);
+  const auto items = testing::SimulateLinearGaussian(problem.model, Eigen::Vector2d(1.0, 0.5), 0.2, 60, 4);
   auto kalman = MakeStateObserver(ParseObserverSpec("kalman"), problem);
   auto lc = MakeStateObserver(ParseObserverSpec("lc_gaussian"), problem);
   auto grid = MakeStateObserver(ParseObserverSpec("grid:points=96"), problem);

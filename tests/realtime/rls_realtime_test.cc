@@ -11,36 +11,17 @@
 #include <gtest/gtest.h>
 
 #include "ident/rls.h"
+#include "tests/realtime/arx_stream.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {
 namespace {
 
-struct Sample {
-  double y;
-  Eigen::Vector4d z;
-};
-
-// ARX(2,2) data, θ = (−1.5, 0.7, 1.0, 0.5), binary input, Gaussian noise σ = 0.1.
-std::vector<Sample> ArxData(unsigned seed, int count) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0, 0.1);
-  std::bernoulli_distribution coin;
-  const Eigen::Vector4d theta(-1.5, 0.7, 1.0, 0.5);
-  std::vector<Sample> data;
-  double y1 = 0, y2 = 0, u1 = 1, u2 = -1;
-  for (int t = 0; t < count; ++t) {
-    const Eigen::Vector4d z(-y1, -y2, u1, u2);
-    const double y = theta.dot(z) + noise(rng);
-    data.push_back({y, z});
-    y2 = y1, y1 = y, u2 = u1, u1 = coin(rng) ? 1.0 : -1.0;
-  }
-  return data;
-}
+using testing::ArxData;
 
 // Bitwise equality of the whole estimator state (factor L, D, ν, sample count).
 template <class E>
-bool SameStateBits(const E& a, const E& b) {
+bool SameRlsStateBits(const E& a, const E& b) {
   const auto& fa = a.statistics().factor();
   const auto& fb = b.statistics().factor();
   const double na = a.nu(), nb = b.nu(), sa = a.samples(), sb = b.samples();
@@ -85,7 +66,7 @@ TYPED_TEST(RlsRealtime, DisabledUpdatesLeaveTheStateBitIdenticalAndResumeExactly
       const StepReport r = rls.Update(data[t].y, data[t].z);
       if (gate) {
         ASSERT_EQ(r.status, StepStatus::kSkipped);
-        ASSERT_TRUE(SameStateBits(rls, before)) << "t = " << t;
+        ASSERT_TRUE(SameRlsStateBits(rls, before)) << "t = " << t;
         // Read-outs keep working on the frozen state.
         ASSERT_EQ(rls.Predict(data[t].z), before.Predict(data[t].z));
       } else {
@@ -93,7 +74,7 @@ TYPED_TEST(RlsRealtime, DisabledUpdatesLeaveTheStateBitIdenticalAndResumeExactly
         twin.Update(data[t].y, data[t].z);
       }
     }
-    EXPECT_TRUE(SameStateBits(rls, twin)) << "stabilised = " << stabilised;
+    EXPECT_TRUE(SameRlsStateBits(rls, twin)) << "stabilised = " << stabilised;
     EXPECT_EQ(rls.parameters(), twin.parameters());
   }
 }
@@ -107,16 +88,16 @@ TYPED_TEST(RlsRealtime, SkippedMissingSamplesLeaveTheStateBitIdentical) {
     if (missing) {
       const TypeParam before = rls;
       ASSERT_EQ(rls.Skip().status, StepStatus::kSkipped);
-      ASSERT_TRUE(SameStateBits(rls, before));
+      ASSERT_TRUE(SameRlsStateBits(rls, before));
       // A NaN sample is rejected, also without touching the state.
       ASSERT_EQ(rls.Update(std::nan(""), data[t].z).status, StepStatus::kRejectedInvalid);
-      ASSERT_TRUE(SameStateBits(rls, before));
+      ASSERT_TRUE(SameRlsStateBits(rls, before));
     } else {
       rls.Update(data[t].y, data[t].z);
       twin.Update(data[t].y, data[t].z);
     }
   }
-  EXPECT_TRUE(SameStateBits(rls, twin));
+  EXPECT_TRUE(SameRlsStateBits(rls, twin));
 }
 
 TYPED_TEST(RlsRealtime, ResetReturnsExactlyToThePrior) {
@@ -124,9 +105,9 @@ TYPED_TEST(RlsRealtime, ResetReturnsExactlyToThePrior) {
   TypeParam rls(4, Forgetting(0.97, true));
   const TypeParam fresh(4, Forgetting(0.97, true));
   for (int t = 0; t < 120; ++t) rls.Update(data[t].y, data[t].z);
-  ASSERT_FALSE(SameStateBits(rls, fresh));
+  ASSERT_FALSE(SameRlsStateBits(rls, fresh));
   rls.Reset();
-  EXPECT_TRUE(SameStateBits(rls, fresh));
+  EXPECT_TRUE(SameRlsStateBits(rls, fresh));
   // The prior guess Θ̂(0) = V_z⁻¹V_zy = 0 for a diagonal V0.
   EXPECT_EQ(rls.parameters(), Eigen::Vector4d::Zero());
   TypeParam again(4, Forgetting(0.97, true));
@@ -134,7 +115,7 @@ TYPED_TEST(RlsRealtime, ResetReturnsExactlyToThePrior) {
     rls.Update(data[t].y, data[t].z);
     again.Update(data[t].y, data[t].z);
   }
-  EXPECT_TRUE(SameStateBits(rls, again));
+  EXPECT_TRUE(SameRlsStateBits(rls, again));
 }
 
 // Without forgetting and with the flat prior, Θ̂ and Cov(Θ̂) are the batch least-squares ones:

@@ -14,36 +14,20 @@
 
 #include "approx/weighting_polynomial.h"
 #include "ident/student_regression.h"
+#include "tests/realtime/arx_stream.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {
 namespace {
 
-struct Sample {
-  double y;
-  Eigen::Vector4d z;
-};
-
-// ARX(2,2) data, θ = (−1.5, 0.7, 1.0, 0.5), binary input, Gaussian noise σ = 0.1 and 5 % outliers of ±5.
-std::vector<Sample> ArxData(unsigned seed, int count) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0, 0.1);
-  std::bernoulli_distribution coin, outlier(0.05);
-  const Eigen::Vector4d theta(-1.5, 0.7, 1.0, 0.5);
-  std::vector<Sample> data;
-  double y1 = 0, y2 = 0, u1 = 1, u2 = -1;
-  for (int t = 0; t < count; ++t) {
-    const Eigen::Vector4d z(-y1, -y2, u1, u2);
-    const double y = theta.dot(z) + noise(rng);
-    data.push_back({y + (outlier(rng) ? (coin(rng) ? 5.0 : -5.0) : 0.0), z});
-    y2 = y1, y1 = y, u2 = u1, u1 = coin(rng) ? 1.0 : -1.0;
-  }
-  return data;
+// ARX(2,2) data with 5 % outliers of ±5.
+std::vector<testing::ArxSample> ArxDataWithOutliers(unsigned seed, int count) {
+  return testing::ArxData(seed, count, 0.05);
 }
 
 // Bitwise equality of the whole estimator state (factor L, D, ν, last β, start-up window position).
 template <class E>
-bool SameStateBits(const E& a, const E& b) {
+bool SameStudentStateBits(const E& a, const E& b) {
   const auto& fa = a.statistics().factor();
   const auto& fb = b.statistics().factor();
   const double na = a.nu(), nb = b.nu(), ba = a.beta(), bb = b.beta();
@@ -79,7 +63,7 @@ TYPED_TEST(StudentRealtime, LoopOperationsAreNoexcept) {
 
 TYPED_TEST(StudentRealtime, DisabledUpdatesLeaveTheStateBitIdenticalAndResumeExactly) {
   for (const bool stabilised : {false, true}) {
-    const auto data = ArxData(31, 400);
+    const auto data = ArxDataWithOutliers(31, 400);
     TypeParam est(4, Cauchy(0.98, stabilised));
     TypeParam twin(4, Cauchy(0.98, stabilised));  // never sees samples 100..149
     for (int t = 0; t < 400; ++t) {
@@ -90,20 +74,20 @@ TYPED_TEST(StudentRealtime, DisabledUpdatesLeaveTheStateBitIdenticalAndResumeExa
       const StepReport r = est.Update(data[t].y, data[t].z);
       if (gate) {
         ASSERT_EQ(r.status, StepStatus::kSkipped);
-        ASSERT_TRUE(SameStateBits(est, before)) << "t = " << t;
+        ASSERT_TRUE(SameStudentStateBits(est, before)) << "t = " << t;
         ASSERT_EQ(est.Predict(data[t].z), before.Predict(data[t].z));
       } else {
         ASSERT_TRUE(r.updated()) << "t = " << t;
         twin.Update(data[t].y, data[t].z);
       }
     }
-    EXPECT_TRUE(SameStateBits(est, twin)) << "stabilised = " << stabilised;
+    EXPECT_TRUE(SameStudentStateBits(est, twin)) << "stabilised = " << stabilised;
     EXPECT_EQ(est.parameters(), twin.parameters());
   }
 }
 
 TYPED_TEST(StudentRealtime, SkippedMissingSamplesLeaveTheStateBitIdentical) {
-  const auto data = ArxData(32, 300);
+  const auto data = ArxDataWithOutliers(32, 300);
   StudentRegressionOptions o;  // default: data-driven start-up — skipped samples do not enter the window
   o.forgetting.factor = 0.99;
   TypeParam est(4, o);
@@ -112,29 +96,29 @@ TYPED_TEST(StudentRealtime, SkippedMissingSamplesLeaveTheStateBitIdentical) {
     if (t % 7 == 3) {
       const TypeParam before = est;
       ASSERT_EQ(est.Skip().status, StepStatus::kSkipped);
-      ASSERT_TRUE(SameStateBits(est, before));
+      ASSERT_TRUE(SameStudentStateBits(est, before));
       ASSERT_EQ(est.Update(std::nan(""), data[t].z).status, StepStatus::kRejectedInvalid);
-      ASSERT_TRUE(SameStateBits(est, before));
+      ASSERT_TRUE(SameStudentStateBits(est, before));
     } else {
       est.Update(data[t].y, data[t].z);
       twin.Update(data[t].y, data[t].z);
     }
   }
   EXPECT_FALSE(est.in_startup());
-  EXPECT_TRUE(SameStateBits(est, twin));
+  EXPECT_TRUE(SameStudentStateBits(est, twin));
 }
 
 TYPED_TEST(StudentRealtime, ResetEqualsAFreshlyBuiltEstimator) {
-  const auto data = ArxData(33, 300);
+  const auto data = ArxDataWithOutliers(33, 300);
   StudentRegressionOptions data_driven;
   data_driven.forgetting.factor = 0.99;
   for (const StudentRegressionOptions& o : {Cauchy(0.97, true), data_driven}) {
     TypeParam est(4, o);
     const TypeParam fresh(4, o);
     for (int t = 0; t < 120; ++t) est.Update(data[t].y, data[t].z);
-    ASSERT_FALSE(SameStateBits(est, fresh));
+    ASSERT_FALSE(SameStudentStateBits(est, fresh));
     est.Reset();
-    EXPECT_TRUE(SameStateBits(est, fresh));
+    EXPECT_TRUE(SameStudentStateBits(est, fresh));
     EXPECT_EQ(est.in_startup(), !o.prior.has_value());
     // The prior guess Θ̂(0) = V_z⁻¹V_zy = 0 for a diagonal V0.
     EXPECT_EQ(est.parameters(), Eigen::Vector4d::Zero());
@@ -142,7 +126,7 @@ TYPED_TEST(StudentRealtime, ResetEqualsAFreshlyBuiltEstimator) {
     for (int t = 120; t < 300; ++t) {
       ASSERT_EQ(est.Update(data[t].y, data[t].z).status, again.Update(data[t].y, data[t].z).status);
     }
-    EXPECT_TRUE(SameStateBits(est, again));
+    EXPECT_TRUE(SameStudentStateBits(est, again));
     EXPECT_EQ(est.parameters(), again.parameters());
   }
 }
@@ -151,7 +135,7 @@ TYPED_TEST(StudentRealtime, ResetEqualsAFreshlyBuiltEstimator) {
 // V(t) = (1−β_t)V(t−1) + β_t h h' (exponential forgetting leaves V unchanged [spec §7b]), ν(t) = λν + 1,
 // D_y = V_y − V_zy'V_z⁻¹V_zy, the inverse by Cholesky.
 TYPED_TEST(StudentRealtime, CovarianceAtAnyTimeEqualsTheDenseMultivariateT) {
-  const auto data = ArxData(34, 400);
+  const auto data = ArxDataWithOutliers(34, 400);
   const StudentRegressionOptions o = Cauchy(0.99);
   TypeParam est(4, o);
   Eigen::MatrixXd V = o.prior->V0;
@@ -204,7 +188,7 @@ TYPED_TEST(StudentRealtime, CovarianceIntoRejectsAWrongSizeNamingIt) {
 // V(t) = (1−β)V + βhh' with β the maximin root of the weighting cubic (approx::SolveWeight, verified
 // against brute force in tests/approx) for ξ = 1 − h'V⁻¹h, ξ_z = 1 − z'V_z⁻¹z computed densely.
 TYPED_TEST(StudentRealtime, ForgettingChangedOnTheFlyEqualsTheDenseRecursion) {
-  const auto data = ArxData(35, 600);
+  const auto data = ArxDataWithOutliers(35, 600);
   const StudentRegressionOptions o = Cauchy(1.0);
   TypeParam est(4, o);
   Eigen::MatrixXd V = o.prior->V0;
@@ -247,7 +231,7 @@ TYPED_TEST(StudentRealtime, InadmissibleForgettingIsRefusedAndLeavesTheOldOne) {
 }
 
 TYPED_TEST(StudentRealtime, TenThousandLoopIterationsAllocateNothing) {
-  const auto data = ArxData(37, 10000);
+  const auto data = ArxDataWithOutliers(37, 10000);
   StudentRegressionOptions data_driven;  // the start-up restart runs inside the counted loop
   data_driven.forgetting.factor = 0.99;
   for (const StudentRegressionOptions& o : {Cauchy(0.99, true), data_driven}) {

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/reliability/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 
@@ -16,24 +17,6 @@ namespace ident::testing {
 namespace {
 
 const std::string kArx = " --output y --input u --na 2 --nb 2 --nk 3";
-
-
-// dryer.csv with every u and y multiplied by `scale` (printed with 17 digits).
-std::string ScaledDryer(const std::string& name, double scale) {
-  const std::string text = ReadFile(DatasetPath("dryer.csv"));
-  std::string out = text.substr(0, text.find('\n') + 1);
-  std::size_t pos = out.size();
-  while (pos < text.size()) {
-    const std::size_t end = text.find('\n', pos);
-    const std::string line = text.substr(pos, end - pos);
-    pos = end == std::string::npos ? text.size() : end + 1;
-    if (line.find_first_not_of(" \r") == std::string::npos) continue;
-    const std::size_t c1 = line.find(','), c2 = line.find(',', c1 + 1);
-    out += line.substr(0, c1) + "," + fmt::format("{:.17g}", std::stod(line.substr(c1 + 1, c2 - c1 - 1)) * scale) +
-           "," + fmt::format("{:.17g}", std::stod(line.substr(c2 + 1)) * scale) + "\n";
-  }
-  return WriteFile(name, out);
-}
 
 std::string Repeat(const std::string& header, int rows, std::string (*row)(int)) {
   std::string csv = header + "\n";

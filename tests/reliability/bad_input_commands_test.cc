@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "tests/reliability/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 
@@ -84,22 +85,6 @@ TEST(BadInputCommands, CellBeyondDoubleRange) {
 
 const std::string kCompareArx = " --output y --input u --na 2 --nb 2 --nk 3 --estimators rls";
 
-// dryer.csv with every u and y multiplied by `scale`.
-std::string ScaledDryer(const std::string& name, double scale) {
-  const std::string text = ReadFile(DatasetPath("dryer.csv"));
-  std::string out = text.substr(0, text.find('\n') + 1);
-  std::size_t pos = out.size();
-  while (pos < text.size()) {
-    const std::size_t end = text.find('\n', pos);
-    const std::string line = text.substr(pos, end - pos);
-    pos = end == std::string::npos ? text.size() : end + 1;
-    if (line.find_first_not_of(" \r") == std::string::npos) continue;
-    const std::size_t c1 = line.find(','), c2 = line.find(',', c1 + 1);
-    out += line.substr(0, c1) + "," + fmt::format("{:.17g}", std::stod(line.substr(c1 + 1, c2 - c1 - 1)) * scale) +
-           "," + fmt::format("{:.17g}", std::stod(line.substr(c2 + 1)) * scale) + "\n";
-  }
-  return WriteFile(name, out);
-}
 
 TEST(BadInputCompare, ValuesNear1e308) {
   ExpectCliError("compare " + ScaledDryer("dryer_e300.csv", 1e300) + kCompareArx, "rescale the data");
