@@ -64,6 +64,7 @@ struct MemsStudyResult {
   std::vector<MemsObserverResult> observers;   // in the order listed in the header comment
   double sigma_o = 0;        // σ_o used by tuned_kalman (p11 = 1/√3)
   double sigma_m2 = 0;
+  int wedge_fallbacks = 0;   // changes of reading where lc_wedge's wedge had no mass (first-passage reading used)
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };

@@ -33,7 +33,7 @@ struct MemsCommandOptions {
 const std::vector<std::pair<std::string, std::string>> kColumns = {
     {"grid", "grid"},         {"tuned_kalman", "tuned_kalman"}, {"tuned_kalman_13", "tuned_kalman_13"},
     {"lc_gaussian", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"}, {"lc_event_capped", "lc_event_capped"},
-    {"bound", "bound"}};
+    {"lc_wedge", "lc_wedge"}, {"bound", "bound"}};
 
 void RunMems(const MemsCommandOptions& o) {
   IDENT_REQUIRE(!o.t_targets.empty(), "--t-mean needs at least one value");
