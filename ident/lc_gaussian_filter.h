@@ -8,6 +8,9 @@
 //   Log-concavity of g makes the tilted density unimodal and v_s ≤ σ² (it is in LC(1/σ²), Thm 1 + 2),
 //   so P stays positive semidefinite (v_s is clipped to σ² against round-off).
 //
+// ApplyPairTilt is the same exact update for a reading of a pair s jointly Gaussian with x (the crossing
+// wedge of the lagged pair (c'x(k−1), c'x(k)), ident/crossing_reading.h).
+//
 // On its own, applied at every step, this is the assumed-density filter (moment matching). It is
 // exact after one reading but on the MEMS threshold sensor it treats successive, strongly dependent
 // y = 0 readings as independent and collapses; see ident/mems_study.h for the event model variants.
