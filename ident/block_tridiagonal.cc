@@ -125,6 +125,26 @@ void SolveBlocks(const double* C_all, const double* G_all, int n_runtime, int N,
 
 }  // namespace
 
+bool FactorizeBlockTridiagonal(int n, int N, const double* D, const double* E, double* C, double* G, double* work) {
+  switch (n) {  // fixed-size kernels for small blocks, run-time size beyond
+    case 1: return FactorizeBlocks<1>(D, E, n, N, C, G, work);
+    case 2: return FactorizeBlocks<2>(D, E, n, N, C, G, work);
+    case 3: return FactorizeBlocks<3>(D, E, n, N, C, G, work);
+    case 4: return FactorizeBlocks<4>(D, E, n, N, C, G, work);
+    default: return FactorizeBlocks<0>(D, E, n, N, C, G, work);
+  }
+}
+
+void SolveBlockTridiagonal(int n, int N, const double* C, const double* G, double* b) {
+  switch (n) {
+    case 1: return SolveBlocks<1>(C, G, n, N, b);
+    case 2: return SolveBlocks<2>(C, G, n, N, b);
+    case 3: return SolveBlocks<3>(C, G, n, N, b);
+    case 4: return SolveBlocks<4>(C, G, n, N, b);
+    default: return SolveBlocks<0>(C, G, n, N, b);
+  }
+}
+
 BlockTridiagonalCholesky::BlockTridiagonalCholesky(int block_size, int num_blocks)
     : n_(block_size), N_(num_blocks) {
   IDENT_REQUIRE(block_size >= 1 && num_blocks >= 1, "block-tridiagonal size {} x {} blocks is invalid", block_size,
@@ -139,28 +159,13 @@ bool BlockTridiagonalCholesky::Factorize(const Eigen::Ref<const Eigen::MatrixXd>
   IDENT_REQUIRE(D.rows() == n_ && D.cols() == C_.cols() && E.rows() == n_ && E.cols() == C_.cols(),
                 "block-tridiagonal storage must be {} x {}", n_, C_.cols());
   IDENT_REQUIRE(D.outerStride() == n_ && E.outerStride() == n_, "block-tridiagonal storage must be contiguous");
-  double* C = C_.data();
-  double* G = G_.data();
-  double* row = work_.data();
-  switch (n_) {  // fixed-size kernels for small blocks, run-time size beyond
-    case 1: return FactorizeBlocks<1>(D.data(), E.data(), n_, N_, C, G, row);
-    case 2: return FactorizeBlocks<2>(D.data(), E.data(), n_, N_, C, G, row);
-    case 3: return FactorizeBlocks<3>(D.data(), E.data(), n_, N_, C, G, row);
-    case 4: return FactorizeBlocks<4>(D.data(), E.data(), n_, N_, C, G, row);
-    default: return FactorizeBlocks<0>(D.data(), E.data(), n_, N_, C, G, row);
-  }
+  return FactorizeBlockTridiagonal(n_, N_, D.data(), E.data(), C_.data(), G_.data(), work_.data());
 }
 
 void BlockTridiagonalCholesky::Solve(Eigen::Ref<Eigen::MatrixXd> b) const {
   IDENT_REQUIRE(b.rows() == n_ && b.cols() == N_ && b.outerStride() == n_, "right-hand side is {}x{}; need {}x{}",
                 b.rows(), b.cols(), n_, N_);
-  switch (n_) {
-    case 1: return SolveBlocks<1>(C_.data(), G_.data(), n_, N_, b.data());
-    case 2: return SolveBlocks<2>(C_.data(), G_.data(), n_, N_, b.data());
-    case 3: return SolveBlocks<3>(C_.data(), G_.data(), n_, N_, b.data());
-    case 4: return SolveBlocks<4>(C_.data(), G_.data(), n_, N_, b.data());
-    default: return SolveBlocks<0>(C_.data(), G_.data(), n_, N_, b.data());
-  }
+  SolveBlockTridiagonal(n_, N_, C_.data(), G_.data(), b.data());
 }
 
 }  // namespace ident

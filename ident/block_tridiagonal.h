@@ -19,7 +19,8 @@
 //   if (!chol.Factorize(D, E)) { /* not positive definite */ }
 //   chol.Solve(b);   // b (n x N) is overwritten by A^-1 b
 //
-// Allocation: none after construction.
+// Allocation: none after construction. FactorizeBlockTridiagonal / SolveBlockTridiagonal do the same on
+// caller-owned storage (for solvers that keep all work arrays in one block, ident/work_arena.h).
 #pragma once
 
 #include <Eigen/Core>
@@ -44,5 +45,12 @@ class BlockTridiagonalCholesky {
   Eigen::MatrixXd G_;  // n x nN, sub-diagonal factors (block 0 unused)
   Eigen::MatrixXd work_;
 };
+
+// The factorisation above on raw column-major storage: D, E, C, G are n x (n N) (block t in columns
+// [t n, (t+1) n), E_0 and G_0 unused), `work` holds n doubles. Returns false if A is not numerically
+// positive definite. No allocation, no argument checks (the class above checks).
+bool FactorizeBlockTridiagonal(int n, int N, const double* D, const double* E, double* C, double* G, double* work);
+// b (n x N) <- A^-1 b with the factor (C, G) of FactorizeBlockTridiagonal.
+void SolveBlockTridiagonal(int n, int N, const double* C, const double* G, double* b);
 
 }  // namespace ident

@@ -5,12 +5,14 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <new>
 
 #include <Eigen/Cholesky>
 #include <fmt/format.h>
 
 #include "ident/block_tridiagonal.h"
 #include "ident/common/error.h"
+#include "ident/work_arena.h"
 
 namespace ident {
 
@@ -134,6 +136,7 @@ struct Prepared {
   bool identity_B = false;  // B = I, b = 0, p = 0: v = p + B'u = u and B r - b = r
   Eigen::MatrixXd Kinv;     // constant case
   Eigen::MatrixXd W;        // constant case
+  Eigen::VectorXd c0;       // constant case: at u = K^-1 (B r - b), p + B'u = c0 + W r with c0 = p - B'K^-1 b
   Eigen::MatrixXd K;        // dense case work
   Eigen::LLT<Eigen::MatrixXd> llt;
   Eigen::MatrixXd KinvB;    // dense case work (k x m)
@@ -141,7 +144,7 @@ struct Prepared {
 
 struct Term {
   Prepared* prep;
-  int offset;  // into the coordinate arrays
+  int offset;  // into the coordinate arrays (terms with a finite bound only; -1 for constant terms)
   int t;
   bool process;
   const double* F;  // F_{t-1} (process terms with t > 0), column-major n x n; else nullptr
@@ -175,11 +178,16 @@ IDENT_HOT void AddMatTVec(const double* A, int r_runtime, int c_runtime, const d
 // per-step loops unroll); kN = 0 is the run-time-size fallback. All work arrays are allocated by the
 // constructor; an iteration allocates nothing (except the dense K of non-diagonal box monitoring
 // functions, which Eigen's LLT factors in place).
+// Terms without finite bounds ("constant": quadratic penalties) carry no multipliers: their R3 = B r - b - M u
+// is linear and stays 0 from a start with R3 = 0, so u = K^-1 (B r - b) is kept implicitly and only the
+// terms with bounds (active_) have coordinate arrays and enter the Newton right-hand sides. The work arrays
+// share one WorkArena block (huge pages for large T: first touches of small pages cost more than the
+// arithmetic on virtual machines).
 template <int kN>
 class Solver {
  public:
   Solver(const MapSmootherProblem& p, const MapSmootherOptions& o)
-      : p_(p), o_(o), T_(p.T()), n_(p.state_dim()), nz_(p.measurement_dim()), chol_(n_, T_ + 1) {
+      : p_(p), o_(o), T_(p.T()), n_(p.state_dim()), nz_(p.measurement_dim()) {
     int offset = 0;
     terms_.reserve(2 * (T_ + 1));
     for (int pass = 0; pass < 2; ++pass)
@@ -189,16 +197,36 @@ class Solver {
         if (it == prepared_.end()) it = prepared_.emplace(&pen, Prepare(pen)).first;
         const double* F = pass == 0 && t > 0 ? p.Ft(t - 1).data() : nullptr;
         const double* H = pass == 1 ? p.Ht(t).data() : nullptr;
-        terms_.push_back({it->second.get(), offset, t, pass == 0, F, H});
-        offset += it->second->k;
+        const bool constant = it->second->constant;
+        terms_.push_back({it->second.get(), constant ? -1 : offset, t, pass == 0, F, H});
+        if (!constant) {
+          active_.push_back(terms_.back());
+          offset += it->second->k;
+          e_changes_ = e_changes_ || F != nullptr;
+        }
       }
-    const int K = offset;
-    for (Eigen::VectorXd* v : {&u_, &slo_, &qlo_, &shi_, &qhi_, &lo_, &hi_, &r3_, &rt3_, &du_, &dslo_, &dqlo_,
-                               &dshi_, &dqhi_, &xlo_, &xhi_, &kd_})
-      v->setZero(K);
+    // Work arrays, all in one block (ident/work_arena.h): coordinate arrays only for the terms with a
+    // finite bound; constant terms keep u = K^-1 (B r - b) implicitly (R3 = 0 for them at every iterate,
+    // so their Newton contribution is the precomputed J'WJ and the gradient J'(c0 + W r)).
+    const std::size_t K = offset, N = T_ + 1, nN = static_cast<std::size_t>(n_) * N, blocks = nN * n_;
+    using A = WorkArena;
+    const std::size_t size = 17 * A::Padded(K) + 3 * A::Padded(nN) + (4 + (e_changes_ ? 2 : 1)) * A::Padded(blocks) +
+                             A::Padded(n_);
+    arena_ = std::make_unique<WorkArena>(size);
+    for (Eigen::Map<Eigen::VectorXd>* v : {&u_, &slo_, &qlo_, &shi_, &qhi_, &lo_, &hi_, &r3_, &rt3_, &du_, &dslo_,
+                                           &dqlo_, &dshi_, &dqhi_, &xlo_, &xhi_, &kd_})
+      new (v) Eigen::Map<Eigen::VectorXd>(arena_->Take(K), static_cast<Eigen::Index>(K));
+    for (Eigen::Map<Eigen::MatrixXd>* v : {&x_, &R4_, &dx_})
+      new (v) Eigen::Map<Eigen::MatrixXd>(arena_->Take(nN), n_, static_cast<Eigen::Index>(N));
+    for (Eigen::Map<Eigen::MatrixXd>* v : {&D_, &base_D_, &base_E_, &C_, &G_})
+      new (v) Eigen::Map<Eigen::MatrixXd>(arena_->Take(blocks), n_, static_cast<Eigen::Index>(nN));
+    // E changes between iterations only through bounded process terms; otherwise it is the constant part.
+    new (&E_) Eigen::Map<Eigen::MatrixXd>(e_changes_ ? arena_->Take(blocks) : base_E_.data(), n_,
+                                          static_cast<Eigen::Index>(nN));
+    chol_work_ = arena_->Take(n_);
     has_lo_.assign(K, 0);
     has_hi_.assign(K, 0);
-    for (const Term& term : terms_) {
+    for (const Term& term : active_) {
       const PlqForm& f = *term.prep->plq;
       for (int i = 0; i < f.rows(); ++i) {
         const int c = term.offset + i;
@@ -219,12 +247,6 @@ class Solver {
     }
     for (const auto& F : p.F) matrix_scale_ = std::max(matrix_scale_, 1 + F.cwiseAbs().maxCoeff());
     for (const auto& H : p.H) matrix_scale_ = std::max(matrix_scale_, 1 + H.cwiseAbs().maxCoeff());
-    x_.setZero(n_, T_ + 1);
-    R4_.setZero(n_, T_ + 1);
-    dx_.setZero(n_, T_ + 1);
-    const Eigen::Index block_cols = static_cast<Eigen::Index>(n_) * (T_ + 1);
-    D_.setZero(n_, block_cols);
-    E_.setZero(n_, block_cols);
     const int m = std::max(n_, nz_);
     r_.resize(m);
     v_.resize(m);
@@ -237,9 +259,7 @@ class Solver {
     tk2_.resize(kmax);
     // The Newton blocks of penalties without bounds do not change: add them up once.
     for (const Term& term : terms_)
-      if (term.prep->constant) AddNewtonBlocks(term, term.prep->W.data(), D_.data(), E_.data());
-    base_D_ = D_;
-    base_E_ = E_;
+      if (term.prep->constant) AddNewtonBlocks(term, term.prep->W.data(), base_D_.data(), base_E_.data());
   }
 
   MapSmootherResult Run() {
@@ -271,7 +291,7 @@ class Solver {
         break;
       }
       AssembleNewtonMatrix();
-      if (!chol_.Factorize(D_, E_)) {
+      if (!FactorizeBlockTridiagonal(n_, T_ + 1, D_.data(), E_.data(), C_.data(), G_.data(), chol_work_)) {
         // Near the solution K = M + D spans many orders of magnitude; if the Newton matrix breaks down
         // there, the iterate is accepted when its KKT residual is within 1e3 tolerance (precision limit).
         res.status = kkt <= 1e3 * o_.tolerance ? MapSmootherStatus::kConverged : MapSmootherStatus::kNumericalFailure;
@@ -329,6 +349,7 @@ class Solver {
                     pen.Name());
       prep->Kinv = llt.solve(Eigen::MatrixXd::Identity(prep->k, prep->k));
       prep->W = f.B.transpose() * prep->Kinv * f.B;
+      prep->c0 = f.p - f.B.transpose() * (prep->Kinv * f.b);
     } else if (!f.diagonal_M) {
       prep->K.resize(prep->k, prep->k);
       prep->KinvB.resize(prep->k, prep->m);
@@ -338,28 +359,28 @@ class Solver {
 
   // r = residual of the term at x (process: x_t - F x_{t-1}; measurement: z_t - H_t x_t), or its
   // linear part J x (include_constant = false).
-  IDENT_HOT void Residual(const Term& term, const Eigen::MatrixXd& x, bool include_constant, double* out) const {
+  IDENT_HOT void Residual(const Term& term, const double* x, bool include_constant, double* out) const {
     const int n = this->n(), t = term.t;
-    const double* xt = x.data() + static_cast<Eigen::Index>(t) * n;
+    const double* xt = x + static_cast<Eigen::Index>(t) * n;
     if (term.process) {
       for (int i = 0; i < n; ++i) out[i] = xt[i];
       if (term.F) AddMatVec<kN, kN>(term.F, n, n, xt - n, out, -1.0);
     } else {
       const double* zt = p_.z.data() + static_cast<Eigen::Index>(t) * nz_;
       for (int i = 0; i < nz_; ++i) out[i] = include_constant ? zt[i] : 0.0;
-      AddMatVec(term.H, nz_, n, xt, out, -1.0);
+      AddMatVec<0, kN>(term.H, nz_, n, xt, out, -1.0);
     }
   }
 
   // out += sign * J' g
-  IDENT_HOT void AddJt(const Term& term, const double* g, double sign, Eigen::MatrixXd& out) const {
+  IDENT_HOT void AddJt(const Term& term, const double* g, double sign, double* out) const {
     const int n = this->n();
-    double* ot = out.data() + static_cast<Eigen::Index>(term.t) * n;
+    double* ot = out + static_cast<Eigen::Index>(term.t) * n;
     if (term.process) {
       for (int i = 0; i < n; ++i) ot[i] += sign * g[i];
       if (term.F) AddMatTVec<kN, kN>(term.F, n, n, g, ot - n, -sign);
     } else {
-      AddMatTVec(term.H, nz_, n, g, ot, -sign);
+      AddMatTVec<0, kN>(term.H, nz_, n, g, ot, -sign);
     }
   }
 
@@ -373,7 +394,20 @@ class Solver {
       const Prepared& prep = *term.prep;
       const PlqForm& f = *prep.plq;
       const int m = prep.m, k = prep.k;
-      Residual(term, x_, true, r);
+      Residual(term, x_.data(), true, r);
+      if (prep.constant) {  // u = K^-1 (B r - b): p + B'u = c0 + W r, R3 = 0
+        const double* W = prep.W.data();
+        if (term.process && prep.identity_B) {  // m = n, c0 = 0
+          for (int i = 0; i < m; ++i) v[i] = 0;
+          AddMatVec<kN, kN>(W, m, m, r, v, 1.0);
+        } else {
+          for (int i = 0; i < m; ++i) v[i] = prep.c0(i);
+          AddMatVec(W, m, m, r, v, 1.0);
+        }
+        for (int i = 0; i < m; ++i) v_scale = std::max(v_scale, std::abs(v[i]));
+        AddJt(term, v, 1.0, R4_.data());
+        continue;
+      }
       const double* u = u_.data() + term.offset;
       double* r3 = r3_.data() + term.offset;
       if (prep.identity_B) {
@@ -386,7 +420,7 @@ class Solver {
         AddMatVec(f.B.data(), k, m, r, r3, 1.0);
       }
       for (int i = 0; i < m; ++i) v_scale = std::max(v_scale, std::abs(v[i]));
-      AddJt(term, v, 1.0, R4_);
+      AddJt(term, v, 1.0, R4_.data());
       if (f.diagonal_M) {
         const double* M = f.M.data();
         for (int i = 0; i < k; ++i) r3[i] -= M[i + i * k] * u[i];
@@ -428,7 +462,7 @@ class Solver {
         AddMatVec(prep.Kinv.data(), k, k, in, out, 1.0);
     } else if (prep.plq->diagonal_M) {
       const double* kd = kd_.data() + term.offset;
-      for (int i = 0; i < k; ++i) out[i] = in[i] / kd[i];
+      for (int i = 0; i < k; ++i) out[i] = in[i] * kd[i];  // kd = 1 / (M_ii + D_ii) here
     } else {
       FactorK(term);
       Eigen::Map<Eigen::VectorXd>(out, k) = prep.llt.solve(Eigen::Map<const Eigen::VectorXd>(in, k));
@@ -490,22 +524,22 @@ class Solver {
   // terms with bounds, whose K = M + diag(q_hi/s_hi + q_lo/s_lo) changes every iteration.
   void AssembleNewtonMatrix() {
     D_ = base_D_;
-    E_ = base_E_;
+    if (e_changes_) E_ = base_E_;
     double* W = W_.data();
-    for (const Term& term : terms_) {
+    for (const Term& term : active_) {
       Prepared& prep = *term.prep;
-      if (prep.constant) continue;
       const PlqForm& f = *prep.plq;
       const int m = prep.m, k = prep.k;
       double* kd = kd_.data() + term.offset;
       if (f.diagonal_M) {
-        for (int i = 0; i < k; ++i) kd[i] = BarrierCurvature(term.offset + i) + f.M(i, i);
+        // diagonal M: kd holds the reciprocal diagonal of K = M + D (ApplyKinv multiplies)
+        for (int i = 0; i < k; ++i) kd[i] = 1.0 / (BarrierCurvature(term.offset + i) + f.M(i, i));
         for (int i = 0; i < m * m; ++i) W[i] = 0;
         if (prep.identity_B) {
-          for (int i = 0; i < k; ++i) W[i + i * m] = 1.0 / kd[i];
+          for (int i = 0; i < k; ++i) W[i + i * m] = kd[i];
         } else {
           for (int i = 0; i < k; ++i) {
-            const double inv = 1.0 / kd[i];
+            const double inv = kd[i];
             for (int b = 0; b < m; ++b)
               for (int a = 0; a < m; ++a) W[a + b * m] += f.B(i, a) * f.B(i, b) * inv;
           }
@@ -530,40 +564,40 @@ class Solver {
   //   (M + D) du = B J dx + R3 - e,   e = S_hi^-1 (-R2_hi + Q_hi R1_hi) - S_lo^-1 (-R2_lo + Q_lo R1_lo)
   //   sum J'B'K^-1 B J dx = -R4 - sum J'B'K^-1 (R3 - e)
   // R1 (the linear box residual u + s - hi, -u + s - (-lo)) is kept in the formulas.
+  // Constant terms (no bounds) contribute nothing beyond R4: their R3 - e is 0 (u = K^-1 (B r - b)).
   void Direction(double target, bool corrector) {
     dx_ = -R4_;
     double* kinv = tk2_.data();
     double* g = g_.data();
-    for (const Term& term : terms_) {
+    for (const Term& term : active_) {
       const Prepared& prep = *term.prep;
       const int k = prep.k, m = prep.m;
       double* rt3 = rt3_.data() + term.offset;
       RightHandSide(term, target, corrector, rt3);
       ApplyKinv(term, rt3, kinv);
       if (prep.identity_B) {
-        AddJt(term, kinv, -1.0, dx_);
+        AddJt(term, kinv, -1.0, dx_.data());
       } else {
         for (int i = 0; i < m; ++i) g[i] = 0;
         AddMatTVec(prep.plq->B.data(), k, m, kinv, g, 1.0);
-        AddJt(term, g, -1.0, dx_);
+        AddJt(term, g, -1.0, dx_.data());
       }
     }
-    chol_.Solve(dx_);
+    SolveBlockTridiagonal(n_, T_ + 1, C_.data(), G_.data(), dx_.data());
     double* rhs = tk_.data();
     double* r = r_.data();
-    for (const Term& term : terms_) {
+    for (const Term& term : active_) {
       const Prepared& prep = *term.prep;
       const int k = prep.k, m = prep.m;
       const double* rt3 = rt3_.data() + term.offset;
       for (int i = 0; i < k; ++i) rhs[i] = rt3[i];
-      Residual(term, dx_, false, r);  // J dx
+      Residual(term, dx_.data(), false, r);  // J dx
       if (prep.identity_B) {
         for (int i = 0; i < k; ++i) rhs[i] += r[i];
       } else {
         AddMatVec(prep.plq->B.data(), k, m, r, rhs, 1.0);
       }
       ApplyKinv(term, rhs, du_.data() + term.offset);
-      if (prep.constant) continue;
       for (int i = 0; i < k; ++i) {
         const int c = term.offset + i;
         double r2lo, r2hi;
@@ -634,12 +668,19 @@ class Solver {
     const int n = this->n();
     res->x = x_;
     res->w.resize(n_, T_ + 1);
-    for (int t = 0; t <= T_; ++t) Residual(terms_[t], x_, true, res->w.col(t).data());  // w_t = x_t - F x_{t-1}
+    for (int t = 0; t <= T_; ++t) Residual(terms_[t], x_.data(), true, res->w.col(t).data());  // w_t = x_t - F x_{t-1}
     res->u.resize(nz_, T_ + 1);
     for (const Term& term : terms_) {
       if (term.process) continue;
       const PlqForm& f = *term.prep->plq;
       double* ut = res->u.col(term.t).data();  // u_t = p + B'u in d g_t
+      if (term.prep->constant) {  // u = K^-1 (B r - b): p + B'u = c0 + W r
+        double* r = r_.data();
+        Residual(term, x_.data(), true, r);
+        for (int i = 0; i < nz_; ++i) ut[i] = term.prep->c0(i);
+        AddMatVec(term.prep->W.data(), nz_, nz_, r, ut, 1.0);
+        continue;
+      }
       for (int i = 0; i < nz_; ++i) ut[i] = f.p(i);
       AddMatTVec(f.B.data(), term.prep->k, nz_, u_.data() + term.offset, ut, 1.0);
     }
@@ -668,7 +709,7 @@ class Solver {
     double* r = r_.data();
     for (int t = 0; t <= T_; ++t) {
       dual += p_.z.col(t).dot(res->u.col(t)) - p_.gt(t).Conjugate(res->u.col(t)) - p_.ft(t).Conjugate(res->y.col(t));
-      Residual(terms_[T_ + 1 + t], x_, true, r);  // z_t - H_t x_t
+      Residual(terms_[T_ + 1 + t], x_.data(), true, r);  // z_t - H_t x_t
       primal += p_.ft(t).Value(res->w.col(t), domain_tolerance) +
                 p_.gt(t).Value(Eigen::Map<const Eigen::VectorXd>(r, nz_), domain_tolerance);
     }
@@ -706,17 +747,29 @@ class Solver {
   const MapSmootherOptions& o_;
   const int T_, n_, nz_;
   std::map<const Penalty*, std::unique_ptr<Prepared>> prepared_;
-  std::vector<Term> terms_;  // process terms t = 0..T, then measurement terms t = 0..T
+  std::vector<Term> terms_;   // process terms t = 0..T, then measurement terms t = 0..T
+  std::vector<Term> active_;  // the terms with a finite bound (non-constant Newton blocks), same order
+  bool e_changes_ = false;    // an active process term couples x_{t-1}, x_t: E must be reassembled
+  std::unique_ptr<WorkArena> arena_;
   int num_constraints_ = 0;
   double matrix_scale_ = 1;
   // Per PLQ coordinate: u, slacks and multipliers of lo <= u <= hi, residual R3, R3 - e of the current
-  // direction, Newton direction, affine cross terms ds.*dq, and K's diagonal.
+  // direction, Newton direction, affine cross terms ds.*dq, and K's diagonal (its reciprocal for
+  // diagonal M).
   std::vector<char> has_lo_, has_hi_;  // finite bounds per coordinate
   std::vector<int> bounded_;           // coordinates with at least one finite bound
-  Eigen::VectorXd u_, slo_, qlo_, shi_, qhi_, lo_, hi_, r3_, rt3_, du_, dslo_, dqlo_, dshi_, dqhi_, xlo_, xhi_, kd_;
-  Eigen::MatrixXd x_, R4_, dx_, D_, E_, base_D_, base_E_;
+  // All of these live in arena_ (placement-constructed maps).
+  using VectorMap = Eigen::Map<Eigen::VectorXd>;
+  using MatrixMap = Eigen::Map<Eigen::MatrixXd>;
+  VectorMap u_{nullptr, 0}, slo_{nullptr, 0}, qlo_{nullptr, 0}, shi_{nullptr, 0}, qhi_{nullptr, 0}, lo_{nullptr, 0},
+      hi_{nullptr, 0}, r3_{nullptr, 0}, rt3_{nullptr, 0}, du_{nullptr, 0}, dslo_{nullptr, 0}, dqlo_{nullptr, 0},
+      dshi_{nullptr, 0}, dqhi_{nullptr, 0}, xlo_{nullptr, 0}, xhi_{nullptr, 0}, kd_{nullptr, 0};
+  // States, gradient R4 and direction (n x (T+1)); Newton blocks D, E, their constant parts and the
+  // block Cholesky factor C, G (n x n(T+1)).
+  MatrixMap x_{nullptr, 0, 0}, R4_{nullptr, 0, 0}, dx_{nullptr, 0, 0}, D_{nullptr, 0, 0}, E_{nullptr, 0, 0},
+      base_D_{nullptr, 0, 0}, base_E_{nullptr, 0, 0}, C_{nullptr, 0, 0}, G_{nullptr, 0, 0};
+  double* chol_work_ = nullptr;
   Eigen::VectorXd r_, v_, g_, tk_, tk2_, W_, WF_;
-  BlockTridiagonalCholesky chol_;
 };
 
 template <int kN>

@@ -347,3 +347,54 @@ TEST(MapSmoother, VectorMeasurementsWithACoupledBoxMonitoringFunctionCloseTheGap
 
 }  // namespace
 }  // namespace ident
+
+namespace ident {
+namespace {
+
+// Quadratic (bound-free) penalties interleaved with bounded ones at single time steps: the solver keeps no
+// multipliers for the quadratic terms (u = K^-1 (B r - b) implicitly) and rebuilds their dual controls from
+// x. Checked against the optimality conditions written out here: u_t = C_t^-1 (z_t - H_t x_t) for the
+// quadratic measurement steps (stationarity of g_t), a vanishing duality gap, and no coordinate
+// perturbation of x improving (P); bounded process noise (Huber) makes the Newton blocks E_t vary too.
+TEST(MapSmoother, QuadraticTermsWithoutMultipliersMixWithBoundedOnes) {
+  std::mt19937 rng(77);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int T = 25 + trial;
+    MapSmootherProblem p;
+    Eigen::MatrixXd F(2, 2);
+    F << 1, 0.1, 0, 0.95;
+    p.F = {F + RandomMatrix(rng, 2, 2, 0.05)};
+    p.H = {RandomMatrix(rng, 1, 2)};
+    p.z = RandomMatrix(rng, 1, T + 1, 1.5);
+    p.process = {Penalty::Quadratic(RandomSpd(rng, 2)),
+                 trial % 2 ? Penalty::Huber(0.3, 2) : Penalty::Quadratic(RandomSpd(rng, 2))};
+    const double c = 0.5 + trial * 0.1;  // covariance of the quadratic measurement steps
+    std::vector<bool> quadratic(T + 1);
+    for (int t = 0; t <= T; ++t) {
+      quadratic[t] = t % 3 != 1;
+      p.measurement.push_back(quadratic[t] ? Penalty::Quadratic(Eigen::MatrixXd::Constant(1, 1, c))
+                              : t % 2   ? Penalty::L1()
+                                        : Penalty::Huber(0.5));
+    }
+    const MapSmootherResult r = SolveMapSmoother(p);
+    ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << r.message;
+    EXPECT_LE(std::abs(r.relative_gap), 1e-8) << "trial " << trial;
+    for (int t = 0; t <= T; ++t)
+      if (quadratic[t]) {
+        const double expected = (p.z(0, t) - p.H[0].row(0).dot(r.x.col(t))) / c;
+        EXPECT_NEAR(r.u(0, t), expected, 1e-9 * (1 + std::abs(expected))) << "trial " << trial << " t " << t;
+      } else {
+        EXPECT_LE(std::abs(r.u(0, t)), (t % 2 ? 1.0 : 0.5) + 1e-12);  // dom g*: [-1, 1] (l1), [-0.5, 0.5] (Huber)
+      }
+    for (int t = 0; t <= T; t += 3)
+      for (int i = 0; i < 2; ++i)
+        for (double h : {-1e-4, 1e-4}) {
+          Eigen::MatrixXd x = r.x;
+          x(i, t) += h;
+          EXPECT_GE(PrimalObjective(p, x), r.primal - 1e-9 * (1 + std::abs(r.primal))) << "trial " << trial;
+        }
+  }
+}
+
+}  // namespace
+}  // namespace ident
