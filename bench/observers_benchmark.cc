@@ -1,6 +1,7 @@
 // Cost per step of the log-concave observers on the MEMS accelerometer (2 states, threshold sensor):
 // grid Bayesian observer (128² and 256² nodes), log-concave Gaussian filter (exact tilted moments and
-// the first-passage/σ_o variant's Gaussian reading), square-root Kalman filter, bound tracker.
+// the first-passage/σ_o variant's Gaussian reading; the crossing wedge of lc_wedge at a change of the
+// reading), square-root Kalman filter, bound tracker.
 // Filters in both forms: dynamic sizes and fixed-size (BasicKalmanFilter<2>, BasicLcGaussianFilter<2>).
 // Readings alternate 0 / 0 / ... / ±1 as in a run with events, precomputed before timing.
 #include <random>
@@ -9,6 +10,7 @@
 #include <benchmark/benchmark.h>
 
 #include "ident/covariance_bound.h"
+#include "ident/crossing_reading.h"
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
@@ -115,6 +117,25 @@ void BM_LcGaussianFilterEventVariant(benchmark::State& state) {
 }
 BENCHMARK_TEMPLATE(BM_LcGaussianFilterEventVariant, ident::LcGaussianFilter)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_LcGaussianFilterEventVariant, ident::BasicLcGaussianFilter<2>)->Unit(benchmark::kMicrosecond);
+
+// One crossing update (the exact wedge of (x1(k−1), x1(k)), ident/crossing_reading.h) after a prediction,
+// on a state near the threshold: the cost of a step where the reading changes (≈ 2 per event).
+void BM_LcCrossingWedge(benchmark::State& state) {
+  const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
+  const ident::models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
+  const Eigen::Vector2d m_before(0.97, 3.5);
+  Eigen::Matrix2d P_before;
+  P_before << 2e-3, 5e-3, 5e-3, 0.25;
+  const Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
+  ident::BasicLcGaussianFilter<2> f(m_before, P_before);
+  for (auto _ : state) {
+    ident::BasicLcGaussianFilter<2> g = f;
+    g.Predict(model, u);
+    benchmark::DoNotOptimize(ident::CorrectReadingChange(g, m_before, P_before, model, sensor, 0.0, 1.0));
+    benchmark::DoNotOptimize(g.mean());
+  }
+}
+BENCHMARK(BM_LcCrossingWedge)->Unit(benchmark::kMicrosecond);
 
 template <class Filter>
 void BM_KalmanFilter(benchmark::State& state) {

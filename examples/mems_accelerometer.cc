@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
     o.seed = seed++;
     const auto r = ident::RunMemsStudy(o);
     std::cout << fmt::format("{:7.3f} {:6d}", r.t_mean, r.events);
-    for (const char* name : {"grid", "tuned_kalman", "lc_event", "bound"})
+    for (const char* name : {"grid", "tuned_kalman", "lc_wedge", "bound"})
       std::cout << fmt::format(" {:8.4f} ({:4.2f})", r.Get(name).rms, r.Get(name).calibration);
     std::cout << "\n";
   }

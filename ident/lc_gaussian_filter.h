@@ -8,6 +8,9 @@
 //   Log-concavity of g makes the tilted density unimodal and v_s ≤ σ² (it is in LC(1/σ²), Thm 1 + 2),
 //   so P stays positive semidefinite (v_s is clipped to σ² against round-off).
 //
+// ApplyPairTilt is the same exact update for a reading of a pair s jointly Gaussian with x (the crossing
+// wedge of the lagged pair (c'x(k−1), c'x(k)), ident/crossing_reading.h).
+//
 // On its own, applied at every step, this is the assumed-density filter (moment matching). It is
 // exact after one reading but on the MEMS threshold sensor it treats successive, strongly dependent
 // y = 0 readings as independent and collapses; see ident/mems_study.h for the event model variants.
@@ -37,12 +40,14 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 
 #include "ident/common/error.h"
 #include "ident/common/step_report.h"
 #include "ident/state_observer.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
+#include "models/truncated_bivariate_normal.h"
 
 namespace ident {
 
@@ -66,6 +71,13 @@ class BasicLcGaussianFilter {
   StepReport Correct(const models::ProjectedMeasurement& measurement, double y) noexcept;
   // The update for given moments of the tilted density along c (used by event models).
   StepReport ApplyTilt(const Eigen::Ref<const Eigen::VectorXd>& c, const models::TiltedMoments& t) noexcept;
+  // The update for a reading that depends on x only through a pair s jointly Gaussian with x (e.g.
+  // s = (c'x(k−1), c'x(k)), ident/crossing_reading.h): `cross` = Cov(x, s) (n × 2), s ~ N(prior_mean,
+  // prior_cov) before the reading, `t` the moments of the tilted density of s. x | s is Gaussian, so
+  //   K = cross · prior_cov⁻¹,  m ← m + K (μ_t − prior_mean),  P ← P − K (prior_cov − V_t) K'   (exact)
+  // prior_cov − V_t ≥ 0 for a log-concave reading [1, Thm 2]; round-off below 0 is clipped.
+  StepReport ApplyPairTilt(const Eigen::Ref<const Eigen::MatrixXd>& cross, const Eigen::Vector2d& prior_mean,
+                           const Eigen::Matrix2d& prior_cov, const models::TruncatedBivariateMoments& t) noexcept;
   // Predict + Correct with the stored model and measurement (the whole step or nothing);
   // kRejectedInvalid without a stored model.
   StepReport Update(const StateSpaceItem& item) noexcept;
@@ -77,6 +89,7 @@ class BasicLcGaussianFilter {
 
  private:
   StateVector m_, k_, m_new_, m_bak_;
+  Eigen::Matrix<double, N, 2> k2_, kd_;
   StateMatrix P_, tmp_, P_new_, P_bak_;
   double log_likelihood_ = 0.0;
   models::LinearStateSpace model_;
@@ -100,6 +113,8 @@ BasicLcGaussianFilter<N>::BasicLcGaussianFilter(const Eigen::Ref<const Eigen::Ve
   m_ = m0;
   P_ = P0;
   k_.resize(n);
+  k2_.resize(n, 2);
+  kd_.resize(n, 2);
   m_new_.resize(n);
   m_bak_.resize(n);
   tmp_.resize(n, n);
@@ -166,6 +181,46 @@ StepReport BasicLcGaussianFilter<N>::ApplyTilt(const Eigen::Ref<const Eigen::Vec
   log_likelihood_ += t.log_normalizer;
   StepReport report{StepStatus::kUpdated};
   report.prediction_error = t.mean - prior_mean;
+  return report;
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::ApplyPairTilt(const Eigen::Ref<const Eigen::MatrixXd>& cross,
+                                                   const Eigen::Vector2d& prior_mean, const Eigen::Matrix2d& prior_cov,
+                                                   const models::TruncatedBivariateMoments& t) noexcept {
+  const int n = num_states();
+  if (cross.rows() != n || cross.cols() != 2 || !cross.allFinite() || !prior_mean.allFinite() ||
+      !prior_cov.allFinite()) {
+    return {StepStatus::kRejectedInvalid};
+  }
+  if (!t.ok || !t.mean.allFinite() || !t.covariance.allFinite() || !std::isfinite(t.log_probability)) {
+    return {StepStatus::kNumericalFailure};
+  }
+  const double det = prior_cov(0, 0) * prior_cov(1, 1) - prior_cov(0, 1) * prior_cov(1, 0);
+  if (!(prior_cov(0, 0) > 0) || !(det > 0)) return {StepStatus::kNumericalFailure};
+  Eigen::Matrix2d s_inv;
+  s_inv << prior_cov(1, 1), -prior_cov(0, 1), -prior_cov(1, 0), prior_cov(0, 0);
+  s_inv /= det;
+  k2_.noalias() = cross * s_inv;                                      // K = Cov(x, s) S⁻¹
+  // D = S − V_t ≥ 0 (clip round-off): symmetric 2×2 eigen-decomposition, negative eigenvalues to 0.
+  const Eigen::Matrix2d d = 0.5 * ((prior_cov - t.covariance) + (prior_cov - t.covariance).transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(d);
+  const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(0.0);
+  const Eigen::Matrix2d d_psd = eig.eigenvectors() * lambda.asDiagonal() * eig.eigenvectors().transpose();
+  m_new_ = m_;
+  m_new_.noalias() += k2_ * (t.mean - prior_mean);                    // m ← m + K (μ_t − μ_s)
+  kd_.noalias() = k2_ * d_psd;
+  tmp_.noalias() = kd_ * k2_.transpose();
+  P_new_ = P_ - tmp_;                                                 // P ← P − K (S − V_t) K'
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < i; ++j) P_new_(i, j) = P_new_(j, i) = 0.5 * (P_new_(i, j) + P_new_(j, i));
+  }
+  if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
+  m_ = m_new_;
+  P_ = P_new_;
+  log_likelihood_ += t.log_probability;
+  StepReport report{StepStatus::kUpdated};
+  report.prediction_error = t.mean(1) - prior_mean(1);
   return report;
 }
 

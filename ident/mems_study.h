@@ -22,6 +22,11 @@
 //                   variance σ_o²/h, p11 = 1/3: successive equal readings carry little new information
 //                   [1, sec. V-B], and exact moments at each of them collapse the filter (lc_plain)
 //   lc_event_trunc  first-passage event model, but exact interval moments for every other reading
+//   lc_event_capped first-passage event model, exact interval readings with information capped at h/σ_o²
+//   lc_wedge        (the CLI's lc_gaussian) every change of reading y(k−1) ≠ y(k) is the exact wedge of the
+//                   lagged pair (x1(k−1), x1(k)), e.g. x1(k−1) < T ≤ x1(k) (ident/crossing_reading.h: a
+//                   log-concave reading of the augmented state, Tallis moments, exact update of x(k));
+//                   every repeated reading is the σ_o reading of lc_event (p11 = 1/3)
 //   bound           CovarianceBoundTracker with the modified event measurement: crossing ∈ LC(Q_M),
 //                   Q_M = diag(σ_M⁻², 0), y = 0 ∈ LC(0); rms = √(mean P̄22)
 //
@@ -55,7 +60,7 @@ struct MemsObserverResult {
 };
 
 struct MemsTrace {
-  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_event, var_bound, err2_grid, y;
+  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian, var_bound, err2_grid, y;
 };
 
 struct MemsStudyResult {
@@ -64,6 +69,7 @@ struct MemsStudyResult {
   std::vector<MemsObserverResult> observers;   // in the order listed in the header comment
   double sigma_o = 0;        // σ_o used by tuned_kalman (p11 = 1/√3)
   double sigma_m2 = 0;
+  int wedge_fallbacks = 0;   // changes of reading where lc_wedge's wedge had no mass (first-passage reading used)
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };

@@ -32,7 +32,7 @@ struct MemsCommandOptions {
 // The columns of the Fig. 9 table: (csv name, observer name in the study).
 const std::vector<std::pair<std::string, std::string>> kColumns = {
     {"grid", "grid"},         {"tuned_kalman", "tuned_kalman"}, {"tuned_kalman_13", "tuned_kalman_13"},
-    {"lc_gaussian", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"}, {"lc_event_capped", "lc_event_capped"},
+    {"lc_gaussian", "lc_wedge"}, {"lc_event", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"}, {"lc_event_capped", "lc_event_capped"},
     {"bound", "bound"}};
 
 void RunMems(const MemsCommandOptions& o) {
@@ -85,7 +85,7 @@ void RunMems(const MemsCommandOptions& o) {
     std::cout << "\n";
   }
   std::cout << fmt::format("sigma_o = {:.4f} (p11 = 1/sqrt 3), bound: sigma_M^2 = (2 h v_ref)^2/3; lc_gaussian = "
-                           "first-passage event model + sigma_o(p11 = 1/3) for y = 0\n",
+                           "lc_wedge: exact wedge at changes of y + sigma_o(p11 = 1/3) for repeated y\n",
                            results.front().sigma_o);
   if (!o.csv.empty()) {
     std::ofstream& f = csv_file;
@@ -108,13 +108,13 @@ void RunMems(const MemsCommandOptions& o) {
     f << "t,x1,y,var_grid,var_tuned_kalman,var_lc_gaussian,var_bound\n";
     for (size_t k = 0; k < tr.t.size(); ++k)
       f << fmt::format("{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", tr.t[k], tr.x1[k], tr.y[k], tr.var_grid[k],
-                       tr.var_tuned_kalman[k], tr.var_lc_event[k], tr.var_bound[k]);
+                       tr.var_tuned_kalman[k], tr.var_lc_gaussian[k], tr.var_bound[k]);
   }
   if (!o.plot.empty()) {
     PlotPanel fig9{.title = "Fig. 9: RMS velocity error vs mean time between events", .xlabel = "t_mean",
                    .ylabel = "RMS x2 error", .series = {}};
     for (const auto& [col, name] : {std::pair<std::string, std::string>{"grid", "grid"},
-                                    {"tuned Kalman", "tuned_kalman"}, {"LC Gaussian", "lc_event"},
+                                    {"tuned Kalman", "tuned_kalman"}, {"LC Gaussian", "lc_wedge"},
                                     {"bound", "bound"}}) {
       PlotSeries s{col, {}, {}};
       for (const auto& r : results) { s.x.push_back(r.t_mean); s.y.push_back(r.Get(name).rms); }
@@ -130,7 +130,7 @@ void RunMems(const MemsCommandOptions& o) {
     };
     fig8.series.push_back(window("grid", tr.var_grid));
     fig8.series.push_back(window("tuned Kalman", tr.var_tuned_kalman));
-    fig8.series.push_back(window("LC Gaussian", tr.var_lc_event));
+    fig8.series.push_back(window("LC Gaussian", tr.var_lc_gaussian));
     fig8.series.push_back(window("approximate bound", tr.var_bound));
     RenderPlot(o.plot, {fig9, fig8});
   }

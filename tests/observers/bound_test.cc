@@ -234,6 +234,16 @@ TEST(MemsStudy, TunedKalmanAndBoundBehaveAsThePaperSays) {
   EXPECT_LT(r.Get("tuned_kalman").rms, 1.4 * r.Get("grid").rms);
   EXPECT_GT(r.Get("grid").calibration, 0.7);
   EXPECT_LT(r.Get("grid").calibration, 1.6);
+  // The exact wedge reading at changes of the reading (lc_wedge): within 20 % of the grid, calibrated
+  // within [0.7, 1.4], never needing the first-passage fallback, and far from the plain filter's collapse.
+  const auto& wedge = r.Get("lc_wedge");
+  std::printf("lc_wedge rms %.4f (cal %.2f), lc_event %.4f (cal %.2f), grid %.4f\n", wedge.rms, wedge.calibration,
+              r.Get("lc_event").rms, r.Get("lc_event").calibration, r.Get("grid").rms);
+  EXPECT_LT(wedge.rms, 1.2 * r.Get("grid").rms);
+  EXPECT_GT(wedge.calibration, 0.7);
+  EXPECT_LT(wedge.calibration, 1.4);
+  EXPECT_EQ(r.wedge_fallbacks, 0);
+  EXPECT_LT(wedge.rms, 0.8 * r.Get("lc_plain").rms);
 }
 
 }  // namespace
