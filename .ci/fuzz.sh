@@ -21,10 +21,17 @@ if ! command -v "${CXX:-clang++}" >/dev/null; then
   echo "fuzz.sh: ${CXX:-clang++} not found (apt-get install clang libclang-rt-14-dev)" >&2
   exit 1
 fi
+if [ "$#" -gt 0 ]; then
+  targets=("$@")
+else
+  targets=()
+  for src in "$root"/fuzz/*_fuzzer.cc; do targets+=("$(basename "$src" .cc)"); done
+fi
+
 mkdir -p "$build"
-# Reuse a build tree already configured with IDENT_BUILD_FUZZERS=ON (.ci/test passes its sanitizer build,
-# so the library is compiled once for the sanitizer suite and the fuzzers); otherwise configure one with
-# only what the fuzzers need (-O1 and line tables: half the compile time of -O2 -g, reports keep file:line).
+# Reuse a build tree already configured with IDENT_BUILD_FUZZERS=ON; otherwise configure the top-level
+# project with only what the fuzzers need (no tests, benchmarks, examples; -O1 and line tables: half the
+# compile time of -O2 -g, and reports keep file:line). Only the requested targets are built.
 if ! grep -q '^IDENT_BUILD_FUZZERS:BOOL=ON' "$build/CMakeCache.txt" 2>/dev/null; then
   if ! CXX="${CXX:-clang++}" cmake -S "$root" -B "$build" -G Ninja -DIDENT_BUILD_FUZZERS=ON \
         -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
@@ -35,17 +42,10 @@ if ! grep -q '^IDENT_BUILD_FUZZERS:BOOL=ON' "$build/CMakeCache.txt" 2>/dev/null;
     exit 1
   fi
 fi
-if ! cmake --build "$build" -j"$jobs" --target fuzzers >"$build/fuzz-build.log" 2>&1; then
+if ! cmake --build "$build" -j"$jobs" --target "${targets[@]}" >"$build/fuzz-build.log" 2>&1; then
   tail -n 30 "$build/fuzz-build.log" >&2
   echo "fuzz.sh: building the fuzz targets failed (log: $build/fuzz-build.log)" >&2
   exit 1
-fi
-
-if [ "$#" -gt 0 ]; then
-  targets=("$@")
-else
-  targets=()
-  for src in "$root"/fuzz/*_fuzzer.cc; do targets+=("$(basename "$src" .cc)"); done
 fi
 
 # Runs one target on a copy of its seed corpus; writes "<execs> <corpus size> <status>" to $work/result.
