@@ -88,6 +88,8 @@ TiltedMoments UpperStandardTruncatedMoments(double a, double b) {
 
 }  // namespace
 
+double LogNormalDensity(double x) { return LogPhi(x); }
+
 double LogNormalTail(double x) {
   if (x < 30.0) return std::log(0.5 * boost::math::erfc(x * std::numbers::sqrt2 / 2));
   // Mills ratio Q(x)/φ(x) = 1/(x + 1/(x + 2/(x + 3/(x + ...)))), converged for x ≥ 30.

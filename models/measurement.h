@@ -99,6 +99,8 @@ TiltedMoments TruncatedNormalMoments(double mean, double variance, double lo, do
 TiltedMoments StandardTruncatedMoments(double a, double b);
 // log P(Z > x) for standard normal Z, accurate far into the upper tail.
 double LogNormalTail(double x);
+// log φ(x) of the standard normal density (−∞ at ±∞).
+double LogNormalDensity(double x);
 
 class GaussianMeasurement final : public ProjectedMeasurement {
  public:

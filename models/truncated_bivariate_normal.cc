@@ -12,29 +12,26 @@
 namespace ident::models {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-const double kLogSqrt2Pi = 0.5 * std::log(2.0 * std::numbers::pi);
-
-double LogPhi(double x) { return std::isinf(x) ? -kInf : -0.5 * x * x - kLogSqrt2Pi; }   // log φ(x)
+constexpr double kPlusInfinity = std::numeric_limits<double>::infinity();
+constexpr double kNotANumber = std::numeric_limits<double>::quiet_NaN();
 
 // log of the integrand φ(y) Q((h − ρy)/s) of P(X > h, Y > k) = ∫_k^∞ φ(y) Q((h − ρy)/s) dy.
-double LogIntegrand(double y, double h, double rho, double s) { return LogPhi(y) + LogNormalTail((h - rho * y) / s); }
+double LogIntegrand(double y, double h, double rho, double s) { return LogNormalDensity(y) + LogNormalTail((h - rho * y) / s); }
 
 // d/dy of LogIntegrand: −y + (ρ/s) λ(z), z = (h − ρy)/s, λ = φ/Q the normal hazard. Decreasing in y
 // (the integrand is log-concave with curvature ≤ −1).
 double LogIntegrandSlope(double y, double h, double rho, double s) {
   const double z = (h - rho * y) / s;
-  return -y + rho / s * std::exp(LogPhi(z) - LogNormalTail(z));
+  return -y + rho / s * std::exp(LogNormalDensity(z) - LogNormalTail(z));
 }
 
 }  // namespace
 
 double LogUpperOrthantProbability(double h, double k, double rho) {
-  if (std::isnan(h) || std::isnan(k) || !(std::abs(rho) < 1)) return kNaN;
-  if (h == kInf || k == kInf) return -kInf;
-  if (h == -kInf) return LogNormalTail(k);
-  if (k == -kInf) return LogNormalTail(h);
+  if (std::isnan(h) || std::isnan(k) || !(std::abs(rho) < 1)) return kNotANumber;
+  if (h == kPlusInfinity || k == kPlusInfinity) return -kPlusInfinity;
+  if (h == -kPlusInfinity) return LogNormalTail(k);
+  if (k == -kPlusInfinity) return LogNormalTail(h);
   const double s = std::sqrt((1 - rho) * (1 + rho));
   // Mode y* of the log-concave integrand on [k, ∞): bracket, then bisection on the decreasing slope.
   double mode = k;
@@ -48,10 +45,10 @@ double LogUpperOrthantProbability(double h, double k, double rho) {
     mode = 0.5 * (lo + hi);
   }
   const double peak = LogIntegrand(mode, h, rho, s);
-  if (!std::isfinite(peak)) return -kInf;
+  if (!std::isfinite(peak)) return -kPlusInfinity;
   // Curvature ≤ −1, so the integrand is below e^(−800) of its peak beyond ±40 of the mode. Cut at the
   // mode and at the edge of the Q factor (z = 0, width s/|ρ|).
-  std::array<double, 4> cuts{std::max(k, mode - 40), mode, mode + 40, kNaN};
+  std::array<double, 4> cuts{std::max(k, mode - 40), mode, mode + 40, kNotANumber};
   int n = 3;
   if (rho != 0) {
     const double edge = h / rho;
@@ -90,8 +87,8 @@ TruncatedBivariateMoments TruncatedBivariateNormalMoments(const Eigen::Vector2d&
   const double s = std::sqrt((1 - rho) * (1 + rho));
   // Ratios to L of A_h = φ(h) Q((k − ρh)/s), A_k = φ(k) Q((h − ρk)/s) and f = φ2(h, k; ρ) (zero at −∞).
   const bool fin_h = std::isfinite(h), fin_k = std::isfinite(k);
-  const double r_h = fin_h ? std::exp(LogPhi(h) + (fin_k ? LogNormalTail((k - rho * h) / s) : 0.0) - log_l) : 0.0;
-  const double r_k = fin_k ? std::exp(LogPhi(k) + (fin_h ? LogNormalTail((h - rho * k) / s) : 0.0) - log_l) : 0.0;
+  const double r_h = fin_h ? std::exp(LogNormalDensity(h) + (fin_k ? LogNormalTail((k - rho * h) / s) : 0.0) - log_l) : 0.0;
+  const double r_k = fin_k ? std::exp(LogNormalDensity(k) + (fin_h ? LogNormalTail((h - rho * k) / s) : 0.0) - log_l) : 0.0;
   const double r_f = fin_h && fin_k ? std::exp(-(h * h - 2 * rho * h * k + k * k) / (2 * s * s) -
                                                std::log(2 * std::numbers::pi * s) - log_l)
                                     : 0.0;
