@@ -24,7 +24,7 @@ struct MemsCommandOptions {
   std::vector<double> t_targets = {0.3, 0.5, 1.0, 1.5, 2.0, 3.0};
   int steps = 4000;
   unsigned seed = 1;
-  int grid_points = 64;
+  int grid_points = 96;
   double h = 0.01;
   std::string csv, trace, plot;
 };
@@ -33,7 +33,7 @@ struct MemsCommandOptions {
 const std::vector<std::pair<std::string, std::string>> kColumns = {
     {"grid", "grid"},         {"tuned_kalman", "tuned_kalman"}, {"tuned_kalman_13", "tuned_kalman_13"},
     {"lc_gaussian", "lc_wedge"}, {"lc_event", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"}, {"lc_event_capped", "lc_event_capped"},
-    {"bound", "bound"}};
+    {"lc_wedge", "lc_wedge"}, {"lc_excursion", "lc_excursion"}, {"bound", "bound"}};
 
 void RunMems(const MemsCommandOptions& o) {
   IDENT_REQUIRE(!o.t_targets.empty(), "--t-mean needs at least one value");
