@@ -79,6 +79,7 @@ void ExcursionReading::SetMarginal(const Factor& f, const Eigen::Vector2d& mean,
   gain_.leftCols(k).topRows(d).noalias() = sigma_.block(0, a, d, k) * inv.topLeftCorner(k, k);
   const Eigen::Vector2d dm = mean - (k == 2 ? Eigen::Vector2d(mu_.segment(a, 2)) : Eigen::Vector2d(mu_(a), 0));
   const Eigen::Matrix2d dc = cov - sigma_aa;
+  if (dm.head(k).isZero(0.0) && dc.topLeftCorner(k, k).isZero(0.0)) return;   // an inactive factor: nothing moves
   mu_.head(d).noalias() += gain_.leftCols(k).topRows(d) * dm.head(k);
   work_m_.leftCols(k).topRows(d).noalias() = gain_.leftCols(k).topRows(d) * dc.topLeftCorner(k, k);
   sigma_.topLeftCorner(d, d).noalias() += work_m_.leftCols(k).topRows(d) * gain_.leftCols(k).topRows(d).transpose();
@@ -109,6 +110,19 @@ double ExcursionReading::Refit(Factor& f) {
   Eigen::Vector2d mc;
   Eigen::Matrix2d vc;
   Cavity(f, mc, vc);
+  // An unchanged cavity (within the tolerance, relative to its sd / variance) gives the same site: skip
+  // the refit and its O(d²) joint update (the fixed point is the same).
+  if (std::isfinite(f.last_mean(0))) {
+    double moved = 0;
+    for (int i = 0; i < f.dim; ++i) {
+      moved = std::max(moved, std::abs(mc(i) - f.cavity_mean(i)) / std::sqrt(vc(i, i)));
+      for (int j = 0; j < f.dim; ++j)
+        moved = std::max(moved, std::abs(vc(i, j) - f.cavity_cov(i, j)) / std::sqrt(vc(i, i) * vc(j, j)));
+    }
+    if (moved <= options_.tolerance) return 0.0;
+  }
+  f.cavity_mean = mc;
+  f.cavity_cov = vc;
   Eigen::Vector2d mt = Eigen::Vector2d::Zero();
   Eigen::Matrix2d vt = Eigen::Matrix2d::Zero();
   if (f.dim == 2) {

@@ -31,8 +31,9 @@
 //   if (ex.active() || y != y_prev) ex.Step(f, m_before, P_before, model, u, y_prev, y);  // writes f's state
 //   else f.ApplyTilt(...);                                                               // y = 0 repeated
 //
-// Cost per step inside an excursion of length L: sweeps × L factor refits, each O((L + n)²) (storage for
-// max_length readings is allocated at construction). Past max_length steps the excursion is closed (the state kept) and later
+// Cost per step inside an excursion of length L: sweeps × L factor refits, each O((L + n)²). The joint's
+// storage for max_length readings is allocated at construction, but the time update allocates small
+// temporaries: not for hard real time (unlike BasicLcGaussianFilter). Past max_length steps the excursion is closed (the state kept) and later
 // readings of it are left to the caller (Step returns kRejectedInvalid).
 //
 // [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
@@ -88,6 +89,8 @@ class ExcursionReading {
     Eigen::Vector2d eta;           // site precision × mean
     Eigen::Vector2d last_mean;     // tilted moments of the last refit (convergence check)
     Eigen::Matrix2d last_cov;
+    Eigen::Vector2d cavity_mean;   // cavity of the last refit: an unchanged cavity needs no refit
+    Eigen::Matrix2d cavity_cov;
   };
   // Refit factor f (EP step); returns the largest relative change of its tilted moments, or −1 if the
   // factor has no mass.

@@ -135,8 +135,12 @@ TEST(ExcursionReading, WholeExcursionIsCloseToMonteCarloAndCloserThanTheSequenti
     EXPECT_NEAR(ep.mean()(i), mc_mean(i), 0.05 * sd + 4 * sd / std::sqrt(n)) << i;
     EXPECT_NEAR(ep.covariance()(i, i), mc_cov(i, i), 0.05 * mc_cov(i, i)) << i;
   }
-  // The sequential projection is overconfident in the velocity here; EP's variance is nearer the truth.
-  EXPECT_LT(std::abs(ep.covariance()(1, 1) - mc_cov(1, 1)), std::abs(adf.covariance()(1, 1) - mc_cov(1, 1)));
+  // The sequential projection re-truncates its Gaussian projection (overconfident: −8 % in var x1 here);
+  // EP's mean and variance are nearer the exact posterior.
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_LT(std::abs(ep.covariance()(i, i) - mc_cov(i, i)), std::abs(adf.covariance()(i, i) - mc_cov(i, i))) << i;
+    EXPECT_LT(std::abs(ep.mean()(i) - mc_mean(i)), std::abs(adf.mean()(i) - mc_mean(i))) << i;
+  }
 }
 
 TEST(ExcursionReading, BadInputIsRejectedOrThrows) {
