@@ -4,6 +4,7 @@
 // Gaussian path against the whole reading sequence), where EP must be close and closer than the
 // sequential (assumed-density) projection of the same exact factors; (3) bad input.
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -171,6 +172,29 @@ TEST(ExcursionReading, BadInputIsRejectedOrThrows) {
   EXPECT_EQ(ex.Step(g, gb, gP, model, u, 0.0, 1.0).status, StepStatus::kNumericalFailure);
   EXPECT_EQ(g.mean(), gm);
   EXPECT_FALSE(ex.active());
+}
+
+TEST(LcGaussianFilterAssign, ReplacesTheStateOrRejectsWithoutTouchingIt) {
+  LcGaussianFilter f(Eigen::Vector2d(0.5, 1.0), Eigen::Matrix2d::Identity());
+  const Eigen::Vector2d m = f.mean();
+  const Eigen::Matrix2d P = f.covariance();
+  Eigen::Matrix2d bad_nan = P;
+  bad_nan(0, 1) = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Matrix2d bad_neg = P;
+  bad_neg(1, 1) = -1e-3;
+  EXPECT_EQ(f.Assign(Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.Assign(Eigen::Vector2d::Zero(), bad_nan).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.Assign(Eigen::Vector2d::Zero(), bad_neg).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.mean(), m);
+  EXPECT_EQ(f.covariance(), P);
+  Eigen::Matrix2d asym;
+  asym << 2.0, 0.3, 0.1, 1.0;
+  const double ll = f.log_likelihood();
+  ASSERT_TRUE(f.Assign(Eigen::Vector2d(-1, 2), asym).updated());
+  EXPECT_EQ(f.mean(), Eigen::Vector2d(-1, 2));
+  EXPECT_DOUBLE_EQ(f.covariance()(0, 1), 0.2);   // symmetrised
+  EXPECT_DOUBLE_EQ(f.covariance()(1, 0), 0.2);
+  EXPECT_EQ(f.log_likelihood(), ll);
 }
 
 }  // namespace excursion_test
