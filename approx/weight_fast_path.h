@@ -154,7 +154,11 @@ inline double HouseholderRoot(const std::array<double, 4>& mu, double a, double 
 
 // The common case (see the header comment): fills s (β, β0, β_hi, num_maxima = 1, iterations) and
 // returns true, or returns false (s partly written) when SolveWeight's general path must decide.
-// `c` must have been formed for p (c.nu == p.nu, same ρ, k, δ).
+// `c` must have been formed for p (c.nu == p.nu, same ρ, k, δ). Forced inline: GCC otherwise keeps it
+// out of line, and the call sits on the update's critical path (see the header comment).
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 inline bool SolveWeightCommon(const WeightingProblem& p, const WeightConstants& c, WeightSolution& s) {
   const double a = Beta0Inline(p), b = c.beta_hi;
   s.beta0 = a;
@@ -184,6 +188,10 @@ inline bool SolveWeightCommon(const WeightingProblem& p, const WeightConstants& 
 }  // namespace internal
 
 // SolveWeight with its common case inline (same results, bit for bit); `c` as for SolveWeightCommon.
+// Forced inline as well, so that the solution stays in registers (not returned through memory).
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
 inline WeightSolution SolveWeightInline(const WeightingProblem& p, const WeightConstants& c) {
   WeightSolution s;
   if (internal::SolveWeightCommon(p, c, s)) return s;

@@ -102,20 +102,9 @@ inline std::string GridObserverProperty(const std::uint8_t* data, std::size_t si
         report = grid.Predict(model, u);
       } else {
         Fill(in, c);
-        const std::uint8_t kind = in.Byte() % 4;
-        const double parameter = Value(in);
-        const double y = Value(in);
-        std::unique_ptr<models::ProjectedMeasurement> m;
-        try {
-          switch (kind) {
-            case 0: m = std::make_unique<models::GaussianMeasurement>(c, parameter); break;
-            case 1: m = std::make_unique<models::ThresholdSensor>(c, parameter); break;
-            case 2: m = std::make_unique<models::UniformQuantizer>(c, parameter); break;
-            default: m = std::make_unique<models::LaplaceMeasurement>(c, parameter); break;
-          }
-        } catch (const InvalidArgument&) {
-          continue;  // refused at the boundary, as documented
-        }
+        double y;
+        const std::unique_ptr<models::ProjectedMeasurement> m = ReadMeasurement(in, c, y);
+        if (!m) continue;  // refused at the boundary, as documented
         report = grid.Correct(*m, y);
       }
     } catch (const std::exception& e) {

@@ -55,6 +55,25 @@ inline void ReadPredict(ByteReader& in, bool raw_noise, models::LinearStateSpace
   u(0) = Value(in);
 }
 
+// Reads one projected measurement on c'x (kind, parameter) and its reading y. Returns nullptr when the
+// measurement's constructor refuses the parameter (the documented boundary check); y is read either way.
+inline std::unique_ptr<models::ProjectedMeasurement> ReadMeasurement(ByteReader& in, const Eigen::VectorXd& c,
+                                                                     double& y) {
+  const std::uint8_t kind = in.Byte() % 4;
+  const double parameter = Value(in);
+  y = Value(in);
+  try {
+    switch (kind) {
+      case 0: return std::make_unique<models::GaussianMeasurement>(c, parameter);
+      case 1: return std::make_unique<models::ThresholdSensor>(c, parameter);
+      case 2: return std::make_unique<models::UniformQuantizer>(c, parameter);
+      default: return std::make_unique<models::LaplaceMeasurement>(c, parameter);
+    }
+  } catch (const InvalidArgument&) {
+    return nullptr;
+  }
+}
+
 }  // namespace observer_detail
 
 inline Eigen::MatrixXd CovarianceOf(const KalmanFilter& f) { return f.covariance_factor(); }
@@ -109,20 +128,9 @@ inline std::string LcGaussianProperty(const std::uint8_t* data, std::size_t size
   const int n = 1 + in.Byte() % 3;
   LcGaussianFilter filter(Eigen::VectorXd::Zero(n), Eigen::MatrixXd::Identity(n, n));
   return RunObserverProperty(in, n, filter, [&](ByteReader& r, const Eigen::VectorXd& c) {
-    const std::uint8_t kind = r.Byte() % 4;
-    const double parameter = observer_detail::Value(r);
-    const double y = observer_detail::Value(r);
-    std::unique_ptr<models::ProjectedMeasurement> m;
-    try {
-      switch (kind) {
-        case 0: m = std::make_unique<models::GaussianMeasurement>(c, parameter); break;
-        case 1: m = std::make_unique<models::ThresholdSensor>(c, parameter); break;
-        case 2: m = std::make_unique<models::UniformQuantizer>(c, parameter); break;
-        default: m = std::make_unique<models::LaplaceMeasurement>(c, parameter); break;
-      }
-    } catch (const InvalidArgument&) {
-      return StepReport{StepStatus::kSkipped};  // refused at the boundary, as documented
-    }
+    double y;
+    const std::unique_ptr<models::ProjectedMeasurement> m = observer_detail::ReadMeasurement(r, c, y);
+    if (!m) return StepReport{StepStatus::kSkipped};  // refused at the boundary, as documented
     return filter.Correct(*m, y);
   });
 }

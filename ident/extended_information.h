@@ -96,10 +96,14 @@ class ExtendedInformation {
   // With_xi = false computes ê only (ξ = ξ_z = NaN): RLS needs no ξ and saves ρ+1 divisions.
   template <bool WithXi = true, class Derived>
   Innovation Prepare(double y, const Eigen::MatrixBase<Derived>& z) {
+    // g and h are both written from (y, z) (not g copied from h: a wide load of h just after its
+    // narrow stores cannot be store-forwarded and stalls the update's critical path).
     h_(0) = y;
     h_.tail(h_.size() - 1) = z;
+    g_(0) = y;
+    g_.tail(g_.size() - 1) = z;
     if constexpr (!WithXi) {
-      V_.SolveTransposed(h_, g_);
+      V_.SolveTransposed(g_, g_);
       constexpr double nan = std::numeric_limits<double>::quiet_NaN();
       return {nan, nan, g_(0)};
     }
@@ -108,7 +112,7 @@ class ExtendedInformation {
     const auto& d = V_.d();
     const Eigen::Index n = g_.size();
     for (Eigen::Index i = 0; i < n; ++i) inv_d_(i) = 1 / d(i);
-    V_.SolveTransposed(h_, g_);
+    V_.SolveTransposed(g_, g_);
     double zeta = 0;
     for (Eigen::Index i = n - 1; i >= 1; --i) {
       zeta += g_(i) * g_(i) * inv_d_(i);

@@ -126,7 +126,8 @@ class LdFactor {
   template <class Derived>
   Plan PlanUpdate(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
     Plan p = PlanPrefixSum(s, c, g);
-    if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) p = PlanChained(s, c, g);
+    if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) [[unlikely]]
+      p = PlanChained(s, c, g);
     plan_ = p;
     return p;
   }
@@ -154,15 +155,10 @@ class LdFactor {
       const double dn = d_(j) * w * ratio_next;
       const double b = c * gj * inv_d(j) * rw;
       ratio_next = s * rw;
-      d_next_(j) = dn;
-      b_(j) = b;
-      p.min_d = std::min(p.min_d, dn);
-      p.max_d = std::max(p.max_d, dn);
-      p.d_sum += dn;
-      p.max_b = std::max(p.max_b, std::abs(b));
-      p.g_abs_sum += std::abs(gj);
+      Record(p, j, dn, b, gj);
     }
-    if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) p = PlanChained(s, c, g);
+    if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) [[unlikely]]
+      p = PlanChained(s, c, g);
     plan_ = p;
     return p;
   }
@@ -252,6 +248,17 @@ class LdFactor {
   // Covers the rounding of the ~2n operations behind each L entry (relative 2^-52 each) many times over.
   static constexpr double kRoundingSlack = 1 + 0x1p-20;
 
+  // Stores the new d_j and b_j of a plan sweep and adds them to the plan's by-products.
+  void Record(Plan& p, Eigen::Index j, double dn, double b, double gj) noexcept {
+    d_next_(j) = dn;
+    b_(j) = b;
+    p.min_d = std::min(p.min_d, dn);
+    p.max_d = std::max(p.max_d, dn);
+    p.d_sum += dn;
+    p.max_b = std::max(p.max_b, std::abs(b));
+    p.g_abs_sum += std::abs(gj);
+  }
+
   void Workspace(int n) {
     d_next_.resize(n);
     b_.resize(n);
@@ -276,20 +283,15 @@ class LdFactor {
         b = gj * w * ru;
         u_next = u, ru_next = ru;
       }
-      d_next_(j) = dn;
-      b_(j) = b;
-      p.min_d = std::min(p.min_d, dn);
-      p.max_d = std::max(p.max_d, dn);
-      p.d_sum += dn;
-      p.max_b = std::max(p.max_b, std::abs(b));
-      p.g_abs_sum += std::abs(gj);
+      Record(p, j, dn, b, gj);
     }
     return p;
   }
 
-  // The c-form of the same sweep (as RankOneUpdate), for scales where the prefix sum overflows.
+  // The c-form of the same sweep (as RankOneUpdate), for scales where the prefix sum overflows
+  // (rare: kept out of line, so that the common path's code stays small).
   template <class Derived>
-  Plan PlanChained(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
+  [[gnu::noinline, gnu::cold]] Plan PlanChained(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
     const Eigen::Index n = d_.size();
     Plan p;
     p.min_d = std::numeric_limits<double>::infinity();
@@ -305,13 +307,7 @@ class LdFactor {
       } else if (!(c > 0) && sweep_end_ == 0) {
         sweep_end_ = j + 1;  // rows < j+1 keep their L
       }
-      d_next_(j) = dn;
-      b_(j) = b;
-      p.min_d = std::min(p.min_d, dn);
-      p.max_d = std::max(p.max_d, dn);
-      p.d_sum += dn;
-      p.max_b = std::max(p.max_b, std::abs(b));
-      p.g_abs_sum += std::abs(gj);
+      Record(p, j, dn, b, gj);
     }
     return p;
   }

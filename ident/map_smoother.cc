@@ -12,6 +12,7 @@
 
 #include "ident/block_tridiagonal.h"
 #include "ident/common/error.h"
+#include "ident/map_smoother_fast_path.h"
 #include "ident/work_arena.h"
 
 namespace ident {
@@ -174,6 +175,78 @@ IDENT_HOT void AddMatTVec(const double* A, int r_runtime, int c_runtime, const d
   }
 }
 
+// Everything of the result after the iteration, from res->x and res->u (see ident/map_smoother_fast_path.h).
+template <int kN>
+void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {
+  const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
+  res->w.resize(n, T + 1);
+  for (int t = 0; t <= T; ++t) {  // w_t = x_t - F_{t-1} x_{t-1}
+    double* wt = res->w.col(t).data();
+    const double* xt = res->x.col(t).data();
+    for (int i = 0; i < n; ++i) wt[i] = xt[i];
+    if (t > 0) AddMatVec<kN, kN>(p.Ft(t - 1).data(), n, n, xt - n, wt, -1.0);
+  }
+  // Dual point: u from the multipliers, y from u by the dynamics of (D) (exact A'y = H'u). Rounding can
+  // leave u_t, y_t a hair outside a box dom f*, dom g*: the distance is reported and the point projected.
+  auto project = [&](const Penalty& pen, double* v, int size) {
+    double violation = 0;
+    for (int i = 0; i < size; ++i) {
+      const double c = std::clamp(v[i], pen.conjugate_lo()(i), pen.conjugate_hi()(i));
+      violation = std::max(violation, std::abs(c - v[i]));
+      v[i] = c;
+    }
+    res->dual_infeasibility = std::max(res->dual_infeasibility, violation);
+  };
+  for (int t = 0; t <= T; ++t) project(p.gt(t), res->u.col(t).data(), nz);
+  res->y.resize(n, T + 1);
+  for (int t = T; t >= 0; --t) {  // y_T = H_T'u_T, y_t = F_t'y_{t+1} + H_t'u_t   [BCW Thm 2.5, A'y = H'u]
+    double* yt = res->y.col(t).data();
+    for (int i = 0; i < n; ++i) yt[i] = 0;
+    if (t < T) AddMatTVec<kN, kN>(p.Ft(t).data(), n, n, yt + n, yt, 1.0);
+    AddMatTVec<0, kN>(p.Ht(t).data(), nz, n, res->u.col(t).data(), yt, 1.0);
+  }
+  for (int t = 0; t <= T; ++t) project(p.ft(t), res->y.col(t).data(), n);
+  double dual = 0, primal = 0;
+  const double domain_tolerance = 1e-8 * z_scale;
+  Eigen::VectorXd residual(nz);
+  double* r = residual.data();
+  for (int t = 0; t <= T; ++t) {
+    dual += p.z.col(t).dot(res->u.col(t)) - p.gt(t).Conjugate(res->u.col(t)) - p.ft(t).Conjugate(res->y.col(t));
+    for (int i = 0; i < nz; ++i) r[i] = p.z(i, t);  // z_t - H_t x_t
+    AddMatVec<0, kN>(p.Ht(t).data(), nz, n, res->x.col(t).data(), r, -1.0);
+    primal += p.ft(t).Value(res->w.col(t), domain_tolerance) +
+              p.gt(t).Value(Eigen::Map<const Eigen::VectorXd>(r, nz), domain_tolerance);
+  }
+  res->dual = dual;
+  res->primal = primal;
+  res->gap = res->primal - res->dual;
+  res->relative_gap = res->gap / std::max(1.0, std::abs(res->primal));
+  // Reconstruction w_t in d f_t*(y_t), then x_0 = w_0, x_{t+1} = F_t x_t + w_{t+1}  [BCW sec. 3].
+  res->x_from_dual.resize(n, T + 1);
+  res->nonunique_steps.clear();
+  // The interior point locates a dual state that is degenerate on a kink of f_t* only to O(sqrt(mu)),
+  // so kinks closer than y_tolerance count as reached.
+  const double y_tolerance = std::max(1e-7, 100 * std::sqrt(std::max(mu, 0.0)));
+  for (int t = 0; t <= T; ++t) {
+    const Penalty& f = p.ft(t);
+    double* xt = res->x_from_dual.col(t).data();
+    f.ConjugateGradient(res->y.col(t), res->x_from_dual.col(t));
+    // d f_t*(y_t) is not a single point if (a) f_t* has a kink within y_tolerance of y_t, or (b) the
+    // primal w_t (an element of d f_t*(y_t) at the optimum) differs from the element just chosen.
+    double w_diff = 0, w_scale = 1;
+    for (int i = 0; i < n; ++i) {
+      w_diff = std::max(w_diff, std::abs(xt[i] - res->w(i, t)));
+      w_scale = std::max({w_scale, std::abs(xt[i]), std::abs(res->w(i, t))});
+    }
+    const double y_scale = 1 + res->y.col(t).cwiseAbs().maxCoeff();
+    if (!f.ConjugateIsDifferentiableNear(res->y.col(t), y_tolerance * y_scale) || w_diff > 1e-6 * w_scale)
+      res->nonunique_steps.push_back(t);
+    if (t > 0) AddMatVec<kN, kN>(p.Ft(t - 1).data(), n, n, xt - n, xt, 1.0);
+  }
+  res->reconstruction_unique = res->nonunique_steps.empty();
+  res->max_abs_x_difference = (res->x_from_dual - res->x).cwiseAbs().maxCoeff();
+}
+
 // The interior-point iteration. kN > 0 fixes the state dimension n at compile time (n = 1..4: the
 // per-step loops unroll); kN = 0 is the run-time-size fallback. All work arrays are allocated by the
 // constructor; an iteration allocates nothing (except the dense K of non-diagonal box monitoring
@@ -316,18 +389,7 @@ class Solver {
       Step(std::min(1.0, o_.step_fraction * MaxStep()));
     }
     res.iterations = iter;
-    switch (res.status) {
-      case MapSmootherStatus::kConverged:
-        res.message = fmt::format("converged in {} iterations (KKT residual {:.1e})", iter, res.kkt_residual);
-        break;
-      case MapSmootherStatus::kMaxIterations:
-        res.message = fmt::format("did not converge in {} iterations (the problem may be infeasible)", iter);
-        break;
-      case MapSmootherStatus::kInfeasible:
-        res.message = "the multipliers diverge: no state sequence keeps every residual inside its penalty's domain";
-        break;
-      case MapSmootherStatus::kNumericalFailure: res.message = "the Newton matrix is not positive definite"; break;
-    }
+    internal::SetMapSmootherMessage(&res);
     Finish(&res, z_scale, mu);
     return res;
   }
@@ -663,12 +725,9 @@ class Solver {
     }
   }
 
-  // Objective values, the dual point, the reconstruction of x from y and where it is not unique.
+  // The states and dual controls u_t = p + B'u of the iterate; the rest is common to both paths.
   void Finish(MapSmootherResult* res, double z_scale, double mu) {
-    const int n = this->n();
     res->x = x_;
-    res->w.resize(n_, T_ + 1);
-    for (int t = 0; t <= T_; ++t) Residual(terms_[t], x_.data(), true, res->w.col(t).data());  // w_t = x_t - F x_{t-1}
     res->u.resize(nz_, T_ + 1);
     for (const Term& term : terms_) {
       if (term.process) continue;
@@ -684,63 +743,7 @@ class Solver {
       for (int i = 0; i < nz_; ++i) ut[i] = f.p(i);
       AddMatTVec(f.B.data(), term.prep->k, nz_, u_.data() + term.offset, ut, 1.0);
     }
-    // Dual point: u from the multipliers, y from u by the dynamics of (D) (exact A'y = H'u). Rounding can
-    // leave u_t, y_t a hair outside a box dom f*, dom g*: the distance is reported and the point projected.
-    auto project = [&](const Penalty& pen, double* v, int size) {
-      double violation = 0;
-      for (int i = 0; i < size; ++i) {
-        const double c = std::clamp(v[i], pen.conjugate_lo()(i), pen.conjugate_hi()(i));
-        violation = std::max(violation, std::abs(c - v[i]));
-        v[i] = c;
-      }
-      res->dual_infeasibility = std::max(res->dual_infeasibility, violation);
-    };
-    for (int t = 0; t <= T_; ++t) project(p_.gt(t), res->u.col(t).data(), nz_);
-    res->y.resize(n_, T_ + 1);
-    for (int t = T_; t >= 0; --t) {  // y_T = H_T'u_T, y_t = F_t'y_{t+1} + H_t'u_t   [BCW Thm 2.5, A'y = H'u]
-      double* yt = res->y.col(t).data();
-      for (int i = 0; i < n; ++i) yt[i] = 0;
-      if (t < T_) AddMatTVec(terms_[t + 1].F, n, n, yt + n, yt, 1.0);
-      AddMatTVec(terms_[T_ + 1 + t].H, nz_, n, res->u.col(t).data(), yt, 1.0);
-    }
-    for (int t = 0; t <= T_; ++t) project(p_.ft(t), res->y.col(t).data(), n);
-    double dual = 0, primal = 0;
-    const double domain_tolerance = 1e-8 * z_scale;
-    double* r = r_.data();
-    for (int t = 0; t <= T_; ++t) {
-      dual += p_.z.col(t).dot(res->u.col(t)) - p_.gt(t).Conjugate(res->u.col(t)) - p_.ft(t).Conjugate(res->y.col(t));
-      Residual(terms_[T_ + 1 + t], x_.data(), true, r);  // z_t - H_t x_t
-      primal += p_.ft(t).Value(res->w.col(t), domain_tolerance) +
-                p_.gt(t).Value(Eigen::Map<const Eigen::VectorXd>(r, nz_), domain_tolerance);
-    }
-    res->dual = dual;
-    res->primal = primal;
-    res->gap = res->primal - res->dual;
-    res->relative_gap = res->gap / std::max(1.0, std::abs(res->primal));
-    // Reconstruction w_t in d f_t*(y_t), then x_0 = w_0, x_{t+1} = F_t x_t + w_{t+1}  [BCW sec. 3].
-    res->x_from_dual.resize(n_, T_ + 1);
-    res->nonunique_steps.clear();
-    // The interior point locates a dual state that is degenerate on a kink of f_t* only to O(sqrt(mu)),
-    // so kinks closer than y_tolerance count as reached.
-    const double y_tolerance = std::max(1e-7, 100 * std::sqrt(std::max(mu, 0.0)));
-    for (int t = 0; t <= T_; ++t) {
-      const Penalty& f = p_.ft(t);
-      double* xt = res->x_from_dual.col(t).data();
-      f.ConjugateGradient(res->y.col(t), res->x_from_dual.col(t));
-      // d f_t*(y_t) is not a single point if (a) f_t* has a kink within y_tolerance of y_t, or (b) the
-      // primal w_t (an element of d f_t*(y_t) at the optimum) differs from the element just chosen.
-      double w_diff = 0, w_scale = 1;
-      for (int i = 0; i < n; ++i) {
-        w_diff = std::max(w_diff, std::abs(xt[i] - res->w(i, t)));
-        w_scale = std::max({w_scale, std::abs(xt[i]), std::abs(res->w(i, t))});
-      }
-      const double y_scale = 1 + res->y.col(t).cwiseAbs().maxCoeff();
-      if (!f.ConjugateIsDifferentiableNear(res->y.col(t), y_tolerance * y_scale) || w_diff > 1e-6 * w_scale)
-        res->nonunique_steps.push_back(t);
-      if (t > 0) AddMatVec(terms_[t].F, n, n, xt - n, xt, 1.0);
-    }
-    res->reconstruction_unique = res->nonunique_steps.empty();
-    res->max_abs_x_difference = (res->x_from_dual - x_).cwiseAbs().maxCoeff();
+    internal::FinishMapSmootherResult(p_, z_scale, mu, res);
   }
 
   const MapSmootherProblem& p_;
@@ -782,10 +785,42 @@ MapSmootherResult Solve(const MapSmootherProblem& problem, const MapSmootherOpti
 
 }  // namespace
 
+namespace internal {
+
+void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {
+  switch (p.state_dim()) {
+    case 1: return FinishResult<1>(p, z_scale, mu, res);
+    case 2: return FinishResult<2>(p, z_scale, mu, res);
+    case 3: return FinishResult<3>(p, z_scale, mu, res);
+    case 4: return FinishResult<4>(p, z_scale, mu, res);
+    default: return FinishResult<0>(p, z_scale, mu, res);
+  }
+}
+
+void SetMapSmootherMessage(MapSmootherResult* res) {
+  switch (res->status) {
+    case MapSmootherStatus::kConverged:
+      res->message =
+          fmt::format("converged in {} iterations (KKT residual {:.1e})", res->iterations, res->kkt_residual);
+      break;
+    case MapSmootherStatus::kMaxIterations:
+      res->message = fmt::format("did not converge in {} iterations (the problem may be infeasible)", res->iterations);
+      break;
+    case MapSmootherStatus::kInfeasible:
+      res->message = "the multipliers diverge: no state sequence keeps every residual inside its penalty's domain";
+      break;
+    case MapSmootherStatus::kNumericalFailure: res->message = "the Newton matrix is not positive definite"; break;
+  }
+}
+
+}  // namespace internal
+
 MapSmootherResult SolveMapSmoother(const MapSmootherProblem& problem, const MapSmootherOptions& options) {
   ValidateMapSmootherProblem(problem);
   const std::string error = options.Validate();
   IDENT_REQUIRE(error.empty(), "MapSmootherOptions: {}", error);
+  if (options.fast_path && internal::MapSmootherFastPathApplies(problem))
+    return internal::SolveMapSmootherFastPath(problem, options);
   switch (problem.state_dim()) {  // fixed-size kernels for small state dimensions
     case 1: return Solve<1>(problem, options);
     case 2: return Solve<2>(problem, options);

@@ -68,6 +68,10 @@ struct MapSmootherOptions {
   int max_iterations = 100;     // interior-point (Newton) iterations
   double tolerance = 1e-10;     // on complementarity and the scaled KKT residuals
   double step_fraction = 0.995;  // fraction-to-boundary factor for s, q > 0
+  // Use the fused fast path (ident/map_smoother_fast_path.h) when the problem has its structure: bound-free
+  // (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties,
+  // n <= 4. Same iteration and result up to rounding; false forces the general path (tests compare both).
+  bool fast_path = true;
   std::string Validate() const;  // "" if valid
 };
 

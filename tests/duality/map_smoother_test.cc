@@ -253,15 +253,20 @@ TEST(MapSmoother, L1AndHuberMatchAnExhaustiveActiveSetSolutionOfTheDenseDual) {
     const bool huber = trial % 2 == 1;
     const double kappa = 0.6;
     p.measurement = {huber ? Penalty::Huber(kappa) : Penalty::L1()};
-    const MapSmootherResult r = SolveMapSmoother(p);
-    ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << r.message;
     const DenseSolution dense = SolveDualByEnumeration(p, P0, Q, huber ? 1.0 : 0.0, huber ? kappa : 1.0);
-    EXPECT_LT((r.x - dense.x).cwiseAbs().maxCoeff(), 1e-7 * (1 + dense.x.cwiseAbs().maxCoeff())) << "trial " << trial;
-    EXPECT_NEAR(r.primal, dense.dual, 1e-9 * (1 + std::abs(dense.dual)));
     EXPECT_NEAR(PrimalObjective(p, dense.x), dense.dual, 1e-9 * (1 + std::abs(dense.dual)));
-    // With quadratic process noise the dual reconstruction w = Q y is exact.
-    EXPECT_TRUE(r.reconstruction_unique);
-    EXPECT_LT(r.max_abs_x_difference, 1e-7 * (1 + dense.x.cwiseAbs().maxCoeff()));
+    for (bool fast_path : {true, false}) {  // the fused fast path (the default here) and the general path
+      MapSmootherOptions options;
+      options.fast_path = fast_path;
+      const MapSmootherResult r = SolveMapSmoother(p, options);
+      ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << r.message;
+      EXPECT_LT((r.x - dense.x).cwiseAbs().maxCoeff(), 1e-7 * (1 + dense.x.cwiseAbs().maxCoeff()))
+          << "trial " << trial << ", fast path " << fast_path;
+      EXPECT_NEAR(r.primal, dense.dual, 1e-9 * (1 + std::abs(dense.dual))) << "fast path " << fast_path;
+      // With quadratic process noise the dual reconstruction w = Q y is exact.
+      EXPECT_TRUE(r.reconstruction_unique);
+      EXPECT_LT(r.max_abs_x_difference, 1e-7 * (1 + dense.x.cwiseAbs().maxCoeff()));
+    }
   }
 }
 

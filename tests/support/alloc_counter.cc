@@ -20,7 +20,16 @@ namespace ident::testing {
 std::int64_t AllocationsSoFar() { return g_allocations; }
 }  // namespace ident::testing
 
+// GCC says __SANITIZE_ADDRESS__, clang __has_feature(address_sanitizer).
 #if defined(__SANITIZE_ADDRESS__)
+#define IDENT_TESTS_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define IDENT_TESTS_UNDER_ASAN 1
+#endif
+#endif
+
+#if defined(IDENT_TESTS_UNDER_ASAN)
 
 extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
                                                           void (*free_hook)(const volatile void*));

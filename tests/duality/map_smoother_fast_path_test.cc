@@ -1,0 +1,169 @@
+// The MAP smoother's fused fast path (ident/map_smoother_fast_path.h) against the general interior-point
+// path (MapSmootherOptions::fast_path = false: per-term PLQ dispatch, block Cholesky) on random problems of
+// the fast path's structure, n = 1..4, time-invariant and time-varying; which problems take it. The
+// agreement of both paths with an independent dense method is in map_smoother_test.cc
+// (L1AndHuberMatchAnExhaustiveActiveSetSolutionOfTheDenseDual runs both).
+#include "ident/map_smoother_fast_path.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "ident/map_smoother.h"
+
+namespace ident {
+namespace {
+
+using models::Penalty;
+
+Eigen::MatrixXd Random(std::mt19937& rng, int r, int c, double scale = 1.0) {
+  std::normal_distribution<double> N(0, scale);
+  Eigen::MatrixXd A(r, c);
+  for (int i = 0; i < r; ++i)
+    for (int j = 0; j < c; ++j) A(i, j) = N(rng);
+  return A;
+}
+
+Eigen::MatrixXd Spd(std::mt19937& rng, int n, double scale) {
+  const Eigen::MatrixXd A = Random(rng, n, n);
+  return scale * (A * A.transpose() + 0.5 * Eigen::MatrixXd::Identity(n, n));
+}
+
+// A measurement penalty of the fast path's kind: l1, Huber, quantile or a scalar box monitoring function.
+Penalty FastPathPenalty(std::mt19937& rng, int kind) {
+  std::uniform_real_distribution<double> U(0, 1);
+  switch (kind % 4) {
+    case 0: return Penalty::L1();
+    case 1: return Penalty::Huber(0.2 + 2 * U(rng));
+    case 2: return Penalty::Quantile(0.1 + 0.8 * U(rng));
+    default:
+      return Penalty::BoxMonitoring(Eigen::VectorXd::Constant(1, -0.5 - U(rng)), Eigen::VectorXd::Constant(1, 0.5 + U(rng)),
+                                    Eigen::MatrixXd::Constant(1, 1, U(rng)));
+  }
+}
+
+// A random stable-ish system with heavy-tailed measurements; time-varying F, H and penalties if `varying`.
+MapSmootherProblem RandomProblem(std::mt19937& rng, int n, int T, bool varying, int kind) {
+  MapSmootherProblem p;
+  const int num_F = varying ? T : 1, num_H = varying ? T + 1 : 1;
+  for (int t = 0; t < num_F; ++t)
+    p.F.push_back(0.9 * Eigen::MatrixXd::Identity(n, n) + Random(rng, n, n, 0.1));
+  for (int t = 0; t < num_H; ++t) p.H.push_back(Random(rng, 1, n));
+  p.z = Random(rng, 1, T + 1, 2.0);
+  std::bernoulli_distribution outlier(0.1);
+  for (int t = 0; t <= T; ++t)
+    if (outlier(rng)) p.z(0, t) += 10 * Random(rng, 1, 1)(0, 0);
+  if (varying) {
+    p.process.push_back(Penalty::Quadratic(Spd(rng, n, 1.0)));
+    for (int t = 1; t <= T; ++t) p.process.push_back(Penalty::Quadratic(Spd(rng, n, 0.05 + 0.1 * (t % 3))));
+    for (int t = 0; t <= T; ++t) p.measurement.push_back(FastPathPenalty(rng, kind + t));
+  } else {
+    p.process = {Penalty::Quadratic(Spd(rng, n, 1.0)), Penalty::Quadratic(Spd(rng, n, 0.1))};
+    p.measurement = {FastPathPenalty(rng, kind)};
+  }
+  return p;
+}
+
+TEST(MapSmootherFastPath, AppliesExactlyToBoundFreeProcessAndScalarBoxMeasurementTerms) {
+  std::mt19937 rng(5);
+  for (int kind = 0; kind < 4; ++kind)
+    for (int n = 1; n <= 4; ++n) {
+      MapSmootherProblem p = RandomProblem(rng, n, 6, kind % 2 == 1, kind);
+      EXPECT_TRUE(internal::MapSmootherFastPathApplies(p)) << "n = " << n << ", kind " << kind;
+    }
+  const MapSmootherProblem base = RandomProblem(rng, 2, 6, false, 0);
+  MapSmootherProblem p = base;
+  p.measurement = {Penalty::Vapnik(0.5)};  // B is 2 x 1
+  EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
+  p.measurement = {Penalty::PiecewiseLinear(Eigen::Vector3d(-1, 0, 2), Eigen::Vector3d(1, 0, 1))};
+  EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
+  p.measurement = {Penalty::Quadratic(Eigen::MatrixXd::Identity(1, 1))};  // no bounds: no multipliers
+  EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
+  p = base;
+  p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2)), Penalty::Huber(1.0, 2)};  // bounded f_t
+  EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
+  p = base;  // nz = 2
+  p.H = {Random(rng, 2, 2)};
+  p.z = Random(rng, 2, 7);
+  p.measurement = {Penalty::L1(2)};
+  EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
+  p = RandomProblem(rng, 5, 6, false, 0);  // n = 5: the general path's run-time size
+  EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
+}
+
+// Both paths run the same iteration (same start, directions equal in exact arithmetic, same stopping rule),
+// so the solutions agree to the interior point's accuracy and the iteration counts nearly coincide.
+TEST(MapSmootherFastPath, AgreesWithTheGeneralPathOnRandomProblems) {
+  std::mt19937 rng(2025);
+  MapSmootherOptions general;
+  general.fast_path = false;
+  int trials = 0;
+  for (int n = 1; n <= 4; ++n)
+    for (int kind = 0; kind < 4; ++kind)
+      for (bool varying : {false, true}) {
+        const int T = 10 + 13 * kind + 7 * n;
+        const MapSmootherProblem p = RandomProblem(rng, n, T, varying, kind);
+        ASSERT_TRUE(internal::MapSmootherFastPathApplies(p));
+        const MapSmootherResult fast = SolveMapSmoother(p), slow = SolveMapSmoother(p, general);
+        const std::string label = "n = " + std::to_string(n) + ", kind " + std::to_string(kind) +
+                                  (varying ? ", time-varying" : ", time-invariant");
+        ASSERT_EQ(fast.status, MapSmootherStatus::kConverged) << label << ": " << fast.message;
+        ASSERT_EQ(slow.status, MapSmootherStatus::kConverged) << label << ": " << slow.message;
+        const double x_scale = 1 + slow.x.cwiseAbs().maxCoeff();
+        EXPECT_LT((fast.x - slow.x).cwiseAbs().maxCoeff(), 1e-7 * x_scale) << label;
+        EXPECT_LT((fast.u - slow.u).cwiseAbs().maxCoeff(), 1e-6) << label;
+        EXPECT_NEAR(fast.primal, slow.primal, 1e-9 * (1 + std::abs(slow.primal))) << label;
+        EXPECT_LE(std::abs(fast.relative_gap), 1e-8) << label;
+        EXPECT_LE(fast.dual_infeasibility, 1e-9) << label;
+        EXPECT_LE(std::abs(fast.iterations - slow.iterations), 2) << label;
+        // Quadratic process noise: the dual determines the states (w = Q y).
+        EXPECT_TRUE(fast.reconstruction_unique) << label;
+        // (x_from_dual accumulates the error of y through up to 70 steps of the dynamics.)
+        EXPECT_LT(fast.max_abs_x_difference, 1e-5 * x_scale) << label << ", general path " << slow.max_abs_x_difference;
+        // (P) at the fast path's x is not improved by moving any coordinate.
+        for (int t = 0; t <= T; t += 3)
+          for (int i = 0; i < n; ++i)
+            for (double h : {-1e-4, 1e-4}) {
+              Eigen::MatrixXd x = fast.x;
+              x(i, t) += h;
+              EXPECT_GE(PrimalObjective(p, x), fast.primal - 1e-9 * (1 + std::abs(fast.primal))) << label;
+            }
+        ++trials;
+      }
+  EXPECT_EQ(trials, 32);
+}
+
+// A longer benchmark-like problem (the model of bench/map_smoother_benchmark.cc at T = 3000).
+TEST(MapSmootherFastPath, AgreesWithTheGeneralPathOnALongSequence) {
+  std::mt19937 rng(42);
+  std::normal_distribution<double> normal(0, 1);
+  std::exponential_distribution<double> expo(2.0);
+  std::bernoulli_distribution sign(0.5), outlier(0.05);
+  const int T = 3000;
+  MapSmootherProblem p;
+  p.F = {(Eigen::MatrixXd(2, 2) << 0.99, 0.1, 0, 0.95).finished()};
+  p.H = {(Eigen::MatrixXd(1, 2) << 1, 0).finished()};
+  p.z.resize(1, T + 1);
+  Eigen::Vector2d x(normal(rng), normal(rng));
+  for (int t = 0; t <= T; ++t) {
+    if (t > 0) x = p.F[0] * x + 0.1 * Eigen::Vector2d(normal(rng), normal(rng));
+    p.z(0, t) = x(0) + (sign(rng) ? 1 : -1) * expo(rng) + (outlier(rng) ? 10 * normal(rng) : 0.0);
+  }
+  MapSmootherOptions general;
+  general.fast_path = false;
+  for (const Penalty& g : {Penalty::L1(), Penalty::Huber(1.0)}) {
+    p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2)), Penalty::Quadratic(0.01 * Eigen::MatrixXd::Identity(2, 2))};
+    p.measurement = {g};
+    const MapSmootherResult fast = SolveMapSmoother(p), slow = SolveMapSmoother(p, general);
+    ASSERT_EQ(fast.status, MapSmootherStatus::kConverged) << g.Name() << ": " << fast.message;
+    ASSERT_EQ(slow.status, MapSmootherStatus::kConverged) << g.Name() << ": " << slow.message;
+    EXPECT_LT((fast.x - slow.x).cwiseAbs().maxCoeff(), 1e-7 * (1 + slow.x.cwiseAbs().maxCoeff())) << g.Name();
+    EXPECT_NEAR(fast.primal, slow.primal, 1e-10 * std::abs(slow.primal)) << g.Name();
+    EXPECT_LE(std::abs(fast.relative_gap), 1e-9) << g.Name();
+    EXPECT_LE(std::abs(fast.iterations - slow.iterations), 2) << g.Name();
+  }
+}
+
+}  // namespace
+}  // namespace ident
