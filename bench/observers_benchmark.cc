@@ -1,7 +1,8 @@
 // Cost per step of the log-concave observers on the MEMS accelerometer (2 states, threshold sensor):
 // grid Bayesian observer (128² and 256² nodes), log-concave Gaussian filter (exact tilted moments and
 // the first-passage/σ_o variant's Gaussian reading; the crossing wedge of lc_wedge at a change of the
-// reading), square-root Kalman filter, bound tracker.
+// reading; lc_excursion's fixed-lag EP over each excursion, averaged over a run), square-root Kalman
+// filter, bound tracker.
 // Filters in both forms: dynamic sizes and fixed-size (BasicKalmanFilter<2>, BasicLcGaussianFilter<2>).
 // Readings alternate 0 / 0 / ... / ±1 as in a run with events, precomputed before timing.
 #include <random>
@@ -11,6 +12,7 @@
 
 #include "ident/covariance_bound.h"
 #include "ident/crossing_reading.h"
+#include "ident/excursion_reading.h"
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
@@ -136,6 +138,38 @@ void BM_LcCrossingWedge(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_LcCrossingWedge)->Unit(benchmark::kMicrosecond);
+
+// The study's lc_excursion variant, averaged per step over the precomputed run (events, excursions of
+// ≈ 25 steps with this run's push-back, and the σ_o reading of repeated y = 0 between them).
+void BM_LcExcursionVariant(benchmark::State& state) {
+  const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
+  const ident::models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
+  ident::LcGaussianFilter f(Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
+  ident::ExcursionReading excursion(sensor, 2);
+  const Eigen::Vector2d c(1, 0);
+  Eigen::VectorXd m_before(2);
+  Eigen::MatrixXd P_before(2, 2);
+  const Run& run = MemsRun();
+  size_t k = 0;
+  double y_prev = 0;
+  for (auto _ : state) {
+    m_before = f.mean();
+    P_before = f.covariance();
+    f.Predict(model, run.u[k]);
+    const double y = run.y[k];
+    ident::StepReport report;
+    if (y != y_prev || excursion.active()) report = excursion.Step(f, m_before, P_before, model, run.u[k], y_prev, y);
+    if (!report.updated() && y == y_prev) {
+      const double s2 = f.covariance()(0, 0), m = f.mean()(0), r = 15.1;
+      report = f.ApplyTilt(c, {0.0, m + s2 / (s2 + r) * (y - m), s2 * r / (s2 + r), true});
+    }
+    benchmark::DoNotOptimize(report);
+    y_prev = y;
+    k = (k + 1) % run.y.size();
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_LcExcursionVariant)->Unit(benchmark::kMicrosecond);
 
 template <class Filter>
 void BM_KalmanFilter(benchmark::State& state) {

@@ -17,8 +17,8 @@
 // Example (after f.Predict(model, u), with m_before, P_before the filter's state before it):
 //   ident::StepReport r = ident::CorrectReadingChange(f, m_before, P_before, model, sensor, y_prev, y);
 //
-// Cost: one adaptive 1-D quadrature (the orthant probability) and a few exp/erfc, only at changes of the
-// reading (≈ 2 per event). Fixed-size filters allocate nothing; the dynamic one allocates a n × 2 work array.
+// Cost: the orthant probability by Owen's T (two owens_t; adaptive quadrature only for a wedge of mass
+// < 1e-5) and a few exp/erfc, only at changes of the reading (≈ 2 per event). Fixed-size filters allocate nothing; the dynamic one allocates a n × 2 work array.
 //
 // [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
 #pragma once

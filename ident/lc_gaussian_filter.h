@@ -78,6 +78,11 @@ class BasicLcGaussianFilter {
   // prior_cov − V_t ≥ 0 for a log-concave reading [1, Thm 2]; round-off below 0 is clipped.
   StepReport ApplyPairTilt(const Eigen::Ref<const Eigen::MatrixXd>& cross, const Eigen::Vector2d& prior_mean,
                            const Eigen::Matrix2d& prior_cov, const models::TruncatedBivariateMoments& t) noexcept;
+  // Replace the state by an externally computed Gaussian, e.g. the marginal of x(k) of the fixed-lag
+  // excursion smoother (ident/excursion_reading.h); the log-likelihood is left unchanged.
+  // kRejectedInvalid (state untouched) for wrong sizes, non-finite entries or a negative variance; the
+  // covariance is symmetrised.
+  StepReport Assign(const Eigen::Ref<const Eigen::VectorXd>& mean, const Eigen::Ref<const Eigen::MatrixXd>& cov) noexcept;
   // Predict + Correct with the stored model and measurement (the whole step or nothing);
   // kRejectedInvalid without a stored model.
   StepReport Update(const StateSpaceItem& item) noexcept;
@@ -88,6 +93,10 @@ class BasicLcGaussianFilter {
   int num_states() const { return static_cast<int>(m_.size()); }
 
  private:
+  // The commit tail of ApplyTilt/ApplyPairTilt: symmetrise P_new_, reject non-finite m_new_/P_new_ (state
+  // untouched), else commit them and add log_normalizer to the log-likelihood.
+  StepReport CommitUpdate(double log_normalizer, double prediction_error) noexcept;
+
   StateVector m_, k_, m_new_, m_bak_;
   Eigen::Matrix<double, N, 2> k2_, kd_;
   StateMatrix P_, tmp_, P_new_, P_bak_;
@@ -172,15 +181,21 @@ StepReport BasicLcGaussianFilter<N>::ApplyTilt(const Eigen::Ref<const Eigen::Vec
   m_new_ = m_ + k_ * (t.mean - prior_mean);                           // m ← m + k (μ_s − c'm)
   P_new_ = P_;
   P_new_.noalias() -= (s2 - std::min(t.variance, s2)) * k_ * k_.transpose();   // P ← P − k k'(σ² − v_s)
+  return CommitUpdate(t.log_normalizer, t.mean - prior_mean);
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::CommitUpdate(double log_normalizer, double prediction_error) noexcept {
+  const int n = num_states();
   for (int i = 0; i < n; ++i) {                                       // symmetrise against round-off
     for (int j = 0; j < i; ++j) P_new_(i, j) = P_new_(j, i) = 0.5 * (P_new_(i, j) + P_new_(j, i));
   }
   if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
   m_ = m_new_;
   P_ = P_new_;
-  log_likelihood_ += t.log_normalizer;
+  log_likelihood_ += log_normalizer;
   StepReport report{StepStatus::kUpdated};
-  report.prediction_error = t.mean - prior_mean;
+  report.prediction_error = prediction_error;
   return report;
 }
 
@@ -212,16 +227,20 @@ StepReport BasicLcGaussianFilter<N>::ApplyPairTilt(const Eigen::Ref<const Eigen:
   kd_.noalias() = k2_ * d_psd;
   tmp_.noalias() = kd_ * k2_.transpose();
   P_new_ = P_ - tmp_;                                                 // P ← P − K (S − V_t) K'
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < i; ++j) P_new_(i, j) = P_new_(j, i) = 0.5 * (P_new_(i, j) + P_new_(j, i));
+  return CommitUpdate(t.log_probability, t.mean(1) - prior_mean(1));
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::Assign(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                                            const Eigen::Ref<const Eigen::MatrixXd>& cov) noexcept {
+  const int n = num_states();
+  if (mean.size() != n || cov.rows() != n || cov.cols() != n || !mean.allFinite() || !cov.allFinite() ||
+      (cov.diagonal().array() < 0).any()) {
+    return {StepStatus::kRejectedInvalid};
   }
-  if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
-  m_ = m_new_;
-  P_ = P_new_;
-  log_likelihood_ += t.log_probability;
-  StepReport report{StepStatus::kUpdated};
-  report.prediction_error = t.mean(1) - prior_mean(1);
-  return report;
+  m_new_ = mean;
+  P_new_ = cov;
+  return CommitUpdate(0.0, 0.0);
 }
 
 template <int N>

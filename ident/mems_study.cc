@@ -10,6 +10,7 @@
 #include "ident/common/error.h"
 #include "ident/covariance_bound.h"
 #include "ident/crossing_reading.h"
+#include "ident/excursion_reading.h"
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
@@ -76,7 +77,9 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   gopt.points = {o.grid_points, o.grid_points};
   GridObserver grid(m0, P0, gopt);
   KalmanFilter tuned(m0, P0), tuned13(m0, P0);
-  LcGaussianFilter plain(m0, P0), event(m0, P0), event_trunc(m0, P0), event_capped(m0, P0), wedge(m0, P0);
+  LcGaussianFilter plain(m0, P0), event(m0, P0), event_trunc(m0, P0), event_capped(m0, P0), wedge(m0, P0),
+      excursion_filter(m0, P0), silent_filter(m0, P0);
+  ExcursionReading excursion(*sensor, 2), silent_excursion(*sensor, 2);
   CovarianceBoundTracker bound(P0);
 
   std::mt19937_64 rng(o.seed);
@@ -85,9 +88,14 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   Eigen::Vector2d x(0.0, v_ref), w;
   Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
   double y_prev = 0, direction = 1;
-  Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_capped, acc_wedge, acc_bound;
+  Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_capped, acc_wedge, acc_bound,
+      acc_excursion, acc_silent;
   Eigen::VectorXd wedge_mean_before(2);
   Eigen::MatrixXd wedge_cov_before(2, 2);
+  Eigen::VectorXd excursion_mean_before(2);
+  Eigen::MatrixXd excursion_cov_before(2, 2);
+  Eigen::VectorXd silent_mean_before(2);
+  Eigen::MatrixXd silent_cov_before(2, 2);
   int events_counted = 0;
 
   // Gaussian reading of x1 at `value` with variance r, as tilted moments (exact for a Gaussian).
@@ -149,6 +157,37 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     wedge_mean_before = wedge.mean();
     wedge_cov_before = wedge.covariance();
     wedge.Predict(model, u);
+    excursion_mean_before = excursion_filter.mean();
+    excursion_cov_before = excursion_filter.covariance();
+    excursion_filter.Predict(model, u);
+    // lc_excursion: the open excursion (entry wedge, repeated ±1, exit wedge) as one reading of the stacked
+    // states (fixed-lag EP, ident/excursion_reading.h); repeated y = 0 as in lc_wedge.
+    bool excursion_done = false;
+    if (crossing || leaving || excursion.active()) {
+      excursion_done = excursion.Step(excursion_filter, excursion_mean_before, excursion_cov_before, model, u, y_prev, y)
+                           .updated();
+      if (excursion_done && !excursion.last_converged()) ++result.excursion_unconverged;
+      if (!excursion_done && (crossing || leaving)) {
+        ++result.excursion_fallbacks;
+        if (!CorrectReadingChange(excursion_filter, excursion_mean_before, excursion_cov_before, model, *sensor, y_prev,
+                                  y)
+                 .updated()) {
+          first_passage(excursion_filter, crossing ? y : y_prev, crossing ? 1.0 : -1.0);
+        }
+        excursion_done = true;
+      }
+    }
+    if (!excursion_done) gaussian_reading(excursion_filter, y * o.threshold, r_zero13);
+    // lc_excursion_silent (diagnostic): the same, but a repeated y = 0 is no reading at all (prediction only).
+    silent_mean_before = silent_filter.mean();
+    silent_cov_before = silent_filter.covariance();
+    silent_filter.Predict(model, u);
+    if (crossing || leaving || silent_excursion.active()) {
+      if (!silent_excursion.Step(silent_filter, silent_mean_before, silent_cov_before, model, u, y_prev, y).updated() &&
+          (crossing || leaving)) {
+        CorrectReadingChange(silent_filter, silent_mean_before, silent_cov_before, model, *sensor, y_prev, y);
+      }
+    }
     if (crossing || leaving) {
       const double side = crossing ? y : y_prev, outward = crossing ? 1.0 : -1.0;
       first_passage(event, side, outward);
@@ -181,6 +220,8 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       acc_trunc.Add(event_trunc.mean()(1) - x(1), event_trunc.covariance()(1, 1));
       acc_capped.Add(event_capped.mean()(1) - x(1), event_capped.covariance()(1, 1));
       acc_wedge.Add(wedge.mean()(1) - x(1), wedge.covariance()(1, 1));
+      acc_excursion.Add(excursion_filter.mean()(1) - x(1), excursion_filter.covariance()(1, 1));
+      acc_silent.Add(silent_filter.mean()(1) - x(1), silent_filter.covariance()(1, 1));
       acc_bound.Add(0.0, bound.covariance()(1, 1));
     }
     if (o.record_trace) {
@@ -190,7 +231,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       t.y.push_back(y);
       t.var_grid.push_back(grid.covariance()(1, 1));
       t.var_tuned_kalman.push_back(tuned.covariance()(1, 1));
-      t.var_lc_gaussian.push_back(wedge.covariance()(1, 1));
+      t.var_lc_gaussian.push_back(excursion_filter.covariance()(1, 1));
       t.var_bound.push_back(bound.covariance()(1, 1));
       const double e = grid.mean()(1) - x(1);
       t.err2_grid.push_back(e * e);
@@ -207,6 +248,8 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   result.observers.push_back(acc_trunc.Result("lc_event_trunc"));
   result.observers.push_back(acc_capped.Result("lc_event_capped"));
   result.observers.push_back(acc_wedge.Result("lc_wedge"));
+  result.observers.push_back(acc_excursion.Result("lc_excursion"));
+  result.observers.push_back(acc_silent.Result("lc_excursion_silent"));
   MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n), (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n)};
   result.observers.push_back(b);
   return result;

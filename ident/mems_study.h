@@ -23,10 +23,15 @@
 //                   [1, sec. V-B], and exact moments at each of them collapse the filter (lc_plain)
 //   lc_event_trunc  first-passage event model, but exact interval moments for every other reading
 //   lc_event_capped first-passage event model, exact interval readings with information capped at h/σ_o²
-//   lc_wedge        (the CLI's lc_gaussian) every change of reading y(k−1) ≠ y(k) is the exact wedge of the
+//   lc_wedge        every change of reading y(k−1) ≠ y(k) is the exact wedge of the
 //                   lagged pair (x1(k−1), x1(k)), e.g. x1(k−1) < T ≤ x1(k) (ident/crossing_reading.h: a
 //                   log-concave reading of the augmented state, Tallis moments, exact update of x(k));
 //                   every repeated reading is the σ_o reading of lc_event (p11 = 1/3)
+//   lc_excursion    (the CLI's lc_gaussian) as lc_wedge, but an excursion past a threshold (entry wedge, repeated ±1 readings, exit
+//                   wedge) is one log-concave reading of the stacked states x(k_e − 1 … k): fixed-lag
+//                   expectation propagation with exact 1-D/2-D factor moments (ident/excursion_reading.h)
+//   lc_excursion_silent  diagnostic: lc_excursion with no reading at repeated y = 0 (prediction only
+//                   between excursions), to see what the σ_o reading contributes
 //   bound           CovarianceBoundTracker with the modified event measurement: crossing ∈ LC(Q_M),
 //                   Q_M = diag(σ_M⁻², 0), y = 0 ∈ LC(0); rms = √(mean P̄22)
 //
@@ -60,7 +65,7 @@ struct MemsObserverResult {
 };
 
 struct MemsTrace {
-  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian, var_bound, err2_grid, y;
+  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian /* lc_excursion */, var_bound, err2_grid, y;
 };
 
 struct MemsStudyResult {
@@ -70,6 +75,8 @@ struct MemsStudyResult {
   double sigma_o = 0;        // σ_o used by tuned_kalman (p11 = 1/√3)
   double sigma_m2 = 0;
   int wedge_fallbacks = 0;   // changes of reading where lc_wedge's wedge had no mass (first-passage reading used)
+  int excursion_fallbacks = 0;    // changes of reading lc_excursion left to lc_wedge's update (no mass / too long)
+  int excursion_unconverged = 0;  // lc_excursion steps whose EP sweeps hit the limit
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };

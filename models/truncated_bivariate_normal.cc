@@ -5,7 +5,9 @@
 #include <cmath>
 #include <numbers>
 
+#include <boost/math/distributions/normal.hpp>
 #include <boost/math/quadrature/gauss_kronrod.hpp>
+#include <boost/math/special_functions/owens_t.hpp>
 
 #include "models/measurement.h"
 
@@ -25,9 +27,39 @@ double LogIntegrandSlope(double y, double h, double rho, double s) {
   return -y + rho / s * std::exp(LogNormalDensity(z) - LogNormalTail(z));
 }
 
+// Φ2(a, b; ρ) = P(X ≤ a, Y ≤ b) by Owen's T (Owen 1956, eq. (2.1)):
+//   Φ2 = ½Φ(a) + ½Φ(b) − T(a, α_a) − T(b, α_b) − β,  α_a = (b − ρa)/(a s),  α_b = (a − ρb)/(b s),
+//   β = 0 if ab > 0, else ½   (a, b ≠ 0, s = √(1 − ρ²)).
+// Absolute error ≈ 1e-16 (the terms are O(1) and cancel when Φ2 is small).
+double OwenBivariateCdf(double a, double b, double rho, double s) {
+  const double alpha_a = (b - rho * a) / (a * s), alpha_b = (a - rho * b) / (b * s);
+  const double beta = a * b > 0 ? 0.0 : 0.5;
+  const boost::math::normal unit;
+  return 0.5 * boost::math::cdf(unit, a) + 0.5 * boost::math::cdf(unit, b) - boost::math::owens_t(a, alpha_a) -
+         boost::math::owens_t(b, alpha_b) - beta;
+}
+
+// Below this probability the closed form's absolute error (≈ 1e-16) exceeds a relative 1e-10: quadrature.
+constexpr double kClosedFormFloor = 1e-5;
+
 }  // namespace
 
 double LogUpperOrthantProbability(double h, double k, double rho) {
+  if (std::isnan(h) || std::isnan(k) || !(std::abs(rho) < 1)) return kNotANumber;
+  if (h == kPlusInfinity || k == kPlusInfinity) return -kPlusInfinity;
+  if (h == -kPlusInfinity) return LogNormalTail(k);
+  if (k == -kPlusInfinity) return LogNormalTail(h);
+  const double s = std::sqrt((1 - rho) * (1 + rho));
+  // P(X > h, Y > k) = Φ2(−h, −k; ρ): Owen's T closed form where it keeps 1e-10 relative accuracy
+  // (a few µs instead of ~300 µs of adaptive quadrature); the log-space quadrature below for the tails.
+  if (h != 0 && k != 0) {
+    const double p = OwenBivariateCdf(-h, -k, rho, s);
+    if (p >= kClosedFormFloor && p <= 1) return std::log(p);
+  }
+  return LogUpperOrthantProbabilityByQuadrature(h, k, rho);
+}
+
+double LogUpperOrthantProbabilityByQuadrature(double h, double k, double rho) {
   if (std::isnan(h) || std::isnan(k) || !(std::abs(rho) < 1)) return kNotANumber;
   if (h == kPlusInfinity || k == kPlusInfinity) return -kPlusInfinity;
   if (h == -kPlusInfinity) return LogNormalTail(k);

@@ -3,9 +3,11 @@
 // crossing reading s1 = x1(k−1) < T ≤ x1(k) = s2 (ident/crossing_reading.h).
 //
 // Provides:
-//   UpperOrthantProbability(h, k, ρ)   log P(X > h, Y > k) for standard normals with correlation ρ,
-//                                      by adaptive Gauss–Kronrod quadrature of φ(y) Q((h − ρy)/√(1−ρ²))
-//                                      over y > k, scaled at the mode (accurate far into the tails)
+//   LogUpperOrthantProbability(h, k, ρ) log P(X > h, Y > k) for standard normals with correlation ρ:
+//                                      Owen's T closed form (Boost.Math owens_t) when P ≥ 1e-5, else
+//                                      LogUpperOrthantProbabilityByQuadrature: adaptive Gauss–Kronrod
+//                                      quadrature of φ(y) Q((h − ρy)/√(1−ρ²)) over y > k, scaled at the
+//                                      mode (accurate far into the tails; ~100× slower)
 //   TruncatedBivariateNormalMoments    N(μ, Σ) restricted to {side_i (s_i − b_i) > 0, i = 1, 2}
 //                                      (side_i = ±1, b_i may be −∞·side_i for "no bound"): log mass, mean,
 //                                      covariance. The region is an intersection of half-planes, so the
@@ -44,6 +46,9 @@ struct TruncatedBivariateMoments {
 // log P(X > h, Y > k), X, Y standard normal with correlation rho, |rho| < 1; h, k may be −∞ (no bound)
 // or +∞ (empty: returns −∞). NaN for NaN input or |rho| ≥ 1.
 double LogUpperOrthantProbability(double h, double k, double rho);
+// The same by adaptive quadrature only (the tail branch of LogUpperOrthantProbability; the reference of
+// its closed form in the tests).
+double LogUpperOrthantProbabilityByQuadrature(double h, double k, double rho);
 
 // N(mean, covariance) restricted to {sides(i) · (s_i − bounds(i)) > 0}; sides(i) ∈ {−1, +1}. A bound of
 // −∞·sides(i) leaves that coordinate unbounded. Never throws; ok = false on invalid input (non-finite

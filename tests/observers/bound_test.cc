@@ -244,6 +244,17 @@ TEST(MemsStudy, TunedKalmanAndBoundBehaveAsThePaperSays) {
   EXPECT_LT(wedge.calibration, 1.4);
   EXPECT_EQ(r.wedge_fallbacks, 0);
   EXPECT_LT(wedge.rms, 0.8 * r.Get("lc_plain").rms);
+  // The excursion as one reading of the stacked states (lc_excursion, fixed-lag EP): the same bounds, every
+  // change of reading handled by the EP smoother (no fallback) with converged sweeps.
+  const auto& excursion = r.Get("lc_excursion");
+  std::printf("lc_excursion rms %.4f (cal %.2f), unconverged steps %d\n", excursion.rms, excursion.calibration,
+              r.excursion_unconverged);
+  EXPECT_LT(excursion.rms, 1.2 * r.Get("grid").rms);
+  EXPECT_GT(excursion.calibration, 0.7);
+  EXPECT_LT(excursion.calibration, 1.4);
+  EXPECT_EQ(r.excursion_fallbacks, 0);
+  EXPECT_EQ(r.excursion_unconverged, 0);
+  EXPECT_LT(excursion.rms, 0.8 * r.Get("lc_plain").rms);
 }
 
 }  // namespace
