@@ -8,7 +8,8 @@
 #
 # Environment: IDENT_FUZZ_SECONDS (default 60) per target, IDENT_FUZZ_BUILD (default build-fuzz),
 # IDENT_FUZZ_OUT (default $IDENT_FUZZ_BUILD/runs), CXX (default clang++), IDENT_FUZZ_JOBS (default 2: build
-# parallelism and the number of targets fuzzed at the same time).
+# parallelism and the number of targets fuzzed at the same time), IDENT_FUZZ_PARALLEL (default
+# IDENT_FUZZ_JOBS: the number of targets fuzzed at the same time, if it should differ).
 # Prints one summary line per target: name, executions, corpus size, result.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -16,6 +17,7 @@ seconds="${IDENT_FUZZ_SECONDS:-60}"
 build="${IDENT_FUZZ_BUILD:-$root/build-fuzz}"
 out="${IDENT_FUZZ_OUT:-$build/runs}"
 jobs="${IDENT_FUZZ_JOBS:-2}"
+parallel="${IDENT_FUZZ_PARALLEL:-$jobs}"
 
 if ! command -v "${CXX:-clang++}" >/dev/null; then
   echo "fuzz.sh: ${CXX:-clang++} not found (apt-get install clang libclang-rt-14-dev)" >&2
@@ -65,12 +67,13 @@ run_target() {
   echo "${execs:-0} $(ls "$work/corpus" | wc -l) $status" >"$work/result"
 }
 
-# $jobs targets at a time (one core each), so the whole run takes about ceil(targets/jobs) x seconds.
+# $parallel targets at a time, so the whole run takes about ceil(targets/parallel) x seconds; each target
+# runs for $seconds of wall time and gets (cores / parallel) of a core meanwhile.
 running=0
 for t in "${targets[@]}"; do
   run_target "$t" &
   running=$((running + 1))
-  if [ "$running" -ge "$jobs" ]; then wait -n || true; running=$((running - 1)); fi
+  if [ "$running" -ge "$parallel" ]; then wait -n || true; running=$((running - 1)); fi
 done
 wait || true
 

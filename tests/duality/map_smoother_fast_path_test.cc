@@ -119,8 +119,12 @@ TEST(MapSmootherFastPath, AgreesWithTheGeneralPathOnRandomProblems) {
         EXPECT_LE(std::abs(fast.iterations - slow.iterations), 2) << label;
         // Quadratic process noise: the dual determines the states (w = Q y).
         EXPECT_TRUE(fast.reconstruction_unique) << label;
-        // (x_from_dual accumulates the error of y through up to 70 steps of the dynamics.)
-        EXPECT_LT(fast.max_abs_x_difference, 1e-5 * x_scale) << label << ", general path " << slow.max_abs_x_difference;
+        // x_from_dual accumulates the error of y through up to 70 steps of the dynamics, so how close it comes
+        // to x depends on the instance's conditioning and on rounding: for n = 3, kind 3, time-invariant it
+        // is 7.9e-6 in a gcc build and 5.5e-3 in a clang ASan build — on both paths alike. The property here
+        // is that the fast path rebuilds the states as well as the general path does.
+        EXPECT_LT(fast.max_abs_x_difference, 1e-5 * x_scale + 2 * slow.max_abs_x_difference)
+            << label << ", general path " << slow.max_abs_x_difference;
         // (P) at the fast path's x is not improved by moving any coordinate.
         for (int t = 0; t <= T; t += 3)
           for (int i = 0; i < n; ++i)
