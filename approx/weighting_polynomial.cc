@@ -127,17 +127,27 @@ void SolveOnPieces(const WeightingProblem& p, const std::array<double, 4>& mu, W
   }
 }
 
-}  // namespace
-
-WeightSolution SolveWeightReference(const WeightingProblem& p) {
+// A solution holding only the bracket [β0, β_hi] of spec §4.
+WeightSolution Bracket(const WeightingProblem& p) {
   WeightSolution s;
   s.beta0 = Beta0(p);
   s.beta_hi = BetaHi(p);
-  if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]
-    s.beta = s.beta_hi;
-    s.num_maxima = 1;
-    return s;
-  }
+  return s;
+}
+
+// h = 0 (ξ = ξ_z = 1): P(β_hi) = 0 analytically and β = β_hi exactly [spec §4].
+bool IsZeroData(const WeightingProblem& p) { return p.xi == 1 && p.xi_z == 1; }
+WeightSolution ZeroDataSolution(WeightSolution s) {
+  s.beta = s.beta_hi;
+  s.num_maxima = 1;
+  return s;
+}
+
+}  // namespace
+
+WeightSolution SolveWeightReference(const WeightingProblem& p) {
+  WeightSolution s = Bracket(p);
+  if (IsZeroData(p)) return ZeroDataSolution(s);
   std::array<double, 4> mu = Coefficients(p);
   double scale = 0;
   for (double m : mu) scale = std::max(scale, std::abs(m));
@@ -151,14 +161,8 @@ WeightSolution SolveWeightReference(const WeightingProblem& p) {
 WeightSolution SolveWeight(const WeightingProblem& p) {
   WeightSolution s;
   if (internal::SolveWeightCommon(p, WeightConstants(p), s)) return s;  // the usual case (weight_fast_path.h)
-  s = {};
-  s.beta0 = Beta0(p);
-  s.beta_hi = BetaHi(p);
-  if (p.xi == 1 && p.xi_z == 1) {  // h = 0: P(β_hi) = 0 analytically and β = β_hi exactly [spec §4]
-    s.beta = s.beta_hi;
-    s.num_maxima = 1;
-    return s;
-  }
+  s = Bracket(p);
+  if (IsZeroData(p)) return ZeroDataSolution(s);
   std::array<double, 4> mu = Coefficients(p);
   // Scaling changes neither the roots nor the steps; it only guards the squares below against
   // overflow (|ξξ_z| ~ 1e28 is routine [spec §5]; 1e60 is not).

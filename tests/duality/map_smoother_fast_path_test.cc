@@ -11,24 +11,14 @@
 #include <gtest/gtest.h>
 
 #include "ident/map_smoother.h"
+#include "tests/duality/random_matrices.h"
 
 namespace ident {
 namespace {
 
+using duality_test::RandomMatrix;
+using duality_test::RandomSpd;
 using models::Penalty;
-
-Eigen::MatrixXd Random(std::mt19937& rng, int r, int c, double scale = 1.0) {
-  std::normal_distribution<double> N(0, scale);
-  Eigen::MatrixXd A(r, c);
-  for (int i = 0; i < r; ++i)
-    for (int j = 0; j < c; ++j) A(i, j) = N(rng);
-  return A;
-}
-
-Eigen::MatrixXd Spd(std::mt19937& rng, int n, double scale) {
-  const Eigen::MatrixXd A = Random(rng, n, n);
-  return scale * (A * A.transpose() + 0.5 * Eigen::MatrixXd::Identity(n, n));
-}
 
 // A measurement penalty of the fast path's kind: l1, Huber, quantile or a scalar box monitoring function.
 Penalty FastPathPenalty(std::mt19937& rng, int kind) {
@@ -48,18 +38,18 @@ MapSmootherProblem RandomProblem(std::mt19937& rng, int n, int T, bool varying, 
   MapSmootherProblem p;
   const int num_F = varying ? T : 1, num_H = varying ? T + 1 : 1;
   for (int t = 0; t < num_F; ++t)
-    p.F.push_back(0.9 * Eigen::MatrixXd::Identity(n, n) + Random(rng, n, n, 0.1));
-  for (int t = 0; t < num_H; ++t) p.H.push_back(Random(rng, 1, n));
-  p.z = Random(rng, 1, T + 1, 2.0);
+    p.F.push_back(0.9 * Eigen::MatrixXd::Identity(n, n) + RandomMatrix(rng, n, n, 0.1));
+  for (int t = 0; t < num_H; ++t) p.H.push_back(RandomMatrix(rng, 1, n));
+  p.z = RandomMatrix(rng, 1, T + 1, 2.0);
   std::bernoulli_distribution outlier(0.1);
   for (int t = 0; t <= T; ++t)
-    if (outlier(rng)) p.z(0, t) += 10 * Random(rng, 1, 1)(0, 0);
+    if (outlier(rng)) p.z(0, t) += 10 * RandomMatrix(rng, 1, 1)(0, 0);
   if (varying) {
-    p.process.push_back(Penalty::Quadratic(Spd(rng, n, 1.0)));
-    for (int t = 1; t <= T; ++t) p.process.push_back(Penalty::Quadratic(Spd(rng, n, 0.05 + 0.1 * (t % 3))));
+    p.process.push_back(Penalty::Quadratic(RandomSpd(rng, n, 1.0)));
+    for (int t = 1; t <= T; ++t) p.process.push_back(Penalty::Quadratic(RandomSpd(rng, n, 0.05 + 0.1 * (t % 3))));
     for (int t = 0; t <= T; ++t) p.measurement.push_back(FastPathPenalty(rng, kind + t));
   } else {
-    p.process = {Penalty::Quadratic(Spd(rng, n, 1.0)), Penalty::Quadratic(Spd(rng, n, 0.1))};
+    p.process = {Penalty::Quadratic(RandomSpd(rng, n, 1.0)), Penalty::Quadratic(RandomSpd(rng, n, 0.1))};
     p.measurement = {FastPathPenalty(rng, kind)};
   }
   return p;
@@ -84,8 +74,8 @@ TEST(MapSmootherFastPath, AppliesExactlyToBoundFreeProcessAndScalarBoxMeasuremen
   p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2)), Penalty::Huber(1.0, 2)};  // bounded f_t
   EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
   p = base;  // nz = 2
-  p.H = {Random(rng, 2, 2)};
-  p.z = Random(rng, 2, 7);
+  p.H = {RandomMatrix(rng, 2, 2)};
+  p.z = RandomMatrix(rng, 2, 7);
   p.measurement = {Penalty::L1(2)};
   EXPECT_FALSE(internal::MapSmootherFastPathApplies(p));
   p = RandomProblem(rng, 5, 6, false, 0);  // n = 5: the general path's run-time size

@@ -12,24 +12,14 @@
 #include <gtest/gtest.h>
 
 #include "ident/common/error.h"
+#include "tests/duality/random_matrices.h"
 
 namespace ident {
 namespace {
 
+using duality_test::RandomMatrix;
+using duality_test::RandomSpd;
 using models::Penalty;
-
-Eigen::MatrixXd RandomMatrix(std::mt19937& rng, int r, int c, double scale = 1.0) {
-  std::normal_distribution<double> N(0, scale);
-  Eigen::MatrixXd A(r, c);
-  for (int i = 0; i < r; ++i)
-    for (int j = 0; j < c; ++j) A(i, j) = N(rng);
-  return A;
-}
-
-Eigen::MatrixXd RandomSpd(std::mt19937& rng, int n) {
-  const Eigen::MatrixXd A = RandomMatrix(rng, n, n);
-  return A * A.transpose() + 0.5 * Eigen::MatrixXd::Identity(n, n);
-}
 
 // Kalman filter with prior x_0 ~ N(0, P0), then the RTS backward pass: the posterior means E[x_t | z_0..T].
 Eigen::MatrixXd RtsSmoother(const std::vector<Eigen::MatrixXd>& F, const std::vector<Eigen::MatrixXd>& H,
