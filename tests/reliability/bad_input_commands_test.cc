@@ -205,6 +205,7 @@ TEST(BadInputMems, SamplingPeriodNotPositive) { ExpectCliError("mems --h 0", "h 
 TEST(BadInputMems, SamplingPeriodNan) { ExpectCliError("mems --h nan", "h = nan; need 0 < h < 1"); }
 
 TEST(BadInputMems, GridTooCoarse) { ExpectCliError("mems --grid-points 4", "grid_points = 4; need 16..1024"); }
+TEST(BadInputMems, EpWindowZero) { ExpectCliError("mems --ep-window 0", "ep_window = 0; need 1..4096"); }
 
 TEST(BadInputMems, UnwritableCsvIsReportedBeforeTheStudyRuns) {
   ExpectCliError("mems --steps 400 --grid-points 16 --t-mean 1 --csv /nonexistent/dir/t.csv",
