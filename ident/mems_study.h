@@ -27,12 +27,12 @@
 //                   lagged pair (x1(k−1), x1(k)), e.g. x1(k−1) < T ≤ x1(k) (ident/crossing_reading.h: a
 //                   log-concave reading of the augmented state, Tallis moments, exact update of x(k));
 //                   every repeated reading is the σ_o reading of lc_event (p11 = 1/3)
-//   lc_excursion    (the CLI's lc_gaussian) as lc_wedge, but an excursion past a threshold (entry wedge, repeated ±1 readings, exit
+//   lc_excursion    (the CLI's lc_gaussian in session 5) as lc_wedge, but an excursion past a threshold (entry wedge, repeated ±1 readings, exit
 //                   wedge) is one log-concave reading of the stacked states x(k_e − 1 … k): fixed-lag
 //                   expectation propagation with exact 1-D/2-D factor moments (ident/excursion_reading.h)
 //   lc_excursion_silent  diagnostic: lc_excursion with no reading at repeated y = 0 (prediction only
 //                   between excursions), to see what the σ_o reading contributes
-//   lc_window       every reading of the last W = ep_window steps an exact site of the state chain (repeated
+//   lc_window       (the CLI's lc_gaussian since session 6) every reading of the last W = ep_window steps an exact site of the state chain (repeated
 //                   y = 0 as 1{|x1| < T}, repeated ±1 as half-lines, changes as the wedge of lc_wedge), refined
 //                   jointly by banded sliding-window EP; older sites frozen (ident/window_ep_filter.h). No σ_o.
 //   bound           CovarianceBoundTracker with the modified event measurement: crossing ∈ LC(Q_M),
@@ -69,7 +69,7 @@ struct MemsObserverResult {
 };
 
 struct MemsTrace {
-  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian /* lc_excursion */, var_bound, err2_grid, y;
+  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian /* lc_window */, var_bound, err2_grid, y;
 };
 
 struct MemsStudyResult {
