@@ -304,7 +304,9 @@ TEST(WindowEp, CloseToMonteCarloOfTheExactPosteriorAndCloserThanTheAssumedDensit
       EXPECT_NEAR(ep.mean()(i), mc.mean(i), 0.05 * sd + 4 * sd / std::sqrt(n)) << sequence << " x" << i + 1;
       EXPECT_NEAR(ep.covariance()(i, i), mc.cov(i, i), (var_tol + 4 * std::sqrt(2 / n)) * mc.cov(i, i))
           << sequence << " x" << i + 1;
-      if (sequence == 0 && i == 0) EXPECT_LT(ep.covariance()(i, i), mc.cov(i, i));   // overconfident, not under
+      if (sequence == 0 && i == 0) {
+        EXPECT_LT(ep.covariance()(i, i), mc.cov(i, i));   // overconfident, not under
+      }
     }
     // The assumed-density filter re-truncates its projections (overconfident); EP is nearer the exact
     // posterior in the variance of both states.
