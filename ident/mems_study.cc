@@ -14,6 +14,7 @@
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
+#include "ident/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 
@@ -27,6 +28,7 @@ std::string MemsStudyOptions::Validate() const {
   if (steps < 100) return fmt::format("steps = {}; need >= 100", steps);
   if (burn_in < 0 || burn_in >= steps) return fmt::format("burn_in = {}; need 0 <= burn_in < steps", burn_in);
   if (grid_points < 16 || grid_points > 1024) return fmt::format("grid_points = {}; need 16..1024", grid_points);
+  if (ep_window < 1 || ep_window > 4096) return fmt::format("ep_window = {}; need 1..4096", ep_window);
   if (!(sigma_m2 >= 0)) return fmt::format("sigma_m2 = {}; need >= 0", sigma_m2);
   return "";
 }
@@ -81,6 +83,9 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       excursion_filter(m0, P0), silent_filter(m0, P0);
   ExcursionReading excursion(*sensor, 2), silent_excursion(*sensor, 2);
   CovarianceBoundTracker bound(P0);
+  WindowEpOptions wopt;
+  wopt.window = o.ep_window;
+  WindowEpFilter window_filter(*sensor, m0, P0, wopt);
 
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> normal;
@@ -89,7 +94,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
   double y_prev = 0, direction = 1;
   Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_capped, acc_wedge, acc_bound,
-      acc_excursion, acc_silent;
+      acc_excursion, acc_silent, acc_window;
   Eigen::VectorXd wedge_mean_before(2);
   Eigen::MatrixXd wedge_cov_before(2, 2);
   Eigen::VectorXd excursion_mean_before(2);
@@ -204,6 +209,9 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       event_trunc.Correct(*sensor, y);
       capped_reading(event_capped, y);
     }
+    // lc_window: every reading of the last W steps as an exact site, banded sliding-window EP.
+    window_filter.Step(model, u, y);
+    if (!window_filter.last_converged()) ++result.window_unconverged;
     bound.Predict(model);
     if (crossing) bound.UpdateStrength(c, 1.0 / result.sigma_m2);   // modified event measurement
     // Control law (causal in u and y): push back while outside, else track ∓v_ref with the tuned
@@ -222,6 +230,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       acc_wedge.Add(wedge.mean()(1) - x(1), wedge.covariance()(1, 1));
       acc_excursion.Add(excursion_filter.mean()(1) - x(1), excursion_filter.covariance()(1, 1));
       acc_silent.Add(silent_filter.mean()(1) - x(1), silent_filter.covariance()(1, 1));
+      acc_window.Add(window_filter.mean()(1) - x(1), window_filter.covariance()(1, 1));
       acc_bound.Add(0.0, bound.covariance()(1, 1));
     }
     if (o.record_trace) {
@@ -231,7 +240,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       t.y.push_back(y);
       t.var_grid.push_back(grid.covariance()(1, 1));
       t.var_tuned_kalman.push_back(tuned.covariance()(1, 1));
-      t.var_lc_gaussian.push_back(excursion_filter.covariance()(1, 1));
+      t.var_lc_gaussian.push_back(window_filter.covariance()(1, 1));
       t.var_bound.push_back(bound.covariance()(1, 1));
       const double e = grid.mean()(1) - x(1);
       t.err2_grid.push_back(e * e);
@@ -250,6 +259,8 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   result.observers.push_back(acc_wedge.Result("lc_wedge"));
   result.observers.push_back(acc_excursion.Result("lc_excursion"));
   result.observers.push_back(acc_silent.Result("lc_excursion_silent"));
+  result.observers.push_back(acc_window.Result("lc_window"));
+  result.window_failures = window_filter.failures();
   MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n), (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n)};
   result.observers.push_back(b);
   return result;

@@ -27,11 +27,14 @@
 //                   lagged pair (x1(k−1), x1(k)), e.g. x1(k−1) < T ≤ x1(k) (ident/crossing_reading.h: a
 //                   log-concave reading of the augmented state, Tallis moments, exact update of x(k));
 //                   every repeated reading is the σ_o reading of lc_event (p11 = 1/3)
-//   lc_excursion    (the CLI's lc_gaussian) as lc_wedge, but an excursion past a threshold (entry wedge, repeated ±1 readings, exit
+//   lc_excursion    (the CLI's lc_gaussian in session 5) as lc_wedge, but an excursion past a threshold (entry wedge, repeated ±1 readings, exit
 //                   wedge) is one log-concave reading of the stacked states x(k_e − 1 … k): fixed-lag
 //                   expectation propagation with exact 1-D/2-D factor moments (ident/excursion_reading.h)
 //   lc_excursion_silent  diagnostic: lc_excursion with no reading at repeated y = 0 (prediction only
 //                   between excursions), to see what the σ_o reading contributes
+//   lc_window       (the CLI's lc_gaussian since session 6) every reading of the last W = ep_window steps an exact site of the state chain (repeated
+//                   y = 0 as 1{|x1| < T}, repeated ±1 as half-lines, changes as the wedge of lc_wedge), refined
+//                   jointly by banded sliding-window EP; older sites frozen (ident/window_ep_filter.h). No σ_o.
 //   bound           CovarianceBoundTracker with the modified event measurement: crossing ∈ LC(Q_M),
 //                   Q_M = diag(σ_M⁻², 0), y = 0 ∈ LC(0); rms = √(mean P̄22)
 //
@@ -55,6 +58,7 @@ struct MemsStudyOptions {
   int grid_points = 128;           // per axis of the 2-D grid observer
   double sigma_m2 = 0.0;           // σ_M² of the modified event measurement; 0 = (2 h v_ref)²/3
   bool record_trace = false;       // keep per-step variances (Fig. 8)
+  int ep_window = 16;              // lc_window's EP window W (readings refined jointly)
   std::string Validate() const;
 };
 
@@ -65,7 +69,7 @@ struct MemsObserverResult {
 };
 
 struct MemsTrace {
-  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian /* lc_excursion */, var_bound, err2_grid, y;
+  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian /* lc_window */, var_bound, err2_grid, y;
 };
 
 struct MemsStudyResult {
@@ -77,6 +81,8 @@ struct MemsStudyResult {
   int wedge_fallbacks = 0;   // changes of reading where lc_wedge's wedge had no mass (first-passage reading used)
   int excursion_fallbacks = 0;    // changes of reading lc_excursion left to lc_wedge's update (no mass / too long)
   int excursion_unconverged = 0;  // lc_excursion steps whose EP sweeps hit the limit
+  long window_failures = 0;       // lc_window site refits with no mass under the cavity (site kept)
+  int window_unconverged = 0;     // lc_window steps whose EP sweeps hit the limit
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };

@@ -255,6 +255,17 @@ TEST(MemsStudy, TunedKalmanAndBoundBehaveAsThePaperSays) {
   EXPECT_EQ(r.excursion_fallbacks, 0);
   EXPECT_EQ(r.excursion_unconverged, 0);
   EXPECT_LT(excursion.rms, 0.8 * r.Get("lc_plain").rms);
+  // Every reading of the last W steps an exact site, sliding-window EP (lc_window): the same bounds, no
+  // site without mass, converged sweeps.
+  const auto& window = r.Get("lc_window");
+  std::printf("lc_window rms %.4f (cal %.2f), unconverged steps %d, failures %ld\n", window.rms, window.calibration,
+              r.window_unconverged, r.window_failures);
+  EXPECT_LT(window.rms, 1.2 * r.Get("grid").rms);
+  EXPECT_GT(window.calibration, 0.7);
+  EXPECT_LT(window.calibration, 1.4);
+  EXPECT_EQ(r.window_failures, 0);
+  EXPECT_EQ(r.window_unconverged, 0);
+  EXPECT_LT(window.rms, 0.8 * r.Get("lc_plain").rms);
 }
 
 }  // namespace
