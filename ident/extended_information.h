@@ -93,8 +93,7 @@ class ExtendedInformation {
   }
 
   // Step 3: stores h = [y; z] for Apply() and returns ξ, ξ_z, ê against the current (forgotten) V.
-  // With_xi = false computes ê only (ξ = ξ_z = NaN) and saves ρ+1 divisions, but the plan then has to
-  // chain them (PlanApply<false>); RLS uses WithXi = true for the shorter chain (ident/rls.h).
+  // With_xi = false computes ê only (ξ = ξ_z = NaN): RLS needs no ξ and saves ρ+1 divisions.
   template <bool WithXi = true, class Derived>
   Innovation Prepare(double y, const Eigen::MatrixBase<Derived>& z) {
     // g and h are both written from (y, z) (not g copied from h: a wide load of h just after its

@@ -12,15 +12,11 @@
 //   input check |h|² = y² + |z|², |h|               2ρ + 2
 //   ν̃ = λν, ν = ν̃ + 1, β = 1/ν, n ← λn + 1          5
 //   back substitution L'g = h, ê = g_0               m(m−1)          [spec §6]
-//   r_i = 1/d_i, running sums Q_j = Σ_{i≥j} g_i² r_i 4m + 2 (m divisions, independent of g)
-//   plan from those sums: new d, b_j, Σd, Σ|g|       11m + 1         (O(m): ld_factor.h PlanUpdateFromSums)
+//   plan: new d, b_j (prefix-sum form), Σd, Σ|g|     12m + 2         (O(m): ld_factor.h PlanUpdate)
 //   guard verdict (bound on max|L|, Θ̂)              5               (step_guard.h; no copy)
 //   rank-one update of L (Agee–Turner), bound        2m(m−1) + 5     [spec §6]
-//   total, exponential forgetting                    3m² + 12m + 2ρ + 20 = 3ρ² + 20ρ + 35
-//                                                    (ρ = 4: 163 flops, plus ≈ 4m comparisons)
-//   (The prefix-sum plan of LdFactor::PlanUpdate needs 3m + 1 flops fewer but puts a division per j behind
-//   the running sum, on the step's dependency chain: it measured 21 % slower at ρ = 8 and 32 % at ρ = 32,
-//   the same at ρ = 2; docs/realtime.md, session 6. The Kárný–Hangos estimators form the same sums.)
+//   total, exponential forgetting                    3m² + 9m + 2ρ + 19 = 3ρ² + 17ρ + 31
+//                                                    (ρ = 4: 147 flops, plus ≈ 4m comparisons)
 //   stabilised forgetting adds a copy of L, d and m  ≈ (2/3)m³ + 4m²   (O(ρ³); ρ = 4: ≈ 190 more)
 //   sparse rank-one updates with the rows of L_a [spec §7b]
 //   a step the O(m) guard cannot prove healthy       + a copy of L, d and Σ|L| (O(m²); rare: extreme scales)
@@ -100,7 +96,7 @@ class BasicRecursiveLeastSquares {
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     if (!enabled_) return {StepStatus::kSkipped};
     const DrivenStep s =
-        driver_.template Run</*WithXi=*/true>(stats_, {options_.forgetting.factor, options_.forgetting.stabilised, kWindupFloor}, prior_.nu0,
+        driver_.template Run</*WithXi=*/false>(stats_, {options_.forgetting.factor, options_.forgetting.stabilised, kWindupFloor}, prior_.nu0,
                     prior_factor_, y, z, [](double nu, const Innovation&) { return 1 / nu; });  // β = 1/ν [spec §7c]
     if (s.report.updated()) samples_ = s.lambda * samples_ + 1;
     return s.report;

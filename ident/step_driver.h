@@ -17,7 +17,7 @@
 // Allocation-free, noexcept.
 //
 // Example (inside an estimator holding `ExtendedInformation<kDim> stats_` and `StepDriver<kDim> driver_{stats_}`):
-//   const DrivenStep s = driver_.template Run</*WithXi=*/true>(stats_, {lambda, stabilised, 0x1p-900}, prior_nu0,
+//   const DrivenStep s = driver_.template Run</*WithXi=*/false>(stats_, {lambda, stabilised, 0x1p-900}, prior_nu0,
 //                                    prior_factor_, y, z, [](double nu, const Innovation&) { return 1 / nu; });
 //   if (s.report.updated()) samples_ = s.lambda * samples_ + 1;
 #pragma once
@@ -53,8 +53,7 @@ class StepDriver {
   // One guarded step (see the header comment). `weight(double nu, const Innovation&)` returns β;
   // it is called once per attempt and may record details of the step. (ν_a, V_a): the stabilised
   // forgetting's target (the prior), unused otherwise.
-  // WithXi = false: ξ, ξ_z are then NaN and not computed, and the plan is the prefix-sum form (fewer flops,
-  // a longer dependency chain; RLS takes WithXi = true, ident/rls.h).
+  // WithXi = false: the weight needs only ν (RLS); ξ, ξ_z are then NaN and not computed.
   template <bool WithXi = true, class Derived, class Weight>
   DrivenStep Run(ExtendedInformation<Dim>& stats, const StepSettings& s, double nu_a, const LdFactor<Dim>& Va,
                  double y, const Eigen::MatrixBase<Derived>& z, Weight&& weight) noexcept {

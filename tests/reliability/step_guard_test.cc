@@ -62,8 +62,7 @@ TEST(StepGuard, DecidesExactlyAsCopyStepCheckRestore) {
       reference.ForgetExponential(1.0);
       const double nu = reference.nu() + 1;
       reference.Prepare(y, z);
-      reference.PlanApply</*WithXi=*/true>(1 / nu);  // the plan RLS takes: from Prepare's sums (ident/rls.h)
-      reference.CommitApply(nu, std::sqrt(y * y + z.squaredNorm()));
+      reference.Apply(1 / nu, nu);
       const bool ok = Healthy(reference);
       if (!ok) reference = saved;
       ASSERT_EQ(r.updated(), ok) << "rho = " << rho << ", t = " << t;
