@@ -8,6 +8,7 @@
 
 #include "ident/common/error.h"
 #include "ident/crossing_reading.h"
+#include "ident/ep_site_change.h"
 #include "models/truncated_bivariate_normal.h"
 
 namespace ident {
@@ -154,15 +155,7 @@ double ExcursionReading::Refit(Factor& f) {
   const Eigen::Vector2d target_mean = target_cov * (pc * mc + f.eta);
   SetMarginal(f, target_mean, target_cov);
   // Convergence: change of the tilted moments since the last refit, relative to their scale.
-  double change = std::isfinite(f.last_mean(0)) ? 0.0 : kInf;   // first fit of this factor
-  for (int i = 0; i < f.dim; ++i) {
-    const double sd = std::sqrt(std::max(vt(i, i), 1e-300));
-    change = std::max(change, std::abs(mt(i) - f.last_mean(i)) / sd);
-    change = std::max(change, std::abs(vt(i, i) - f.last_cov(i, i)) / std::max(vt(i, i), 1e-300));
-  }
-  f.last_mean = mt;
-  f.last_cov = vt;
-  return change;
+  return internal::RecordTiltedChange(mt, vt, f.dim, f.last_mean, f.last_cov);
 }
 
 StepReport ExcursionReading::Sweep(LcGaussianFilter& filter) {

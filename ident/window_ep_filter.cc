@@ -9,6 +9,7 @@
 
 #include "ident/common/error.h"
 #include "ident/crossing_reading.h"
+#include "ident/ep_site_change.h"
 #include "models/truncated_bivariate_normal.h"
 
 namespace ident {
@@ -134,15 +135,8 @@ double WindowEpFilter::Refit(Slot& s) {
       return 0.0;
     }
   }
-  double change = std::isfinite(s.last_mean(0)) ? 0.0 : kInf;
-  for (int i = 0; i < s.dim; ++i) {
-    const double sd = std::sqrt(std::max(vt(i, i), 1e-300));
-    change = std::max(change, std::abs(mt(i) - s.last_mean(i)) / sd);
-    change = std::max(change, std::abs(vt(i, i) - s.last_cov(i, i)) / std::max(vt(i, i), 1e-300));
-  }
-  s.last_mean = mt;
-  s.last_cov = vt;
-  return change;
+  // Convergence: change of the tilted moments since the last refit, relative to their scale.
+  return internal::RecordTiltedChange(mt, vt, s.dim, s.last_mean, s.last_cov);
 }
 
 void WindowEpFilter::Filtered(Slot& s) {
