@@ -55,22 +55,26 @@ WindowEpFilter::WindowEpFilter(const models::ThresholdSensor& sensor, const Eige
 double WindowEpFilter::Refit(Slot& s) {
   if (s.dim == 0) return 0.0;
   // Cavity α⁻ · β (moment form): P_c = (I + P⁻Ω)⁻¹ P⁻, m_c = m⁻ + P_c (ω − Ω m⁻).
-  Mat3 Pc;
-  Vec3 mc;
-  if (s.Omega.isZero(0.0) && s.omega.isZero(0.0)) {
-    Pc = s.pred_P;
-    mc = s.pred_m;
-  } else {
-    Pc = (Mat3::Identity() + s.pred_P * s.Omega).inverse() * s.pred_P;
-    Symmetrize(Pc);
-    mc = s.pred_m + Pc * (s.omega - s.Omega * s.pred_m);
-  }
+  // β_j never involves s(j−1) (Ω, ω have a zero third row: F's third column is zero, see Backward), so a
+  // 1-D site on s(j) = c'x(j) needs only the cavity of x(j): (I + P⁻_xx Ω_xx)⁻¹ P⁻_xx, 2 × 2.
+  const bool no_beta = s.Omega.isZero(0.0) && s.omega.isZero(0.0);
   ++refits_;
   Eigen::Vector2d mt, mu;
   Eigen::Matrix2d vt, vc;
   bool zero_site = false;
   if (s.dim == 1) {
-    const double m = h_.dot(mc), v = h_.dot(Pc * h_);
+    const Eigen::Vector2d c = h_.head<2>();
+    double m, v;
+    if (no_beta) {
+      m = c.dot(s.pred_m.head<2>());
+      v = c.dot(s.pred_P.topLeftCorner<2, 2>() * c);
+    } else {
+      const Eigen::Matrix2d Pp = s.pred_P.topLeftCorner<2, 2>(), Om = s.Omega.topLeftCorner<2, 2>();
+      const Eigen::Vector2d mp = s.pred_m.head<2>();
+      const Eigen::Matrix2d Pcx = (Eigen::Matrix2d::Identity() + Pp * Om).inverse() * Pp;
+      m = c.dot(mp + Pcx * (s.omega.head<2>() - Om * mp));
+      v = 0.5 * (c.dot(Pcx * c) + c.dot(Pcx.transpose() * c));
+    }
     if (!(v > 0) || !std::isfinite(m)) return -1;
     // An unchanged cavity (within the tolerance, relative to its sd / variance) gives the same site.
     if (std::isfinite(s.last_mean(0)) && std::abs(m - s.cav_mean(0)) <= options_.tolerance * std::sqrt(v) &&
@@ -96,6 +100,13 @@ double WindowEpFilter::Refit(Slot& s) {
     }
     mu << m, 0;
   } else {
+    Mat3 Pc = s.pred_P;
+    Vec3 mc = s.pred_m;
+    if (!no_beta) {
+      Pc = (Mat3::Identity() + s.pred_P * s.Omega).inverse() * s.pred_P;
+      Symmetrize(Pc);
+      mc = s.pred_m + Pc * (s.omega - s.Omega * s.pred_m);
+    }
     Mat23 H;
     H.row(0) << 0, 0, 1;        // s(j−1)
     H.row(1) = h_.transpose();  // s(j)
@@ -169,18 +180,45 @@ void WindowEpFilter::Filtered(Slot& s) {
 }
 
 void WindowEpFilter::Forward(Slot& s, const Vec3& m_prev, const Mat3& P_prev) {
-  s.pred_m = s.F * m_prev + s.b;
-  s.pred_P = s.F * P_prev * s.F.transpose() + s.Q;
-  Symmetrize(s.pred_P);
+  // z(j) = F z(j−1) + b + w with F = [A 0; c' 0]: only the x block of z(j−1) enters.
+  const Eigen::Matrix2d A = s.F.topLeftCorner<2, 2>(), Pxx = P_prev.topLeftCorner<2, 2>();
+  const Eigen::Vector2d c = h_.head<2>(), mx = m_prev.head<2>();
+  const Eigen::Matrix2d AP = A * Pxx;
+  const Eigen::Vector2d Pc = Pxx * c;
+  s.pred_m << A * mx + s.b.head<2>(), c.dot(mx);
+  const Eigen::Matrix2d Pn = AP * A.transpose() + s.Q.topLeftCorner<2, 2>();
+  s.pred_P.topLeftCorner<2, 2>() = 0.5 * (Pn + Pn.transpose());
+  s.pred_P.block<2, 1>(0, 2) = A * Pc;
+  s.pred_P.block<1, 2>(2, 0) = (A * Pc).transpose();
+  s.pred_P(2, 2) = c.dot(Pc);
 }
 
 void WindowEpFilter::Backward(const Slot& s, Slot& prev) {
+  if (s.dim != 2) {
+    // Ω_j + site j has a zero third row here (a 1-D site reads s(j) = c'x(j)) and Q = diag(P_N, 0), so
+    // the message is a 2 × 2 one on x: S = (I + Ω'P_N)⁻¹ Ω', Ω_{j−1} = [A'SA 0; 0 0], ω_{j−1} = [A'(σ − S B u); 0].
+    Eigen::Matrix2d Om = s.Omega.topLeftCorner<2, 2>();
+    Eigen::Vector2d om = s.omega.head<2>();
+    if (s.dim == 1) {
+      const Eigen::Vector2d c = h_.head<2>();
+      Om += s.lambda(0, 0) * c * c.transpose();
+      om += s.eta(0) * c;
+    }
+    prev.Omega.setZero();
+    prev.omega.setZero();
+    if (Om.isZero(0.0) && om.isZero(0.0)) return;
+    const Eigen::Matrix2d A = s.F.topLeftCorner<2, 2>();
+    const Eigen::Matrix2d M = (Eigen::Matrix2d::Identity() + Om * s.Q.topLeftCorner<2, 2>()).inverse();
+    Eigen::Matrix2d S = M * Om;
+    S = 0.5 * (S + S.transpose()).eval();
+    Eigen::Matrix2d AS = A.transpose() * S * A;
+    prev.Omega.topLeftCorner<2, 2>() = 0.5 * (AS + AS.transpose());
+    prev.omega.head<2>() = A.transpose() * (M * om - S * s.b.head<2>());
+    return;
+  }
   Mat3 Om = s.Omega;
   Vec3 om = s.omega;
-  if (s.dim == 1) {
-    Om += s.lambda(0, 0) * h_ * h_.transpose();
-    om += s.eta(0) * h_;
-  } else if (s.dim == 2) {
+  {
     Mat23 H;
     H.row(0) << 0, 0, 1;
     H.row(1) = h_.transpose();
