@@ -317,21 +317,26 @@ StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eig
   const int L = count_;
   for (last_sweeps_ = 1; last_sweeps_ <= options_.max_sweeps; ++last_sweeps_) {
     double change = 0;
+    int first_changed = L;   // oldest slot whose site this pass changed
     for (int i = L - 1; i >= 0; --i) {
       Slot& si = At(i);
       if (i == L - 1) {
         si.Omega.setZero();
         si.omega.setZero();
       }
+      const Eigen::Matrix2d lambda = si.lambda;
+      const Eigen::Vector2d eta = si.eta;
       const double c = Refit(si);
       if (c < 0) ++failures_;
       else change = std::max(change, c);
+      if (si.lambda != lambda || si.eta != eta) first_changed = i;
       if (i > 0) Backward(si, At(i - 1));
     }
     if (change <= options_.tolerance) last_converged_ = true;
     // Forward pass: messages only (the sites are refitted once per sweep, in the backward pass, where
     // the new information enters; the fixed point is the same, the erf / Owen's T evaluations halve).
-    for (int i = 0; i < L; ++i) {
+    // α_j depends on the sites ≤ j only, so the messages older than the oldest changed site stand (exact).
+    for (int i = first_changed; i < L; ++i) {
       Slot& si = At(i);
       if (i == 0) Forward(si, base_m_, base_P_);
       else Forward(si, At(i - 1).filt_m, At(i - 1).filt_P);
