@@ -35,8 +35,11 @@
 //          projection truncated to the site's region (1-D truncated normal or Tallis' quadrant moments).
 // One sweep = a backward pass (refit j = L … 1 with fresh β_j and the stored α⁻_j, so each refit is a
 // sequential EP step of the current approximation, Heskes & Zoeter 2002) and a forward pass of the
-// messages α (no refits: the fixed point is the same, at half the tilted-moment evaluations); O(L) per
-// sweep with 3 × 3 blocks. The new site is first fitted alone (β = 0). Sweeps stop when no
+// messages α (no refits: the fixed point is the same, at half the tilted-moment evaluations), starting at
+// the oldest site the backward pass changed (α_j depends on sites ≤ j only); O(L) per sweep with 3 × 3
+// blocks, 2 × 2 where the structure allows it: F's third column is zero, so β_j never involves s(j−1) and
+// a 1-D site's cavity, the backward message through it and the time update need only the x block. The new
+// site is first fitted alone (β = 0). Sweeps stop when no
 // site's tilted moments move by more than `tolerance` (relative to their sd / variance); a site whose cavity
 // moved less than that since its last refit keeps its value (no erfc / Owen's T). A 1-D site whose
 // cavity has its bounds more than 8.5 sd away is the identity to double precision (mass outside < 1e-17)
