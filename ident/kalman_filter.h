@@ -38,10 +38,10 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/QR>
 
 #include "ident/common/error.h"
 #include "ident/common/step_report.h"
+#include "ident/householder_triangularize.h"
 #include "ident/state_observer.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
@@ -96,13 +96,11 @@ class BasicKalmanFilter {
   StateMatrix noise_cached_, noise_sqrt_, noise_tmp_;
   Eigen::LDLT<StateMatrix> noise_ldlt_;
   Eigen::Matrix<double, kTwoN, N> pre_;
-  Eigen::HouseholderQR<Eigen::Matrix<double, kTwoN, N>> qr_;
   Eigen::Matrix<double, kN1, kN1> pre1_, post1_;
-  Eigen::HouseholderQR<Eigen::Matrix<double, kN1, kN1>> qr1_;
+  Eigen::Matrix<double, kN1, 1> qr_workspace_;  // TriangularizeInPlace's, n + 1 entries
   // Workspaces of the p-reading Correct (resized when p changes).
   Eigen::MatrixXd pre_p_, post_p_, r_sqrt_, r_cached_;
-  Eigen::VectorXd innov_;
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr_p_;
+  Eigen::VectorXd innov_, qr_workspace_p_;
 };
 
 using KalmanFilter = BasicKalmanFilter<Eigen::Dynamic>;
@@ -133,10 +131,9 @@ BasicKalmanFilter<N>::BasicKalmanFilter(const Eigen::Ref<const Eigen::VectorXd>&
   // Sizes the LDLᵀ workspace and sets its status (LDLT(n) leaves the status uninitialised: UBSan).
   noise_ldlt_.compute(StateMatrix::Identity(n, n));
   pre_.resize(2 * n, n);
-  qr_ = Eigen::HouseholderQR<Eigen::Matrix<double, kTwoN, N>>(2 * n, n);
   pre1_.resize(n + 1, n + 1);
   post1_.resize(n + 1, n + 1);
-  qr1_ = Eigen::HouseholderQR<Eigen::Matrix<double, kN1, kN1>>(n + 1, n + 1);
+  qr_workspace_.resize(n + 1);
 }
 
 template <int N>
@@ -183,8 +180,8 @@ StepReport BasicKalmanFilter<N>::Predict(const models::LinearStateSpace& model,
   // Transposed pre-array [S'A'; (P_N^{1/2})'] (2n × n); its R factor R satisfies R'R = A P A' + P_N.
   pre_.topRows(n).noalias() = S_.transpose() * model.A.transpose();
   pre_.bottomRows(n) = noise_sqrt_.transpose();
-  qr_.compute(pre_);
-  S_new_ = qr_.matrixQR().topRows(n).template triangularView<Eigen::Upper>().transpose();
+  TriangularizeInPlace(pre_, qr_workspace_);
+  S_new_ = pre_.topRows(n).template triangularView<Eigen::Upper>().transpose();
   x_new_.noalias() = model.A * x_;                                           // eq. (1) for the mean
   if (model.num_inputs() > 0) x_new_.noalias() += model.B * u;
   if (!S_new_.allFinite() || !x_new_.allFinite()) return {StepStatus::kNumericalFailure};
@@ -204,8 +201,8 @@ StepReport BasicKalmanFilter<N>::Correct(const Eigen::Ref<const Eigen::VectorXd>
   pre1_(0, 0) = std::sqrt(r);
   pre1_.col(0).tail(n).noalias() = S_.transpose() * c;
   pre1_.bottomRightCorner(n, n) = S_.transpose();
-  qr1_.compute(pre1_);
-  post1_ = qr1_.matrixQR().template triangularView<Eigen::Upper>().transpose();
+  TriangularizeInPlace(pre1_, qr_workspace_);
+  post1_ = pre1_.template triangularView<Eigen::Upper>().transpose();
   const double re_sqrt = post1_(0, 0);
   const double w = (y - c.dot(x_)) / re_sqrt;                                 // Re^{-1/2} e
   const double log_det = std::log(std::abs(re_sqrt));
@@ -243,8 +240,9 @@ StepReport BasicKalmanFilter<N>::Correct(const Eigen::Ref<const Eigen::MatrixXd>
   pre_p_.topLeftCorner(p, p) = r_sqrt_.transpose();
   pre_p_.bottomLeftCorner(n, p).noalias() = S_.transpose() * C.transpose();
   pre_p_.bottomRightCorner(n, n) = S_.transpose();
-  qr_p_.compute(pre_p_);
-  post_p_ = qr_p_.matrixQR().triangularView<Eigen::Upper>().transpose();  // lower-triangular post-array
+  qr_workspace_p_.resize(p + n);
+  TriangularizeInPlace(pre_p_, qr_workspace_p_);
+  post_p_ = pre_p_.triangularView<Eigen::Upper>().transpose();  // lower-triangular post-array
   innov_ = y - C * x_;
   const auto re_sqrt = post_p_.topLeftCorner(p, p);
   re_sqrt.triangularView<Eigen::Lower>().solveInPlace(innov_);  // w = Re^{-1/2} e

@@ -10,7 +10,7 @@ void PlotFit(const std::string& path, const io::DataTable& data, Segment validat
              const Eigen::VectorXd& theta, const ParameterHistory& history) {
   const int rho = source.num_parameters();
   Eigen::VectorXd z(rho);
-  PlotSeries measured{"measured"}, one_step{"one-step prediction"}, simulated{"simulation"};
+  PlotSeries measured{"measured", {}, {}}, one_step{"one-step prediction", {}, {}}, simulated{"simulation", {}, {}};
   // One-step: measured past outputs (as in Score).
   source.Reset();
   for (int r = validation.first; r < validation.first + validation.count; ++r) {
