@@ -152,8 +152,11 @@ TEST(DualReconstruction, FlaggedStepsAreKinksAndUnflaggedStepsRebuildThePrimalOn
     const MapSmootherResult r = SolveMapSmoother(p);
     ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << "trial " << trial << ": " << r.message;
     const std::set<int> flagged = Flagged(r);
-    if (trial % 4 == 2) EXPECT_TRUE(flagged.empty()) << "quadratic process noise, trial " << trial;
-    if (trial % 4 != 2) EXPECT_FALSE(flagged.empty()) << "trial " << trial;
+    if (trial % 4 == 2) {
+      EXPECT_TRUE(flagged.empty()) << "quadratic process noise, trial " << trial;
+    } else {
+      EXPECT_FALSE(flagged.empty()) << "trial " << trial;
+    }
     const int first = flagged.empty() ? T + 1 : *flagged.begin();
     for (int t = 0; t < first; ++t)
       EXPECT_LT((r.x_from_dual.col(t) - r.x.col(t)).cwiseAbs().maxCoeff(), 1e-6) << "trial " << trial << " t " << t;

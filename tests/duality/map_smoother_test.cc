@@ -130,9 +130,12 @@ TEST(MapSmoother, DualityGapVanishesOnRandomPlqInstances) {
     EXPECT_LE(std::abs(r.relative_gap), 1e-8) << "trial " << trial << " primal " << r.primal << " dual " << r.dual;
     EXPECT_LE(r.dual_infeasibility, 1e-9) << "trial " << trial;
     // Where the reconstruction w_t in d f_t*(y_t) is unique it rebuilds the primal states.
-    if (r.reconstruction_unique)
+    if (r.reconstruction_unique) {
       EXPECT_LT(r.max_abs_x_difference, 1e-6 * (1 + r.x.cwiseAbs().maxCoeff())) << "trial " << trial;
-    if (trial % 3 == 0) EXPECT_TRUE(r.reconstruction_unique) << "quadratic process noise, trial " << trial;
+    }
+    if (trial % 3 == 0) {
+      EXPECT_TRUE(r.reconstruction_unique) << "quadratic process noise, trial " << trial;
+    }
     // The reported dual point satisfies the control dynamics of (D) up to its projection onto dom f*.
     EXPECT_LE((DualStates(p, r.u) - r.y).cwiseAbs().maxCoeff(),
               r.dual_infeasibility + 1e-12 * (1 + r.y.cwiseAbs().maxCoeff()));
