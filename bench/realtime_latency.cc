@@ -4,7 +4,9 @@
 // pre-generated ARX(2,2) stream (forgetting λ = 0.99). Reported per estimator as Google Benchmark
 // counters p50, p99, p99.9 and max [ns], plus the cost of one clock read pair (timing overhead,
 // included in every sample); the closing table gives the Cauchy / RLS ratio at p50 (raw and with the
-// clock overhead subtracted), measured in this run. Goals (issue 7): p99 ≤ 2× p50; Cauchy ≤ 1.5× RLS.
+// clock overhead subtracted), measured in this run, and again from a loop that updates the two alternately
+// (BM_LatencyInterleavedCauchyRls4: both under the same machine state). Goals (issue 7): p99 ≤ 2× p50;
+// Cauchy ≤ 1.5× RLS.
 //
 //   ./build/bench/realtime_latency
 //   taskset -c 1 ./build/bench/realtime_latency     (pinned: fewer migrations in the tail)
@@ -123,6 +125,56 @@ void BM_LatencyCauchy4(benchmark::State& state) {
   MeasureLatency(state, cauchy);
 }
 BENCHMARK(BM_LatencyCauchy4)->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// Cauchy and fixed-size RLS updated alternately in one loop, each update timed on its own: both see the same
+// machine state (frequency, cache, neighbours), which the separate benchmarks above do not — on the shared
+// 2-core VMs RLS alone lands at p50 140–150 ns or 190–200 ns from one instance to the next.
+void BM_LatencyInterleavedCauchyRls4(benchmark::State& state) {
+  using Clock = std::chrono::steady_clock;
+  ident::StudentRegressionOptions co;
+  co.forgetting.factor = kForgetting;
+  ident::BasicStudentRegression<4> cauchy(4, co);
+  ident::RlsOptions ro;
+  ro.forgetting.factor = kForgetting;
+  ident::BasicRecursiveLeastSquares<4> rls(4, ro);
+  const Stream& s = TheStream();
+  std::vector<double> cauchy_ns(kUpdates), rls_ns(kUpdates), overhead(kUpdates);
+  for (auto _ : state) {
+    for (int t = 0; t < kWarmUp; ++t) {
+      benchmark::DoNotOptimize(cauchy.Update(s.y(t % kStream), s.z.col(t % kStream)));
+      benchmark::DoNotOptimize(rls.Update(s.y(t % kStream), s.z.col(t % kStream)));
+    }
+    int rejected = 0;
+    for (int i = 0; i < kUpdates; ++i) {
+      const int t = i % kStream;
+      const Eigen::Vector4d z = s.z.col(t);
+      auto start = Clock::now();
+      const ident::StepReport rc = cauchy.Update(s.y(t), z);
+      benchmark::DoNotOptimize(rc);
+      auto stop = Clock::now();
+      cauchy_ns[i] = std::chrono::duration<double, std::nano>(stop - start).count();
+      start = Clock::now();
+      const ident::StepReport rr = rls.Update(s.y(t), z);
+      benchmark::DoNotOptimize(rr);
+      stop = Clock::now();
+      rls_ns[i] = std::chrono::duration<double, std::nano>(stop - start).count();
+      rejected += !rc.updated() + !rr.updated();
+    }
+    for (int i = 0; i < kUpdates; ++i) {
+      const auto start = Clock::now();
+      benchmark::ClobberMemory();
+      const auto stop = Clock::now();
+      overhead[i] = std::chrono::duration<double, std::nano>(stop - start).count();
+    }
+    if (rejected) state.SkipWithError("an update was not applied");
+  }
+  const double clock = Percentile(overhead, 0.50), c50 = Percentile(cauchy_ns, 0.50), r50 = Percentile(rls_ns, 0.50);
+  state.counters["cauchy_p50_ns"] = c50;
+  state.counters["rls_p50_ns"] = r50;
+  state.counters["clock_p50_ns"] = clock;
+  state.counters["ratio_net"] = (c50 - clock) / (r50 - clock);
+}
+BENCHMARK(BM_LatencyInterleavedCauchyRls4)->Iterations(1)->Unit(benchmark::kMillisecond);
 #endif
 
 // Console output plus a closing table: per estimator the percentiles, p99/p50, and Cauchy/RLS at p50.
@@ -142,17 +194,26 @@ class LatencyReporter : public benchmark::ConsoleReporter {
     std::printf("\nUpdate latency over %d updates, rho = 4 (steady_clock around each update)\n", kUpdates);
     std::printf("%-20s %8s %8s %8s %9s %9s %8s\n", "estimator", "p50[ns]", "p99[ns]", "p99.9", "max[ns]",
                 "clock[ns]", "p99/p50");
-    for (auto& [name, c] : counters_)
+    for (auto& [name, c] : counters_) {
+      if (!c.count("p50_ns")) continue;  // the interleaved benchmark has its own line below
       std::printf("%-20s %8.1f %8.1f %8.1f %9.1f %9.1f %8.2f\n", name.c_str(), c["p50_ns"], c["p99_ns"],
                   c["p999_ns"], c["max_ns"], c["clock_p50_ns"], c["p99_ns"] / c["p50_ns"]);
+    }
     if (counters_.count("BM_LatencyCauchy4") && counters_.count("BM_LatencyRls4")) {
       auto& c = counters_["BM_LatencyCauchy4"];
       auto& r = counters_["BM_LatencyRls4"];
       std::printf("Cauchy / RLS at p50: %.2f (raw), %.2f (clock overhead subtracted)\n", c["p50_ns"] / r["p50_ns"],
                   (c["p50_ns"] - c["clock_p50_ns"]) / (r["p50_ns"] - r["clock_p50_ns"]));
-    } else {
-      std::printf("Cauchy / RLS: the Cauchy estimator (ident/student_regression.h) is not in this build\n");
     }
+    if (counters_.count("BM_LatencyInterleavedCauchyRls4")) {
+      auto& i = counters_["BM_LatencyInterleavedCauchyRls4"];
+      std::printf("Cauchy / RLS at p50, updated alternately in one loop (Cauchy %.0f ns, RLS %.0f ns): %.2f (raw), "
+                  "%.2f (clock overhead subtracted)\n", i["cauchy_p50_ns"], i["rls_p50_ns"],
+                  i["cauchy_p50_ns"] / i["rls_p50_ns"], i["ratio_net"]);
+    }
+#ifndef IDENT_HAS_CAUCHY
+    std::printf("Cauchy / RLS: the Cauchy estimator (ident/student_regression.h) is not in this build\n");
+#endif
     std::fflush(stdout);
   }
 
