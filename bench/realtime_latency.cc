@@ -62,6 +62,17 @@ double Percentile(std::vector<double>& v, double p) {
   return v[k];
 }
 
+// Times kUpdates empty clock-read pairs: the overhead included in every latency sample.
+void TimeClockReads(std::vector<double>& overhead) {
+  using Clock = std::chrono::steady_clock;
+  for (int i = 0; i < kUpdates; ++i) {
+    const auto start = Clock::now();
+    benchmark::ClobberMemory();
+    const auto stop = Clock::now();
+    overhead[i] = std::chrono::duration<double, std::nano>(stop - start).count();
+  }
+}
+
 // Times kUpdates single updates of `est`; sets the counters.
 template <class Estimator>
 void MeasureLatency(benchmark::State& state, Estimator& est) {
@@ -81,12 +92,7 @@ void MeasureLatency(benchmark::State& state, Estimator& est) {
       rejected += !r.updated();
       latency[i] = std::chrono::duration<double, std::nano>(stop - start).count();
     }
-    for (int i = 0; i < kUpdates; ++i) {
-      const auto start = Clock::now();
-      benchmark::ClobberMemory();
-      const auto stop = Clock::now();
-      overhead[i] = std::chrono::duration<double, std::nano>(stop - start).count();
-    }
+    TimeClockReads(overhead);
     if (rejected) state.SkipWithError("an update was not applied");
   }
   benchmark::DoNotOptimize(est.parameters());
@@ -160,12 +166,7 @@ void BM_LatencyInterleavedCauchyRls4(benchmark::State& state) {
       rls_ns[i] = std::chrono::duration<double, std::nano>(stop - start).count();
       rejected += !rc.updated() + !rr.updated();
     }
-    for (int i = 0; i < kUpdates; ++i) {
-      const auto start = Clock::now();
-      benchmark::ClobberMemory();
-      const auto stop = Clock::now();
-      overhead[i] = std::chrono::duration<double, std::nano>(stop - start).count();
-    }
+    TimeClockReads(overhead);
     if (rejected) state.SkipWithError("an update was not applied");
   }
   const double clock = Percentile(overhead, 0.50), c50 = Percentile(cauchy_ns, 0.50), r50 = Percentile(rls_ns, 0.50);
