@@ -91,6 +91,18 @@ RegressionPrior RegressionPrior::Flat(int rho) {
   return prior;
 }
 
+RegressionPrior RegressionPrior::Flat(const Eigen::VectorXd& mean_squares) {
+  IDENT_REQUIRE(mean_squares.size() >= 2, "{} mean squares; need y's and at least one regressor's", mean_squares.size());
+  for (Eigen::Index i = 0; i < mean_squares.size(); ++i)
+    IDENT_REQUIRE(mean_squares(i) >= 1e-280 && mean_squares(i) <= 1e280,
+                  "mean square {} of coordinate {} is outside [1e-280, 1e280]; rescale the data or give a prior",
+                  mean_squares(i), i);
+  RegressionPrior prior;
+  prior.nu0 = 1e-12;
+  prior.V0 = mean_squares.asDiagonal();
+  return prior;
+}
+
 void RegressionPrior::Validate() const {
   IDENT_REQUIRE(std::isfinite(nu0) && nu0 > 0, "nu0 = {}; need a positive number of prior degrees", nu0);
   IDENT_REQUIRE(V0.rows() >= 2 && V0.rows() == V0.cols(), "prior matrix V0 is {}x{}; need (rho+1)x(rho+1), rho >= 1",

@@ -36,6 +36,12 @@ struct RegressionPrior {
   // Flat prior for least squares: information ν0·V0 = 1e-12·I (negligible against any real
   // record's Z'Z, so RLS reproduces batch least squares).
   static RegressionPrior Flat(int rho);
+  // The same flat prior in the data's own scale: ν0 = 1e-12, V0 = diag(m), where m = (mean y², mean z_1², …,
+  // mean z_ρ²) over the samples to be fitted — information 1e-12 of one average sample in every coordinate,
+  // so the prior's pull on θ̂ is ~1e-12/N relative whatever the units (RLS reproduces least squares on
+  // data of scale 1e-5 as on data of scale 1). Scaling y or a regressor scales the prior along (spec §10.8).
+  // Throws InvalidArgument unless every m_i is in [1e-280, 1e280] (beyond that, give a prior or rescale).
+  static RegressionPrior Flat(const Eigen::VectorXd& mean_squares);
 
   // Throws InvalidArgument naming the field if ν0 is not positive and finite, or V0 is not
   // square, symmetric and positive definite.

@@ -34,6 +34,12 @@ std::string ForgettingAdmissibility(int rho, double nu0, const ForgettingOptions
   if (lambda < 1) nu_inf = forgetting.stabilised ? nu0 + 1 / (1 - lambda) : 1 / (1 - lambda);
   const double nu_min = std::min(nu1, nu_inf);
   if (!(nu_min > nu_hard)) {
+    if (nu1 <= nu_hard && lambda < 1 && !forgetting.stabilised && nu0 + 1 > nu_hard)
+      return fmt::format(
+          "forgetting = {} is inadmissible with nu0 = {}: the first step has nu(1) = forgetting*nu0 + 1 = {} <= "
+          "nu_hard = {} (max(rho+delta-1, (k+3-delta)/k, rho/(k+1)) for rho = {}, k = {}, delta = {}); raise the "
+          "forgetting factor",
+          lambda, nu0, nu1, nu_hard, rho, dof, delta);
     if (nu1 <= nu_hard)
       return fmt::format(
           "nu0 = {} is inadmissible: the first step has nu(1) = {} <= nu_hard = {} (max(rho+delta-1, "

@@ -14,15 +14,22 @@ ArxStructure::ArxStructure(int na, std::vector<int> nb, std::vector<int> nk)
   IDENT_REQUIRE(na_ >= 0, "na = {}; need na >= 0", na_);
   IDENT_REQUIRE(nb_.size() == nk_.size(), "nb has {} entries but nk has {}; need one per input", nb_.size(),
                 nk_.size());
-  num_parameters_ = na_;
-  t0_ = na_;
+  // In 64 bits: orders near INT_MAX must be refused, not wrap around.
+  long long num_parameters = na_, t0 = na_;
   for (std::size_t i = 0; i < nb_.size(); ++i) {
     IDENT_REQUIRE(nb_[i] >= 0, "nb = {} for input {}; need nb >= 0", nb_[i], i + 1);
     IDENT_REQUIRE(nk_[i] >= 0, "nk = {} for input {}; need nk >= 0", nk_[i], i + 1);
-    num_parameters_ += nb_[i];
-    if (nb_[i] > 0) t0_ = std::max(t0_, nk_[i] + nb_[i] - 1);
+    num_parameters += nb_[i];
+    const long long history = static_cast<long long>(nk_[i]) + nb_[i];
+    IDENT_REQUIRE(history <= kMaxHistory, "nk + nb = {} for input {}; need at most {}", history, i + 1,
+                  kMaxHistory);
+    if (nb_[i] > 0) t0 = std::max(t0, history - 1);
   }
-  IDENT_REQUIRE(num_parameters_ >= 1, "the model has no parameters (na = 0 and nb = 0)");
+  IDENT_REQUIRE(num_parameters >= 1, "the model has no parameters (na = 0 and nb = 0)");
+  IDENT_REQUIRE(num_parameters <= kMaxParameters, "the model has {} parameters; need at most {}", num_parameters,
+                kMaxParameters);
+  num_parameters_ = static_cast<int>(num_parameters);
+  t0_ = static_cast<int>(t0);
 }
 
 std::string ArxStructure::ToString() const {

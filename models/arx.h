@@ -24,8 +24,14 @@ namespace ident::models {
 
 class ArxStructure {
  public:
+  // Limits that keep the memory a recursive estimator needs sane: at most kMaxParameters parameters (its
+  // (ρ+1)×(ρ+1) information matrix alone is 800 MB at ρ = 10⁴) and input histories nk_i + nb_i of at most
+  // kMaxHistory samples (one buffer of doubles per input).
+  static constexpr int kMaxParameters = 10'000;
+  static constexpr int kMaxHistory = 10'000'000;
+
   // Throws InvalidArgument if na < 0, an nb_i < 0, an nk_i < 0, the sizes of nb and nk differ,
-  // or there are no parameters.
+  // there are no parameters, or a limit above is exceeded.
   ArxStructure(int na, std::vector<int> nb, std::vector<int> nk);
 
   int na() const { return na_; }

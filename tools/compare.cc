@@ -161,10 +161,27 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   result.structure = source.structure();
   result.parameter_names = source.parameter_names();
 
+  // Default priors in the data's own scale, as `ident fit` sets them (tools/fit_command.cc): RLS's flat prior
+  // from the clean estimation part's mean squares; the Kárný–Hangos start-up prior is scale-invariant.
+  std::vector<EstimatorSettings> settings = estimators;
+  EstimatorSettings ls_settings;
+  FitOptions fit = options.fit;
+  const Eigen::VectorXd mean_squares = EstimationMeanSquares(data, result.estimation, source);
+  if ((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all()) {
+    ls_settings.prior = RegressionPrior::Flat(mean_squares);
+    for (auto& s : settings)
+      if (!s.prior && !s.exact && s.name == "rls") s.prior = ls_settings.prior;
+    bool absolute_prior = false;  // an --exact estimator keeps the unit-free flat prior and its check
+    for (const auto& s : settings) absolute_prior = absolute_prior || (!s.prior && s.exact);
+    if (!absolute_prior) fit.min_regressor_information = 0;
+  }
+  fit.trace = nullptr;
+  fit.on_update = {};
+
   // Clean-data least squares: reference θ, σ and scores.
   {
-    auto ls = MakeRegressionEstimator(EstimatorSettings{}, rho);
-    Estimate(data, result.estimation, source, *ls, nullptr);
+    auto ls = MakeRegressionEstimator(ls_settings, rho);
+    Estimate(data, result.estimation, source, *ls, fit);
     result.theta_ls = ls->parameters();
     result.sigma = ls->noise_std();
     result.reference = Score(data, result.validation, source, result.theta_ls);
@@ -185,9 +202,9 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
                        options.outliers.size * result.sigma, options.outliers.seed + static_cast<std::uint64_t>(trial));
     result.outliers_per_trial = static_cast<int>(rows.size());
     for (std::size_t e = 0; e < estimators.size(); ++e) {
-      auto estimator = MakeRegressionEstimator(estimators[e], rho);
+      auto estimator = MakeRegressionEstimator(settings[e], rho);
       RecordingEstimator recorder(*estimator, result.estimation.count);
-      Estimate(corrupted, result.estimation, source, recorder, nullptr, options.fit.decision);
+      Estimate(corrupted, result.estimation, source, recorder, fit);
       cleaned[e].push_back(static_cast<double>(source.cleaned()));
       const Eigen::VectorXd theta = estimator->parameters();
       theta_sum[e] += theta;
@@ -196,7 +213,7 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
       if (s.simulation) simulation[e].push_back(*s.simulation);
       distance[e].push_back((theta - result.theta_ls).norm() / result.theta_ls.norm());
       if (trial < kTimedTrials) {
-        auto fresh = MakeRegressionEstimator(estimators[e], rho);
+        auto fresh = MakeRegressionEstimator(settings[e], rho);
         ns[e].push_back(recorder.TimeReplay(*fresh));
       }
       if (options.progress) options.progress(++done, total);

@@ -169,6 +169,7 @@ void RunCompare(CompareCommandOptions& o) {
   io::DataTable table = io::ReadCsv(path);
   std::unique_ptr<DataSource> source = structure.MakeSource(table.names, path);
   std::vector<EstimatorSettings> settings;
+  for (const std::string& name : o.estimators) IDENT_REQUIRE(!name.empty(), "--estimators: an empty estimator name");
   for (const std::string& name : o.estimators) settings.push_back(o.estimator.Resolve(source->num_parameters(), name));
 
   CompareOptions options;

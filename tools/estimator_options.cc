@@ -41,9 +41,10 @@ void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
 }
 
 EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::string& spec) const {
-  EstimatorSettings s = ParseEstimatorSpec(spec.empty() ? estimator : spec);
+  const std::string& name = spec.empty() ? estimator : spec;
+  EstimatorSettings s = ParseEstimatorSpec(name);
   if (dof) {
-    IDENT_REQUIRE(!s.dof || *s.dof == *dof, "--dof {} contradicts estimator '{}'", *dof, spec);
+    IDENT_REQUIRE(!s.dof || *s.dof == *dof, "--dof {} contradicts estimator '{}'", *dof, name);
     s.dof = dof;
   }
   IDENT_REQUIRE(delta == 0 || delta == 1, "delta = {}; need 0 or 1", delta);

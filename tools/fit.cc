@@ -95,6 +95,7 @@ class Estimation {
         }
       } else {
         ++rejected_;
+        failed_ += report.status == StepStatus::kNumericalFailure;
       }
     }
     source_.PushCheckedOutput(y, y_hat, scale, flagged);
@@ -104,6 +105,10 @@ class Estimation {
   std::pair<int, int> Finish(const std::string& name) const {
     const int rho = source_.num_parameters();
     const std::vector<std::string> names = source_.parameter_names();
+    IDENT_REQUIRE(updates_ > 0 || failed_ < rejected_,
+                  "{}: every update of the estimation part ({} samples) was refused as numerically unsafe (a "
+                  "forgetting factor far below 1, which discards nearly all information at each step?)",
+                  name, rejected_);
     IDENT_REQUIRE(updates_ > 0,
                   "{}: none of the {} samples of the estimation part could be used (all missing, or too large: "
                   "squares beyond 1e308); rescale the data",
@@ -112,7 +117,7 @@ class Estimation {
     const Eigen::VectorXd scale = G.diagonal().cwiseSqrt();
     for (int i = 0; i < rho; ++i)
       IDENT_REQUIRE(scale(i) > 0,
-                    "{}: regressor '{}' is identically zero over the estimation part (constant input "
+                    "{}: regressor '{}' is identically zero over the estimation part (a constant column "
                     "after detrending?); the model is not identifiable",
                     name, names[i]);
     for (int i = 0; i < rho; ++i)
@@ -126,7 +131,8 @@ class Estimation {
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
     IDENT_REQUIRE(eig.eigenvalues()(0) > 1e-12 * rho,
                   "{}: the regressors are collinear over the estimation part (smallest eigenvalue of their "
-                  "correlation matrix {:.3g}); the model is not identifiable",
+                  "correlation matrix {:.3g}); the model is not identifiable (if a gross outlier has moved the "
+                  "detrending mean, try --detrend none)",
                   name, eig.eigenvalues()(0));
     return {updates_, rejected_};
   }
@@ -140,7 +146,7 @@ class Estimation {
   std::function<void(int row, const AnyRegressionEstimator&)> on_update_;
   Eigen::VectorXd z_;
   Eigen::MatrixXd ZtZ_;
-  int updates_ = 0, rejected_ = 0;
+  int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
 };
 
 // Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) and RMS, accumulated in one pass (Welford for ‖y − ȳ‖²).
@@ -274,6 +280,11 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
   return EstimateRows(data, segment, source, estimator, options);
 }
 
+std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
+                             AnyRegressionEstimator& estimator, const FitOptions& options) {
+  return EstimateRows(data, segment, source, estimator, options);
+}
+
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta) {
   Scoring scoring(source, theta);
   Eigen::VectorXd row(data.values.cols());
@@ -323,28 +334,96 @@ long CountCsvDataRows(const std::string& path) {
 
 namespace {
 
-FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
-                        AnyRegressionEstimator& estimator, const FitOptions& options) {
-  // Pass 1: the header, then the number of rows (the rows are parsed and checked by the passes below).
+// The rows of a CSV file: the header's reader, the number of data rows and the (estimation, validation) split.
+struct CsvLayout {
+  int columns = 0;
+  long rows = 0;
+  Segment estimation, validation;
+};
+CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                 const FitOptions& options) {
   io::CsvReader header(path, csv);
-  const int columns = header.num_columns();
-  Eigen::VectorXd row(columns);
-  const long rows = CountCsvDataRows(path);
-  if (rows == 0) header.Next(row);  // throws "no data rows after the header"
-  IDENT_REQUIRE(rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", path, rows);
-  const std::pair<Segment, Segment> segments = Split(static_cast<int>(rows), source, options, path);
-  const Segment estimation = segments.first, validation = segments.second;  // captured below (clang 14)
+  CsvLayout layout;
+  layout.columns = header.num_columns();
+  layout.rows = CountCsvDataRows(path);
+  if (layout.rows == 0) {
+    Eigen::VectorXd row(layout.columns);
+    header.Next(row);  // throws "no data rows after the header"
+  }
+  IDENT_REQUIRE(layout.rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", path, layout.rows);
+  std::tie(layout.estimation, layout.validation) = Split(static_cast<int>(layout.rows), source, options, path);
+  return layout;
+}
 
-  // Pass 2: detrending offsets (estimation-part means of the used columns, NaN = missing skipped).
-  Eigen::VectorXd offset = Eigen::VectorXd::Zero(columns);
+// Detrending offsets of a CSV file: the estimation-part means of the used columns (NaN = missing skipped),
+// zero with Detrend::kNone.
+Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                               const FitOptions& options, Segment estimation) {
+  io::CsvReader reader(path, csv);
+  Eigen::VectorXd offset = Eigen::VectorXd::Zero(reader.num_columns()), row(reader.num_columns());
   if (options.detrend == Detrend::kMean) {
-    std::vector<RunningMean> means(columns);
-    io::CsvReader reader(path, csv);
+    std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
     const std::vector<int> used = source.used_columns();
     for (int r = 0; r < estimation.count && reader.Next(row); ++r)
       for (int c : used) means[c].Add(row(c));
-    for (int c : used) offset(c) = means[c].Get(path, header.names()[c]);
+    for (int c : used) offset(c) = means[c].Get(path, reader.names()[c]);
   }
+  return offset;
+}
+
+// Σ of (y², z_1², …, z_ρ²) and the count over rows fed to Add (usable samples only).
+class MeanSquares {
+ public:
+  explicit MeanSquares(DataSource& source)
+      : source_(source), z_(source.num_parameters()), sum_(Eigen::VectorXd::Zero(source.num_parameters() + 1)) {
+    source_.Reset();
+  }
+  void Add(const Eigen::VectorXd& row) {
+    const double y = row(source_.output_column());
+    if (source_.Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {
+      sum_(0) += y * y;
+      sum_.tail(z_.size()) += z_.cwiseAbs2();
+      ++count_;
+    }
+    source_.PushOutput(y);
+  }
+  Eigen::VectorXd Get() {
+    source_.Reset();
+    return count_ > 0 ? Eigen::VectorXd(sum_ / static_cast<double>(count_)) : sum_;
+  }
+
+ private:
+  DataSource& source_;
+  Eigen::VectorXd z_, sum_;
+  long count_ = 0;
+};
+
+// Runs f(); if it throws InvalidArgument, a bad row later in the file is the real problem (e.g. a ragged
+// row makes the record look too short): report the data error first, as reading the whole table up
+// front would.
+template <class F>
+auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) {
+  try {
+    return f();
+  } catch (const InvalidArgument&) {
+    io::CsvReader reader(path, csv);
+    Eigen::VectorXd row(reader.num_columns());
+    while (reader.Next(row)) {
+    }
+    throw;
+  }
+}
+
+FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                        AnyRegressionEstimator& estimator, const FitOptions& options) {
+  // Pass 1: the header, then the number of rows (the rows are parsed and checked by the passes below).
+  const CsvLayout layout = LayOut(path, csv, source, options);
+  const long rows = layout.rows;
+  const Segment estimation = layout.estimation, validation = layout.validation;  // captured below (clang 14)
+  Eigen::VectorXd row(layout.columns);
+
+  // Pass 2: detrending offsets (estimation-part means of the used columns, NaN = missing skipped).
+  const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, estimation);
 
   // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass.
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
@@ -384,21 +463,40 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
   return result;
 }
 
+Eigen::VectorXd StreamMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                                  const FitOptions& options) {
+  const CsvLayout layout = LayOut(path, csv, source, options);
+  const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation);
+  MeanSquares squares(source);
+  io::CsvReader reader(path, csv);
+  Eigen::VectorXd row(layout.columns);
+  for (int r = 0; r < layout.estimation.count && reader.Next(row); ++r) {
+    row -= offset;
+    squares.Add(row);
+  }
+  return squares.Get();
+}
+
 }  // namespace
+
+Eigen::VectorXd EstimationMeanSquares(const io::DataTable& prepared, Segment estimation, DataSource& source) {
+  MeanSquares squares(source);
+  Eigen::VectorXd row(prepared.values.cols());
+  for (int r = estimation.first; r < estimation.first + estimation.count; ++r) {
+    row = prepared.values.row(r).transpose();
+    squares.Add(row);
+  }
+  return squares.Get();
+}
+
+Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                                         const FitOptions& options) {
+  return DataErrorsFirst(path, csv, [&] { return StreamMeanSquares(path, csv, source, options); });
+}
 
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                      AnyRegressionEstimator& estimator, const FitOptions& options) {
-  try {
-    return StreamCsvFile(path, csv, source, estimator, options);
-  } catch (const InvalidArgument&) {
-    // A bad row later in the file is the real problem (e.g. a ragged row makes the record look too
-    // short): report the data error first, as reading the whole table up front would.
-    io::CsvReader reader(path, csv);
-    Eigen::VectorXd row(reader.num_columns());
-    while (reader.Next(row)) {
-    }
-    throw;
-  }
+  return DataErrorsFirst(path, csv, [&] { return StreamCsvFile(path, csv, source, estimator, options); });
 }
 
 }  // namespace ident::tools

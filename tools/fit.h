@@ -88,8 +88,22 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
                              const OutlierDecision& decision = {},
                              const std::function<void(int row, const AnyRegressionEstimator&)>& on_update = {});
 
+// The same with every option of `options` that applies (trace, decision, on_update, min_regressor_information).
+std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
+                             AnyRegressionEstimator& estimator, const FitOptions& options);
+
 // One-step and (for dynamic sources) simulation scores of parameters θ on the segment.
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta);
+
+// Mean squares over the usable samples of the estimation part of a prepared (split and detrended)
+// table: (mean y², mean z_1², …, mean z_ρ²), for RegressionPrior::Flat(mean_squares). Zero if no sample
+// is usable; an entry overflows to +inf for values beyond ~1e154. `source` is Reset() before and after.
+Eigen::VectorXd EstimationMeanSquares(const io::DataTable& prepared, Segment estimation, DataSource& source);
+
+// The same for a CSV file, streamed (the detrending offsets as FitCsvFile computes them, then one pass
+// over the estimation part).
+Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                                         const FitOptions& options);
 
 // PrepareData + Estimate + Score.
 FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options);

@@ -123,13 +123,28 @@ void RunFit(const FitCommandOptions& o) {
   const std::string path = ResolveDataPath(o.data);
   const io::CsvOptions csv{.missing_as_nan = o.missing};
   std::unique_ptr<DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
-  const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
-  std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
+  const int rho = source->num_parameters();
+  EstimatorSettings settings = o.estimator.Resolve(rho);
+  std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, rho);  // checks the options
   FitOptions options;
   options.split = o.split;
   options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
   options.decision = o.structure.Decision();
   if (settings.prior) options.min_regressor_information = 0;  // the user's prior, the user's scale
+  // Default priors in the data's own scale, so that a record in small or large units fits as it does in
+  // units of 1: RLS gets the flat prior of RegressionPrior::Flat(mean squares) (unless --exact, which keeps
+  // the absolute flat prior of the recursion and with it the small-information check); the Kárný–Hangos
+  // estimators' data-driven start-up prior is scale-invariant already (ident/student_regression.h).
+  const bool default_prior = !settings.prior && !settings.exact;
+  const bool scaled_rls = default_prior && settings.name == "rls";
+  if (default_prior && !scaled_rls) options.min_regressor_information = 0;
+  auto use_scaled_flat_prior = [&](const Eigen::VectorXd& mean_squares) {
+    if (!((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all()))
+      return;  // out of range (or no usable sample): the absolute flat prior, whose check names the problem
+    settings.prior = RegressionPrior::Flat(mean_squares);
+    estimator = MakeRegressionEstimator(settings, rho);
+    options.min_regressor_information = 0;
+  };
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
   if (!o.trace.empty()) {
     trace.reset(std::fopen(o.trace.c_str(), "w"));
@@ -139,6 +154,7 @@ void RunFit(const FitCommandOptions& o) {
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
   if (o.plot.empty() && CountCsvDataRows(path) > kInMemoryRows) {
+    if (scaled_rls) use_scaled_flat_prior(CsvEstimationMeanSquares(path, csv, *source, options));
     const FitResult result = FitCsvFile(path, csv, *source, *estimator, options);
     if (o.json) {
       nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
@@ -160,10 +176,11 @@ void RunFit(const FitCommandOptions& o) {
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
   }
+  // The split and detrended table, for the prior's scale and the residual analysis on the validation part.
   io::DataTable prepared = table;
+  const auto [estimation, validation] = PrepareData(prepared, *source, options);
+  if (scaled_rls) use_scaled_flat_prior(EstimationMeanSquares(prepared, estimation, *source));
   const FitResult result = Fit(std::move(table), *source, *estimator, options);
-  // The same split/detrending again, for the residual analysis on the validation part.
-  const Segment validation = PrepareData(prepared, *source, options).second;
   std::optional<ResidualAnalysis> residuals;
   if (validation.count - source->first_regression_index() > kResidualLags + 1)
     residuals = AnalyseResiduals(prepared, validation, *source, result.theta, kResidualLags);

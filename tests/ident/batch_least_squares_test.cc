@@ -3,6 +3,7 @@
 // (independently of models::ArxRegressor), and against the datasets README's numpy baselines.
 #include <Eigen/LU>
 #include <Eigen/QR>
+#include <cmath>
 #include <cstdio>
 
 #include <gtest/gtest.h>
@@ -61,6 +62,41 @@ TEST_P(BatchLeastSquares, FlatPriorRlsEqualsQrSolutionAndReadmeBaseline) {
   for (std::size_t i = 0; i < c.readme_theta.size(); ++i)
     EXPECT_NEAR(theta(i), c.readme_theta[i], c.readme_tolerance * std::abs(c.readme_theta[i]))
         << c.file << " theta(" << i << ")";
+}
+
+// The same record in small units (u and y × 1e-5): RegressionPrior::Flat(mean squares) keeps RLS on the QR
+// solution, while the unit-free flat prior (information 1e-12·I against Z'Z ~ 1e-8) pulls θ̂ off it.
+TEST(BatchLeastSquaresSmallUnits, ScaledFlatPriorKeepsRlsOnTheQrSolution) {
+  Eigen::MatrixXd Z;
+  Eigen::VectorXd Y;
+  BuildRegression(ArxCase{"dryer.csv", 2, 2, 3, {}, 0}, Z, Y);
+  Z *= 1e-5;
+  Y *= 1e-5;
+  const Eigen::VectorXd batch = Z.householderQr().solve(Y);
+  Eigen::VectorXd mean_squares(Z.cols() + 1);
+  mean_squares(0) = Y.squaredNorm() / static_cast<double>(Y.size());
+  mean_squares.tail(Z.cols()) = Z.colwise().squaredNorm().transpose() / static_cast<double>(Z.rows());
+  auto max_relative_error = [&](const RlsOptions& options) {
+    RecursiveLeastSquares rls(static_cast<int>(Z.cols()), options);
+    for (Eigen::Index t = 0; t < Z.rows(); ++t) EXPECT_TRUE(rls.Update(Y(t), Z.row(t).transpose()).updated());
+    return ((rls.parameters() - batch).cwiseAbs().array() / batch.cwiseAbs().array()).maxCoeff();
+  };
+  RlsOptions scaled;
+  scaled.prior = RegressionPrior::Flat(mean_squares);
+  const double with_scaled = max_relative_error(scaled), with_unit = max_relative_error({});
+  std::printf("[ measured ] dryer x 1e-5: RLS vs QR, scaled flat prior %.3g, unit flat prior %.3g\n", with_scaled,
+              with_unit);
+  EXPECT_LE(with_scaled, 1e-8);
+  EXPECT_GE(with_unit, 1e-6);  // the bias the scaled prior removes
+}
+
+TEST(BatchLeastSquaresSmallUnits, ScaledFlatPriorRefusesMeanSquaresOutOfRange) {
+  EXPECT_THROW(RegressionPrior::Flat(Eigen::Vector3d(1, 1e-300, 1)), InvalidArgument);
+  EXPECT_THROW(RegressionPrior::Flat(Eigen::Vector3d(1, 0, 1)), InvalidArgument);
+  EXPECT_THROW(RegressionPrior::Flat(Eigen::Vector3d(1, std::nan(""), 1)), InvalidArgument);
+  const RegressionPrior p = RegressionPrior::Flat(Eigen::Vector3d(4, 2e-10, 3e5));
+  EXPECT_EQ(p.nu0, 1e-12);
+  EXPECT_EQ(p.V0, Eigen::Vector3d(4, 2e-10, 3e5).asDiagonal().toDenseMatrix());
 }
 
 INSTANTIATE_TEST_SUITE_P(RealRecords, BatchLeastSquares,

@@ -115,12 +115,47 @@ TEST(BadInput, ValuesNear1em150AreRefusedInsteadOfReturningThePrior) {
               "over the estimation part, too small against the default flat prior (values near 1e-150?)");
 }
 
+// Ordinary small units (dryer × 3e-5: sums of squares ~1e-7): the default priors follow the data's scale
+// (RLS: RegressionPrior::Flat(mean squares); Kárný–Hangos: the data-driven start-up prior), so every
+// estimator returns the unscaled fit's θ — ARX θ does not change when u and y are scaled alike — instead
+// of refusing the record (before: "too small against the default flat prior") or biasing θ towards the prior.
+TEST(BadInput, SmallUnitsGiveTheSameModelAsUnscaledData) {
+  const std::string small = ScaledDryer("dryer_small.csv", 3e-5);
+  for (const std::string estimator : {"rls", "cauchy", "student:3"}) {
+    const CliResult base = RunCli("fit dryer" + kArx + " --estimator " + estimator + " --json");
+    const CliResult scaled = RunCli("fit " + small + kArx + " --estimator " + estimator + " --json");
+    ASSERT_EQ(base.exit_code, 0) << base.err;
+    ASSERT_EQ(scaled.exit_code, 0) << estimator << ": " << scaled.err;
+    const auto b = nlohmann::json::parse(base.out), s = nlohmann::json::parse(scaled.out);
+    for (int i = 0; i < 4; ++i)
+      EXPECT_NEAR(s["theta"][i].get<double>(), b["theta"][i].get<double>(), 1e-9) << estimator << " theta " << i;
+    EXPECT_NEAR(s["fit_percent"]["one_step"].get<double>(), b["fit_percent"]["one_step"].get<double>(), 1e-9)
+        << estimator;
+  }
+}
+
+// Orders far beyond any record are refused from the structure alone — before (before: 7.8 GB were
+// allocated, then "std::bad_alloc") and without integer overflow (before: nb = INT_MAX wrapped around).
+TEST(BadInput, HugeOrdersAreRefusedBeforeAllocating) {
+  ExpectCliError("fit dryer --output y --input u --na 1000000000", "the model has 1000000002 parameters; need at most 10000");
+  ExpectCliError("fit dryer --output y --input u --nb 2147483647", "nk + nb = 2147483648 for input 1; need at most 10000000");
+}
+
+TEST(BadInput, DofContradictingTheEstimatorSpecNamesIt) {
+  ExpectCliError("fit dryer" + kArx + " --estimator student:3 --dof 5", "--dof 5 contradicts estimator 'student:3'");
+}
+
+TEST(BadInput, InadmissibleForgettingIsBlamedOnTheForgettingFactor) {
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy --forgetting 0.5",
+                 "forgetting = 0.5 is inadmissible with nu0 = 6: the first step has nu(1) = forgetting*nu0 + 1 = 4");
+}
+
 TEST(BadInput, ConstantInputColumn) {
   const std::string path = WriteFile("const.csv", Repeat("t,u,y", 50, [](int i) {
     return fmt::format("{},1.5,{}", i, std::sin(0.3 * i));
   }));
   ExpectCliError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 1",
-              "regressor 'b1' is identically zero over the estimation part (constant input after detrending?); the "
+              "regressor 'b1' is identically zero over the estimation part (a constant column after detrending?); the "
               "model is not identifiable");
 }
 

@@ -108,6 +108,10 @@ TEST(BadInputCompare, OrdersTooLargeForTheRecord) {
   ExpectCliError("compare gas_furnace --estimators rls --na 60 --nb 60", "the estimation part has 148 rows");
 }
 
+TEST(BadInputCompare, EmptyEstimatorName) {
+  ExpectCliError("compare dryer --estimators ''", "--estimators: an empty estimator name");
+}
+
 TEST(BadInputCompare, UnknownEstimator) {
   ExpectCliError("compare dryer --estimators rls,nonesuch", "unknown estimator 'nonesuch'");
 }
