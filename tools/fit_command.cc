@@ -1,5 +1,6 @@
 // ident fit DATA --output y (--input u [--na --nb --nk] | --regressors x1,x2 [--intercept])
 //           [--estimator NAME ...] [--split 0.5] [--detrend mean|none] [--missing] [--trace F] [--json]
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -113,9 +114,11 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
   for (int i = 0; i < r.theta.size(); ++i)
     fmt::print("  {:<12} {:>14.6g} {:>12.4g}\n", r.parameter_names[i], r.theta(i), r.theta_std(i));
   fmt::print("\n  noise std {:.4g}\n", r.noise_std);
-  fmt::print("  validation fit: one-step {:.2f} % (RMS {:.4g})", r.validation.one_step, r.validation.rms_one_step);
+  // Fit % is undefined (0/0) when the validation output is constant; the JSON has null there.
+  auto percent = [](double p) { return std::isfinite(p) ? fmt::format("{:.2f} %", p) : std::string("undefined"); };
+  fmt::print("  validation fit: one-step {} (RMS {:.4g})", percent(r.validation.one_step), r.validation.rms_one_step);
   if (r.validation.simulation)
-    fmt::print(", simulation {:.2f} % (RMS {:.4g})", *r.validation.simulation, *r.validation.rms_simulation);
+    fmt::print(", simulation {} (RMS {:.4g})", percent(*r.validation.simulation), *r.validation.rms_simulation);
   fmt::print("\n");
 }
 

@@ -1,6 +1,7 @@
 // ident — recursive, outlier-robust system identification from the command line.
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -27,7 +28,19 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    app.exit(e);
+    // One line, like every other error. A first argument that is no option and no subcommand is named.
+    std::string message = e.what();
+    if (argc >= 2 && argv[1][0] != '-') {
+      const std::string first = argv[1];
+      bool known = false;
+      for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->check_name(first);
+      if (!known) {
+        message = "unknown subcommand '" + first + "' (known:";
+        for (const CLI::App* sub : app.get_subcommands({})) message += " " + sub->get_name();
+        message += ")";
+      }
+    }
+    std::cerr << "ident: error: " << message << " (ident --help, ident SUBCOMMAND --help for usage)\n";
     return kExitUsage;
   } catch (const ident::InvalidArgument& e) {
     std::cerr << "ident: error: " << e.what() << "\n";

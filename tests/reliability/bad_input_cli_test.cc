@@ -150,6 +150,14 @@ TEST(BadInput, InadmissibleForgettingIsBlamedOnTheForgettingFactor) {
                  "forgetting = 0.5 is inadmissible with nu0 = 6: the first step has nu(1) = forgetting*nu0 + 1 = 4");
 }
 
+// Usage errors are one line too, and an unknown subcommand is named.
+TEST(BadInput, UnknownSubcommandIsNamedOnOneLine) {
+  const CliResult r = RunCli("bogus");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("ident: error: unknown subcommand 'bogus' (known: fit datasets", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
 TEST(BadInput, ConstantInputColumn) {
   const std::string path = WriteFile("const.csv", Repeat("t,u,y", 50, [](int i) {
     return fmt::format("{},1.5,{}", i, std::sin(0.3 * i));
