@@ -106,7 +106,8 @@ class Estimation {
     const int rho = source_.num_parameters();
     const std::vector<std::string> names = source_.parameter_names();
     IDENT_REQUIRE(updates_ > 0 || failed_ < rejected_,
-                  "{}: every update of the estimation part ({} samples) was refused as numerically unsafe (a "
+                  "{}: every update of the estimation part ({} samples) was refused as numerically unsafe (values "
+                  "extremely far from unit scale, e.g. near 1e100? rescale the data or give a prior; or a "
                   "forgetting factor far below 1, which discards nearly all information at each step?)",
                   name, rejected_);
     IDENT_REQUIRE(updates_ > 0,

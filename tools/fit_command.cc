@@ -148,10 +148,19 @@ void RunFit(const FitCommandOptions& o) {
     estimator = MakeRegressionEstimator(settings, rho);
     options.min_regressor_information = 0;
   };
+  // A fit that fails (e.g. a bad row late in a streamed record) leaves no partial trace file behind.
+  struct RemoveUnlessDone {
+    std::string path;
+    bool armed = false;
+    ~RemoveUnlessDone() {
+      if (armed) std::remove(path.c_str());
+    }
+  } partial_trace{o.trace};  // declared before `trace`, so it runs after the file is closed
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
   if (!o.trace.empty()) {
     trace.reset(std::fopen(o.trace.c_str(), "w"));
     if (!trace) throw DataError(fmt::format("cannot write trace file '{}'", o.trace));
+    partial_trace.armed = true;
     options.trace = trace.get();
   }
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
@@ -167,6 +176,7 @@ void RunFit(const FitCommandOptions& o) {
       PrintReport(result, path, o);
       fmt::print("\n  residual analysis: skipped (record of more than {} rows, streamed)\n", kInMemoryRows);
     }
+    partial_trace.armed = false;
     return;
   }
   io::DataTable table = io::ReadCsv(path, csv);
@@ -196,6 +206,7 @@ void RunFit(const FitCommandOptions& o) {
     PrintReport(result, path, o);
     if (residuals) PrintResiduals(*residuals);
   }
+  partial_trace.armed = false;
 }
 
 }  // namespace

@@ -53,6 +53,16 @@ TEST(BadInput, RaggedRowLongLateInTheFile) {
   ExpectCliError("fit " + WriteFile("ragged_late.csv", csv) + kArx, "ragged_late.csv:1002: row has 4 fields; the header has 3");
 }
 
+TEST(BadInput, FailedFitLeavesNoPartialTrace) {
+  std::string csv = ReadFile(DatasetPath("dryer.csv"));
+  csv += "1001,1,2,3\n";
+  const std::string trace = TempDir() + "/failed_trace.csv";
+  std::filesystem::remove(trace);  // from an earlier run
+  ExpectCliError("fit " + WriteFile("ragged_trace.csv", csv) + kArx + " --trace " + trace,
+                 "ragged_trace.csv:1002: row has 4 fields; the header has 3");
+  EXPECT_FALSE(std::filesystem::exists(trace));
+}
+
 TEST(BadInput, NonNumericCell) {
   ExpectCliError("fit " + WriteFile("text.csv", "t,u,y\n0,1,2\n1,x1,2\n") + kArx, "text.csv:3: column 2 ('u'): 'x1' is not a number");
 }
@@ -131,6 +141,22 @@ TEST(BadInput, SmallUnitsGiveTheSameModelAsUnscaledData) {
       EXPECT_NEAR(s["theta"][i].get<double>(), b["theta"][i].get<double>(), 1e-9) << estimator << " theta " << i;
     EXPECT_NEAR(s["fit_percent"]["one_step"].get<double>(), b["fit_percent"]["one_step"].get<double>(), 1e-9)
         << estimator;
+  }
+}
+
+// Large units for the Kárný–Hangos estimators (dryer × 1e75): the provisional start-up prior diag(1, 1e-3·I)
+// cannot take such samples (ξ·ξ_z overflows), but they stay in the start-up window and the data-driven prior
+// replays them (before: student:3 refused the record, "none of the 496 samples ... could be used").
+TEST(BadInput, LargeUnitsGiveTheSameModelForTheKarnyHangosEstimators) {
+  const std::string large = ScaledDryer("dryer_e75.csv", 1e75);
+  for (const std::string estimator : {"cauchy", "student:3"}) {
+    const CliResult base = RunCli("fit dryer" + kArx + " --estimator " + estimator + " --json");
+    const CliResult scaled = RunCli("fit " + large + kArx + " --estimator " + estimator + " --json");
+    ASSERT_EQ(base.exit_code, 0) << base.err;
+    ASSERT_EQ(scaled.exit_code, 0) << estimator << ": " << scaled.err;
+    const auto b = nlohmann::json::parse(base.out), s = nlohmann::json::parse(scaled.out);
+    for (int i = 0; i < 4; ++i)
+      EXPECT_NEAR(s["theta"][i].get<double>(), b["theta"][i].get<double>(), 1e-9) << estimator << " theta " << i;
   }
 }
 
