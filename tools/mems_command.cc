@@ -35,7 +35,8 @@ const std::vector<std::pair<std::string, std::string>> kColumns = {
     {"grid", "grid"},         {"tuned_kalman", "tuned_kalman"}, {"tuned_kalman_13", "tuned_kalman_13"},
     {"lc_gaussian", "lc_window"}, {"lc_event", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"}, {"lc_event_capped", "lc_event_capped"},
     {"lc_wedge", "lc_wedge"}, {"lc_excursion", "lc_excursion"},
-    {"lc_excursion_silent", "lc_excursion_silent"}, {"lc_window", "lc_window"}, {"bound", "bound"}};
+    {"lc_excursion_silent", "lc_excursion_silent"}, {"lc_window", "lc_window"}, {"lc_truncated", "lc_truncated"},
+    {"bound", "bound"}};
 
 void RunMems(const MemsCommandOptions& o) {
   IDENT_REQUIRE(!o.t_targets.empty(), "--t-mean needs at least one value");
@@ -91,6 +92,14 @@ void RunMems(const MemsCommandOptions& o) {
                            "lc_window: every reading of the last W steps an exact site, sliding-window EP, "
                            "no sigma_o\n",
                            results.front().sigma_o);
+  long truncated_failures = 0, truncated_projection_failures = 0;
+  for (const auto& r : results) {
+    truncated_failures += r.truncated_failures;
+    truncated_projection_failures += r.truncated_projection_failures;
+  }
+  std::cout << fmt::format("lc_truncated: Gaussian restricted to the current reading's interval (assumed-density "
+                           "filter); rectangles without mass {}, projections without a parent {}\n",
+                           truncated_failures, truncated_projection_failures);
   if (!o.csv.empty()) {
     std::ofstream& f = csv_file;
     f << "t_mean,t_target,events";
