@@ -511,6 +511,14 @@ TEST(TruncatedGaussian, CloserToMonteCarloThanWindowEp) {
       EXPECT_NEAR(tr.mean()(i), mc.mean(i), 0.05 * sd + 4 * sd / std::sqrt(n)) << sequence << " x" << i + 1;
       EXPECT_NEAR(tr.covariance()(i, i), mc.cov(i, i), (0.05 + 4 * std::sqrt(2 / n)) * mc.cov(i, i))
           << sequence << " x" << i + 1;
+      // Closer to the exact variance than window EP on the pure "not yet crossed" runs (EP's redundant
+      // interval sites: var x1 0.90 / 0.55 of MC, measured). Not asserted on the excursion sequence, where
+      // both are within 2 % (EP 0.995 / 0.993, this filter 1.003 / 0.982 of MC: 2 MC standard errors).
+      if (sequence != 1) {
+        EXPECT_LT(std::abs(tr.covariance()(i, i) - mc.cov(i, i)), std::abs(ep.covariance()(i, i) - mc.cov(i, i)))
+            << sequence << " x" << i + 1;
+        EXPECT_LT(std::abs(tr.mean()(i) - mc.mean(i)), std::abs(ep.mean()(i) - mc.mean(i))) << sequence << " x" << i + 1;
+      }
     }
     ++sequence;
   }
