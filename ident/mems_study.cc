@@ -246,7 +246,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       t.y.push_back(y);
       t.var_grid.push_back(grid.covariance()(1, 1));
       t.var_tuned_kalman.push_back(tuned.covariance()(1, 1));
-      t.var_lc_gaussian.push_back(window_filter.covariance()(1, 1));
+      t.var_lc_gaussian.push_back(truncated_filter.covariance()(1, 1));
       t.var_bound.push_back(bound.covariance()(1, 1));
       const double e = grid.mean()(1) - x(1);
       t.err2_grid.push_back(e * e);
