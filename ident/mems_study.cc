@@ -14,6 +14,7 @@
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
+#include "ident/truncated_gaussian_filter.h"
 #include "ident/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
@@ -86,6 +87,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   WindowEpOptions wopt;
   wopt.window = o.ep_window;
   WindowEpFilter window_filter(*sensor, m0, P0, wopt);
+  TruncatedGaussianFilter truncated_filter(*sensor, m0, P0);
 
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> normal;
@@ -94,7 +96,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
   double y_prev = 0, direction = 1;
   Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_capped, acc_wedge, acc_bound,
-      acc_excursion, acc_silent, acc_window;
+      acc_excursion, acc_silent, acc_window, acc_truncated;
   Eigen::VectorXd wedge_mean_before(2);
   Eigen::MatrixXd wedge_cov_before(2, 2);
   Eigen::VectorXd excursion_mean_before(2);
@@ -212,6 +214,9 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     // lc_window: every reading of the last W steps as an exact site, banded sliding-window EP.
     window_filter.Step(model, u, y);
     if (!window_filter.last_converged()) ++result.window_unconverged;
+    // lc_truncated: assumed-density filter in the family of Gaussians restricted to the current reading's
+    // interval (every reading exact, the hard edge kept in the family; ident/truncated_gaussian_filter.h).
+    truncated_filter.Step(model, u, y);
     bound.Predict(model);
     if (crossing) bound.UpdateStrength(c, 1.0 / result.sigma_m2);   // modified event measurement
     // Control law (causal in u and y): push back while outside, else track ∓v_ref with the tuned
@@ -231,6 +236,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       acc_excursion.Add(excursion_filter.mean()(1) - x(1), excursion_filter.covariance()(1, 1));
       acc_silent.Add(silent_filter.mean()(1) - x(1), silent_filter.covariance()(1, 1));
       acc_window.Add(window_filter.mean()(1) - x(1), window_filter.covariance()(1, 1));
+      acc_truncated.Add(truncated_filter.mean()(1) - x(1), truncated_filter.covariance()(1, 1));
       acc_bound.Add(0.0, bound.covariance()(1, 1));
     }
     if (o.record_trace) {
@@ -240,7 +246,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       t.y.push_back(y);
       t.var_grid.push_back(grid.covariance()(1, 1));
       t.var_tuned_kalman.push_back(tuned.covariance()(1, 1));
-      t.var_lc_gaussian.push_back(window_filter.covariance()(1, 1));
+      t.var_lc_gaussian.push_back(truncated_filter.covariance()(1, 1));
       t.var_bound.push_back(bound.covariance()(1, 1));
       const double e = grid.mean()(1) - x(1);
       t.err2_grid.push_back(e * e);
@@ -260,7 +266,10 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   result.observers.push_back(acc_excursion.Result("lc_excursion"));
   result.observers.push_back(acc_silent.Result("lc_excursion_silent"));
   result.observers.push_back(acc_window.Result("lc_window"));
+  result.observers.push_back(acc_truncated.Result("lc_truncated"));
   result.window_failures = window_filter.failures();
+  result.truncated_failures = truncated_filter.failures();
+  result.truncated_projection_failures = truncated_filter.projection_failures();
   MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n), (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n)};
   result.observers.push_back(b);
   return result;

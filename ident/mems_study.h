@@ -32,9 +32,13 @@
 //                   expectation propagation with exact 1-D/2-D factor moments (ident/excursion_reading.h)
 //   lc_excursion_silent  diagnostic: lc_excursion with no reading at repeated y = 0 (prediction only
 //                   between excursions), to see what the σ_o reading contributes
-//   lc_window       (the CLI's lc_gaussian since session 6) every reading of the last W = ep_window steps an exact site of the state chain (repeated
+//   lc_window       (the CLI's lc_gaussian in sessions 6–7) every reading of the last W = ep_window steps an exact site of the state chain (repeated
 //                   y = 0 as 1{|x1| < T}, repeated ±1 as half-lines, changes as the wedge of lc_wedge), refined
 //                   jointly by banded sliding-window EP; older sites frozen (ident/window_ep_filter.h). No σ_o.
+//   lc_truncated    (the CLI's lc_gaussian since session 8) assumed-density filter in the family of Gaussians restricted to the current
+//                   reading's interval: each step the exact moments of the pushed-forward restricted density on
+//                   the rectangle R(y(k−1)) × R(y(k)), then the KL projection back onto the family
+//                   (ident/truncated_gaussian_filter.h). No σ_o, no window.
 //   bound           CovarianceBoundTracker with the modified event measurement: crossing ∈ LC(Q_M),
 //                   Q_M = diag(σ_M⁻², 0), y = 0 ∈ LC(0); rms = √(mean P̄22)
 //
@@ -69,7 +73,7 @@ struct MemsObserverResult {
 };
 
 struct MemsTrace {
-  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian /* lc_window */, var_bound, err2_grid, y;
+  std::vector<double> t, x1, var_grid, var_tuned_kalman, var_lc_gaussian /* lc_truncated */, var_bound, err2_grid, y;
 };
 
 struct MemsStudyResult {
@@ -83,6 +87,8 @@ struct MemsStudyResult {
   int excursion_unconverged = 0;  // lc_excursion steps whose EP sweeps hit the limit
   long window_failures = 0;       // lc_window site refits with no mass under the cavity (site kept)
   int window_unconverged = 0;     // lc_window steps whose EP sweeps hit the limit
+  long truncated_failures = 0;    // lc_truncated steps whose rectangle had no mass (fallback)
+  long truncated_projection_failures = 0;   // lc_truncated projections without a parent (see its header)
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };

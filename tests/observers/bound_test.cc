@@ -266,6 +266,17 @@ TEST(MemsStudy, TunedKalmanAndBoundBehaveAsThePaperSays) {
   EXPECT_EQ(r.window_failures, 0);
   EXPECT_EQ(r.window_unconverged, 0);
   EXPECT_LT(window.rms, 0.8 * r.Get("lc_plain").rms);
+  // Assumed-density filter on Gaussians restricted to the current reading's interval (lc_truncated): the
+  // same bounds, no rectangle without mass and a parent found at every projection.
+  const auto& truncated = r.Get("lc_truncated");
+  std::printf("lc_truncated rms %.4f (cal %.2f), failures %ld, projection failures %ld\n", truncated.rms,
+              truncated.calibration, r.truncated_failures, r.truncated_projection_failures);
+  EXPECT_LT(truncated.rms, 1.2 * r.Get("grid").rms);
+  EXPECT_GT(truncated.calibration, 0.7);
+  EXPECT_LT(truncated.calibration, 1.4);
+  EXPECT_EQ(r.truncated_failures, 0);
+  EXPECT_EQ(r.truncated_projection_failures, 0);
+  EXPECT_LT(truncated.rms, 0.8 * r.Get("lc_plain").rms);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -19,6 +20,7 @@
 #include "ident/common/error.h"
 #include "ident/crossing_reading.h"
 #include "ident/lc_gaussian_filter.h"
+#include "ident/truncated_gaussian_filter.h"
 #include "ident/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
@@ -354,6 +356,172 @@ TEST(WindowEp, BadInputIsRejectedAndStepsAllocateNothing) {
   }
   EXPECT_EQ(count.allocations(), 0);
   EXPECT_EQ(g.failures(), 0);
+}
+
+// ---- lc_truncated: assumed-density filter on Gaussians restricted to the reading's interval ----------
+
+// A slow approach: 40 "not yet crossed" readings while the mean path drifts from 0.55 towards the threshold
+// at speed 1 (the regime of the study's failing row: long runs of unchanged y = 0).
+Sequence SlowApproach() { return Sequence(Eigen::Vector2d(0.55, 1.0), Eigen::Matrix2d{{4e-3, 0.0}, {0.0, 0.25}}, 40, 0); }
+
+TruncatedGaussianFilter RunTruncated(const Sequence& q) {
+  const ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
+  TruncatedGaussianFilter f(sensor, q.m0, q.P0);
+  for (size_t k = 0; k < q.y.size(); ++k)
+    EXPECT_TRUE(f.Step(q.model, Eigen::VectorXd::Constant(1, q.u[k]), q.y[k]).updated()) << k;
+  EXPECT_EQ(f.failures(), 0);
+  EXPECT_EQ(f.projection_failures(), 0);
+  return f;
+}
+
+// Reference moments of N(μ, Σ) on a rectangle by nested quadrature written independently of the Tallis /
+// Owen's T formulas: outer adaptive Gauss–Kronrod over s1 of the marginal density times the closed-form
+// 1-D truncated moments of s2 | s1 (cut points where the conditional mean of s2 meets a bound).
+RectangleMoments RectangleByQuadrature(const Eigen::Vector2d& mu, const Eigen::Matrix2d& S, const Eigen::Vector2d& lo,
+                                       const Eigen::Vector2d& hi) {
+  using GK = boost::math::quadrature::gauss_kronrod<double, 61>;
+  const double s1 = std::sqrt(S(0, 0)), beta = S(0, 1) / S(0, 0);
+  const double vc = S(1, 1) - S(0, 1) * S(0, 1) / S(0, 0), sc = std::sqrt(vc);
+  const double a = std::max(lo(0), mu(0) - 12 * s1), b = std::min(hi(0), mu(0) + 12 * s1);
+  std::vector<double> pts{a, b};
+  for (double bound : {lo(1), hi(1)}) {
+    if (!std::isfinite(bound)) continue;
+    const double x = mu(0) + (bound - mu(1)) / beta;   // conditional mean of s2 = bound
+    for (double d : {-12.0, -3.0, 0.0, 3.0, 12.0}) {
+      const double p = x + d * sc / std::abs(beta);
+      if (p > a && p < b) pts.push_back(p);
+    }
+  }
+  std::sort(pts.begin(), pts.end());
+  auto integrate = [&](auto g) {
+    double sum = 0;
+    for (size_t i = 0; i + 1 < pts.size(); ++i) {
+      const double half = 0.5 * (pts[i + 1] - pts[i]), mid = 0.5 * (pts[i + 1] + pts[i]);
+      if (half > 0) sum += half * GK::integrate([&](double t) { return g(mid + half * t); }, -1.0, 1.0, 10, 1e-12);
+    }
+    return sum;
+  };
+  auto moments = [&](double x, int which) {   // ∫ s2^which N(s2 | x) 1{lo2 < s2 < hi2} ds2 × N(x)
+    const double m = mu(1) + beta * (x - mu(0));
+    const double px = std::exp(-0.5 * (x - mu(0)) * (x - mu(0)) / S(0, 0)) / (s1 * std::sqrt(2 * M_PI));
+    const auto t = models::TruncatedNormalMoments(m, vc, lo(1), hi(1));
+    if (!t.ok) return 0.0;
+    const double z = std::exp(t.log_normalizer) * px;
+    return which == 0 ? z : (which == 1 ? z * t.mean : z * (t.variance + t.mean * t.mean));
+  };
+  const double L = integrate([&](double x) { return moments(x, 0); });
+  RectangleMoments r;
+  r.log_probability = std::log(L);
+  const double e1 = integrate([&](double x) { return x * moments(x, 0); }) / L;
+  const double e2 = integrate([&](double x) { return moments(x, 1); }) / L;
+  const double e11 = integrate([&](double x) { return (x - e1) * (x - e1) * moments(x, 0); }) / L;
+  const double e12 = integrate([&](double x) { return (x - e1) * (moments(x, 1) - e2 * moments(x, 0)); }) / L;
+  const double e22 = integrate([&](double x) { return moments(x, 2) - 2 * e2 * moments(x, 1) + e2 * e2 * moments(x, 0); }) / L;
+  r.mean << e1, e2;
+  r.covariance << e11, e12, e12, e22;
+  r.ok = true;
+  return r;
+}
+
+TEST(TruncatedGaussian, RectangleMomentsEqualNestedQuadrature) {
+  struct Case {
+    Eigen::Vector2d mu;
+    Eigen::Matrix2d S;
+    Eigen::Vector2d lo, hi;
+  };
+  // The study's regime: s = (x1(k−1), x1(k)) nearly collinear (ρ ≈ 0.9999), strips and half-lines.
+  const Eigen::Matrix2d near{{0.09, 0.0902}, {0.0902, 0.09045}};
+  auto M = [](double a, double b, double d) { return Eigen::Matrix2d{{a, b}, {b, d}}; };
+  auto V = [](double a, double b) { return Eigen::Vector2d(a, b); };
+  const std::vector<Case> cases = {
+      {V(0.2, -0.3), M(1.0, 0.6, 2.0), V(-1, -1), V(1, 1)},
+      {V(0.8, 0.81), near, V(-1, -1), V(1, 1)},                 // strip × strip near +T
+      {V(0.95, 0.97), near, V(-1, 1), V(1, kInf)},              // change 0 → +1
+      {V(1.02, 1.0), near, V(1, -1), V(kInf, 1)},               // change +1 → 0
+      {V(0.0, 0.02), M(0.5, 0.49, 0.5), V(-1, -1), V(1, 1)},    // both thresholds matter
+      {V(0.5, 0.5), M(0.3, -0.1, 0.2), V(-kInf, -1), V(1, 1)},  // one side unbounded
+  };
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const auto& c = cases[i];
+    const RectangleMoments t = TruncatedBivariateRectangleMoments(c.mu, c.S, c.lo, c.hi);
+    const RectangleMoments r = RectangleByQuadrature(c.mu, c.S, c.lo, c.hi);
+    ASSERT_TRUE(t.ok) << i;
+    EXPECT_NEAR(t.log_probability, r.log_probability, 1e-9) << i;
+    for (int a = 0; a < 2; ++a) {
+      EXPECT_NEAR(t.mean(a), r.mean(a), 1e-9 * std::sqrt(r.covariance(a, a))) << i;
+      for (int b = 0; b < 2; ++b)
+        EXPECT_NEAR(t.covariance(a, b), r.covariance(a, b), 1e-8 * std::sqrt(r.covariance(a, a) * r.covariance(b, b)))
+            << i << " " << a << b;
+    }
+  }
+}
+
+TEST(TruncatedGaussian, InversionOfTruncatedNormalMomentsRoundTrips) {
+  for (double lo : {-1.0, -kInf}) {
+    for (double a : {-3.0, 0.0, 0.7, 0.99, 1.5, 4.0}) {
+      for (double v : {1e-4, 0.01, 0.3, 5.0, 100.0}) {
+        const double hi = 1.0;
+        const auto t = models::TruncatedNormalMoments(a, v, lo, hi);
+        if (!t.ok || t.log_normalizer < -600) continue;
+        double ra = 0, rv = 0;
+        ASSERT_TRUE(InvertTruncatedNormalMoments(t.mean, t.variance, lo, hi, ra, rv)) << lo << " " << a << " " << v;
+        EXPECT_NEAR(ra, a, 1e-6 * std::sqrt(v) + 1e-9) << lo << " " << a << " " << v;
+        EXPECT_NEAR(rv, v, 1e-6 * v) << lo << " " << a << " " << v;
+      }
+    }
+  }
+  // Outside the moment space on a bounded interval: flatter than uniform (variance 1/3 on (−1, 1)) has no
+  // Gaussian parent.
+  double ra = 0, rv = 0;
+  EXPECT_FALSE(InvertTruncatedNormalMoments(0.0, 0.4, -1.0, 1.0, ra, rv));
+}
+
+TEST(TruncatedGaussian, FirstReadingIsExact) {
+  // One reading from an unrestricted prior: the exact posterior is the Gaussian restricted to the interval.
+  const auto model = models::MemsAccelerometerDynamics(0.01, 1.0);
+  const ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
+  const Eigen::Vector2d m0(0.9, 2.0);
+  const Eigen::Matrix2d P0{{0.04, 0.01}, {0.01, 1.0}};
+  for (double y : {0.0, 1.0}) {
+    TruncatedGaussianFilter f(sensor, m0, P0);
+    LcGaussianFilter plain(m0, P0);
+    const Eigen::VectorXd u = Eigen::VectorXd::Constant(1, 3.0);
+    ASSERT_TRUE(f.Step(model, u, y).updated());
+    plain.Predict(model, u);
+    ASSERT_TRUE(plain.Correct(sensor, y).updated());
+    EXPECT_TRUE(f.mean().isApprox(plain.mean(), 1e-10)) << y;
+    EXPECT_TRUE(f.covariance().isApprox(plain.covariance(), 1e-9)) << y;
+  }
+}
+
+TEST(TruncatedGaussian, CloserToMonteCarloThanWindowEp) {
+  int sequence = 0;
+  for (const Sequence& q : {Approach(), ApproachAndExcursion(), SlowApproach()}) {
+    const MonteCarlo mc = Rejection(q, 300000, 20261126 + sequence);
+    ASSERT_GT(mc.accepted, 20000) << sequence;
+    const WindowEpFilter ep = RunWindow(q, 64);
+    const TruncatedGaussianFilter tr = RunTruncated(q);
+    const double n = static_cast<double>(mc.accepted);
+    std::printf("sequence %d: K = %zu, accepted %ld\n", sequence, q.y.size(), mc.accepted);
+    for (int i = 0; i < 2; ++i) {
+      const double sd = std::sqrt(mc.cov(i, i));
+      std::printf("  x%d: MC mean %.5f var %.4e | window EP %.5f %.4e (%.3f) | truncated ADF %.5f %.4e (%.3f)\n", i + 1,
+                  mc.mean(i), mc.cov(i, i), ep.mean()(i), ep.covariance()(i, i), ep.covariance()(i, i) / mc.cov(i, i),
+                  tr.mean()(i), tr.covariance()(i, i), tr.covariance()(i, i) / mc.cov(i, i));
+      EXPECT_NEAR(tr.mean()(i), mc.mean(i), 0.05 * sd + 4 * sd / std::sqrt(n)) << sequence << " x" << i + 1;
+      EXPECT_NEAR(tr.covariance()(i, i), mc.cov(i, i), (0.05 + 4 * std::sqrt(2 / n)) * mc.cov(i, i))
+          << sequence << " x" << i + 1;
+      // Closer to the exact variance than window EP on the pure "not yet crossed" runs (EP's redundant
+      // interval sites: var x1 0.90 / 0.55 of MC, measured). Not asserted on the excursion sequence, where
+      // both are within 2 % (EP 0.995 / 0.993, this filter 1.003 / 0.982 of MC: 2 MC standard errors).
+      if (sequence != 1) {
+        EXPECT_LT(std::abs(tr.covariance()(i, i) - mc.cov(i, i)), std::abs(ep.covariance()(i, i) - mc.cov(i, i)))
+            << sequence << " x" << i + 1;
+        EXPECT_LT(std::abs(tr.mean()(i) - mc.mean(i)), std::abs(ep.mean()(i) - mc.mean(i))) << sequence << " x" << i + 1;
+      }
+    }
+    ++sequence;
+  }
 }
 
 }  // namespace window_ep_test
