@@ -58,12 +58,7 @@ class SafeStudentRegression {
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     const StepReport report = est_->Update(y, z);
-    if (options_.base.exact) return report;
-    // During the start-up a valid sample that the provisional prior could not take (a numerical failure:
-    // that prior's scale diag(1, 1e-3·I) is arbitrary, e.g. for data near 1e100 ξ·ξ_z overflows) still
-    // belongs to the window: the data-driven prior, in the data's own scale, replays it.
-    const bool keep = report.updated() || (in_startup() && report.status == StepStatus::kNumericalFailure);
-    if (!keep) return report;
+    if (options_.base.exact || !report.updated()) return report;
     Store(y, z);
     if (in_startup()) {
       if (count_ == startup_window_) Restart(startup_window_);

@@ -148,9 +148,7 @@ class BasicStudentRegression {
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     if (!enabled_) return {StepStatus::kSkipped};
     const StepReport report = Step(y, z);
-    // A valid sample the provisional prior could not take (numerical failure) still joins the window; the
-    // data-driven prior, in the data's own scale, replays it (ident/safe_student_regression.h).
-    if (in_startup() && (report.updated() || report.status == StepStatus::kNumericalFailure)) {
+    if (in_startup() && report.updated()) {
       window_(window_count_, 0) = y;
       window_.row(window_count_).tail(num_parameters()) = z.transpose();
       if (++window_count_ == window_size_) Restart();
