@@ -1,5 +1,6 @@
 #include "ident/mems_study.h"
 
+#include <array>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -11,6 +12,7 @@
 #include "ident/covariance_bound.h"
 #include "ident/crossing_reading.h"
 #include "ident/excursion_reading.h"
+#include "ident/jackknife.h"
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
@@ -27,7 +29,8 @@ std::string MemsStudyOptions::Validate() const {
   if (!(threshold > 0)) return fmt::format("threshold = {}; need > 0", threshold);
   if (!(t_target >= 10 * h)) return fmt::format("t_target = {}; need >= 10 h = {}", t_target, 10 * h);
   if (steps < 100) return fmt::format("steps = {}; need >= 100", steps);
-  if (burn_in < 0 || burn_in >= steps) return fmt::format("burn_in = {}; need 0 <= burn_in < steps", burn_in);
+  if (burn_in < 0 || burn_in > steps - 10)  // at least one step per block of the calibration's jackknife
+    return fmt::format("burn_in = {}; need 0 <= burn_in <= steps - 10", burn_in);
   if (grid_points < 16 || grid_points > 1024) return fmt::format("grid_points = {}; need 16..1024", grid_points);
   if (ep_window < 1 || ep_window > 4096) return fmt::format("ep_window = {}; need 1..4096", ep_window);
   if (!(sigma_m2 >= 0)) return fmt::format("sigma_m2 = {}; need >= 0", sigma_m2);
@@ -47,12 +50,26 @@ double TunedSigmaO(double p11_stat, double noise_intensity) {
 
 namespace {
 
+// Sums of squared error and predicted variance after burn-in, also per contiguous block of the run for the
+// calibration's jackknife standard error (ident/jackknife.h). Blocks of whole stretches of the run keep the
+// strong serial correlation of the errors (an error persists until the next event) inside a block.
 struct Accumulator {
+  static constexpr int kBlocks = 10;
+  explicit Accumulator(int statistics_steps) : steps(statistics_steps) {}
+  int steps;  // steps after burn-in
   double se = 0, var = 0;
   int n = 0;
-  void Add(double err, double predicted_var) { se += err * err; var += predicted_var; ++n; }
+  std::array<double, kBlocks> block_se{}, block_var{};
+  void Add(double err, double predicted_var) {
+    const int b = static_cast<int>(static_cast<long>(n) * kBlocks / steps);
+    se += err * err;
+    var += predicted_var;
+    block_se[b] += err * err;
+    block_var[b] += predicted_var;
+    ++n;
+  }
   MemsObserverResult Result(const std::string& name) const {
-    return {name, std::sqrt(se / n), (var / n) / (se / n)};
+    return {name, std::sqrt(se / n), (var / n) / (se / n), JackknifeRatioStandardError(block_var, block_se)};
   }
 };
 
@@ -95,8 +112,12 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   Eigen::Vector2d x(0.0, v_ref), w;
   Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
   double y_prev = 0, direction = 1;
-  Accumulator acc_grid, acc_tuned, acc_tuned13, acc_plain, acc_event, acc_trunc, acc_capped, acc_wedge, acc_bound,
-      acc_excursion, acc_silent, acc_window, acc_truncated;
+  const int statistics_steps = o.steps - o.burn_in;
+  Accumulator acc_grid(statistics_steps), acc_tuned(statistics_steps), acc_tuned13(statistics_steps),
+      acc_plain(statistics_steps), acc_event(statistics_steps), acc_trunc(statistics_steps),
+      acc_capped(statistics_steps), acc_wedge(statistics_steps), acc_bound(statistics_steps),
+      acc_excursion(statistics_steps), acc_silent(statistics_steps), acc_window(statistics_steps),
+      acc_truncated(statistics_steps);
   Eigen::VectorXd wedge_mean_before(2);
   Eigen::MatrixXd wedge_cov_before(2, 2);
   Eigen::VectorXd excursion_mean_before(2);
@@ -270,7 +291,8 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   result.window_failures = window_filter.failures();
   result.truncated_failures = truncated_filter.failures();
   result.truncated_projection_failures = truncated_filter.projection_failures();
-  MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n), (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n)};
+  MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n),
+                       (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n), 0.0};
   result.observers.push_back(b);
   return result;
 }

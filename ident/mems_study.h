@@ -43,7 +43,9 @@
 //                   Q_M = diag(σ_M⁻², 0), y = 0 ∈ LC(0); rms = √(mean P̄22)
 //
 // For each: RMS velocity error over the steps after burn-in, and calibration = mean predicted
-// velocity variance / mean squared velocity error (1 = calibrated, < 1 = overconfident).
+// velocity variance / mean squared velocity error (1 = calibrated, < 1 = overconfident), with the
+// calibration's jackknife standard error over 10 contiguous blocks of the run: the ratio of two averages
+// over a few events is noisy (the exact posterior's own calibration is 1 only in expectation).
 #pragma once
 
 #include <string>
@@ -70,6 +72,7 @@ struct MemsObserverResult {
   std::string name;
   double rms = 0;            // RMS velocity error (bound: √ mean P̄22)
   double calibration = 0;    // mean predicted var(x2) / mean squared error (bound: mean P̄22 / grid MSE)
+  double calibration_se = 0; // its jackknife standard error over 10 contiguous blocks of the run (bound: 0)
 };
 
 struct MemsTrace {

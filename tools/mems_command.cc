@@ -88,6 +88,16 @@ void RunMems(const MemsCommandOptions& o) {
     }
     std::cout << "\n";
   }
+  // The calibration is a ratio of two averages over a few events: its sampling error, beside the figure.
+  std::cout << "calibration +- jackknife standard error (10 contiguous blocks of each run)\n";
+  std::cout << fmt::format("{:>8} {:>15} {:>15} {:>15}\n", "t_mean", "grid", "tuned_kalman", "lc_gaussian");
+  for (const auto& r : results) {
+    std::cout << fmt::format("{:8.3f}", r.t_mean);
+    for (const char* name : {"grid", "tuned_kalman", "lc_truncated"})
+      std::cout << fmt::format(" {:>15}", fmt::format("{:.2f} +- {:.2f}", r.Get(name).calibration,
+                                                       r.Get(name).calibration_se));
+    std::cout << "\n";
+  }
   std::cout << fmt::format("sigma_o = {:.4f} (p11 = 1/sqrt 3), bound: sigma_M^2 = (2 h v_ref)^2/3; lc_gaussian = "
                            "lc_truncated: every reading exact, Gaussian restricted to the current reading's interval, "
                            "no sigma_o\n",
@@ -105,12 +115,14 @@ void RunMems(const MemsCommandOptions& o) {
     f << "t_mean,t_target,events";
     for (const auto& [col, name] : kColumns) f << ",rms_" << col;
     for (const auto& [col, name] : kColumns) f << ",calibration_" << col;
+    for (const auto& [col, name] : kColumns) f << ",calibration_se_" << col;
     f << "\n";
     for (size_t i = 0; i < results.size(); ++i) {
       const auto& r = results[i];
       f << fmt::format("{:.6g},{:.6g},{}", r.t_mean, o.t_targets[i], r.events);
       for (const auto& [col, name] : kColumns) f << fmt::format(",{:.6g}", r.Get(name).rms);
       for (const auto& [col, name] : kColumns) f << fmt::format(",{:.6g}", r.Get(name).calibration);
+      for (const auto& [col, name] : kColumns) f << fmt::format(",{:.6g}", r.Get(name).calibration_se);
       f << "\n";
     }
     IDENT_REQUIRE(f.good(), "error writing --csv file '{}'", o.csv);

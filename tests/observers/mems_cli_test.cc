@@ -17,8 +17,10 @@ TEST(MemsCli, WritesOneCsvRowPerRateWithTheRequiredColumns) {
   std::istringstream csv(testing::ReadFile(dir + "/fig9.csv"));
   std::string header, line;
   std::getline(csv, header);
-  for (const char* col : {"t_mean", "rms_grid", "rms_tuned_kalman", "rms_lc_gaussian", "rms_bound"})
+  for (const char* col : {"t_mean", "rms_grid", "rms_tuned_kalman", "rms_lc_gaussian", "rms_bound",
+                          "calibration_lc_gaussian", "calibration_se_lc_gaussian", "calibration_se_grid"})
     EXPECT_NE(header.find(col), std::string::npos) << col;
+  EXPECT_NE(r.out.find("jackknife standard error"), std::string::npos) << r.out;
   int rows = 0;
   while (std::getline(csv, line)) if (!line.empty()) ++rows;
   EXPECT_EQ(rows, 2);
