@@ -222,7 +222,10 @@ StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, 
   const double hi = y > 0 ? kTgInf : (y < 0 ? -T : T);
   const Eigen::Matrix2d A = model.A;
   Eigen::Vector2d mp = A * pm_;
-  if (model.num_inputs() > 0) mp += model.B * u;
+  if (model.num_inputs() > 0) {
+    const Eigen::Vector2d Bu = model.B * u;   // not `mp += B u`: Eigen's aliasing-safe temporary is heap-allocated
+    mp += Bu;
+  }
   Eigen::Matrix2d Pp = A * pP_ * A.transpose() + model.process_noise;
   Pp = 0.5 * (Pp + Pp.transpose()).eval();
   // s = (c'x(k−1), c'x(k)) under the parent.
