@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/owens_t.hpp>
@@ -208,6 +209,21 @@ TruncatedGaussianFilter::TruncatedGaussianFilter(const models::ThresholdSensor& 
   IDENT_REQUIRE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues().minCoeff() > 0,
                 "TruncatedGaussianFilter: prior covariance not positive definite");
   c_ = sensor.c().head<2>();
+}
+
+TruncatedGaussianFilter::TruncatedGaussianFilter(models::LinearStateSpace model, const models::ThresholdSensor& sensor,
+                                                 const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance)
+    : TruncatedGaussianFilter(sensor, mean, covariance) {
+  model.Validate();
+  IDENT_REQUIRE(model.num_states() == 2, "TruncatedGaussianFilter: the model has {} states; need 2",
+                model.num_states());
+  model_ = std::move(model);
+  has_model_ = true;
+}
+
+StepReport TruncatedGaussianFilter::Update(const StateSpaceItem& item) {
+  if (!has_model_) return {StepStatus::kRejectedInvalid};
+  return Step(model_, item.u, item.y);
 }
 
 StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
