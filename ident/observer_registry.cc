@@ -12,6 +12,7 @@
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
+#include "ident/truncated_gaussian_filter.h"
 
 namespace ident {
 namespace {
@@ -62,6 +63,20 @@ std::unique_ptr<AnyStateObserver> MakeLcGaussian(const ObserverSettings& s, cons
   return std::make_unique<StateObserverModel<LcGaussianFilter>>("lc_gaussian", p.model, Projected(s, p), p.x0, p.P0);
 }
 
+std::unique_ptr<AnyStateObserver> MakeLcTruncated(const ObserverSettings& s, const ObserverProblem& p) {
+  RequireNoOptions(s);
+  IDENT_REQUIRE(p.measurement != nullptr, "observer 'lc_truncated': measurement must not be null");
+  const auto* threshold = dynamic_cast<const models::ThresholdSensor*>(p.measurement.get());
+  IDENT_REQUIRE(threshold != nullptr && threshold->num_states() == 2,
+                "observer 'lc_truncated' needs a threshold sensor on 2 states; '{}' is not (use lc_gaussian or grid)",
+                p.measurement->name());
+  IDENT_REQUIRE(p.x0.size() == 2 && p.P0.rows() == 2 && p.P0.cols() == 2,
+                "observer 'lc_truncated': x0 has {} entries and P0 is {}×{}; need 2 and 2×2", p.x0.size(),
+                p.P0.rows(), p.P0.cols());
+  return std::make_unique<StateObserverModel<TruncatedGaussianFilter>>("lc_truncated", p.model, *threshold,
+                                                                       Eigen::Vector2d(p.x0), Eigen::Matrix2d(p.P0));
+}
+
 std::unique_ptr<AnyStateObserver> MakeGrid(const ObserverSettings& s, const ObserverProblem& p) {
   IDENT_REQUIRE(p.measurement != nullptr, "observer 'grid': measurement must not be null");
   const int n = static_cast<int>(p.x0.size());
@@ -106,6 +121,7 @@ const std::vector<std::pair<std::string, Factory>>& Registry() {
   static const std::vector<std::pair<std::string, Factory>> registry = {
       {"kalman", MakeKalman},
       {"lc_gaussian", MakeLcGaussian},
+      {"lc_truncated", MakeLcTruncated},
       {"grid", MakeGrid},
   };
   return registry;

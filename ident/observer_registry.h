@@ -3,6 +3,8 @@
 //   "kalman"       KalmanFilter (square-root); needs a linear-Gaussian measurement; no options
 //   "lc_gaussian"  LcGaussianFilter (exact tilted moments, the assumed-density filter); needs a
 //                  measurement that depends on x through c'x (models::ProjectedMeasurement); no options
+//   "lc_truncated" TruncatedGaussianFilter (the assumed-density filter on Gaussians restricted to the
+//                  current reading's interval); needs a models::ThresholdSensor on 2 states; no options
 //   "grid"         GridObserver (1 to 3 states); options points (one count for every axis, or per axis
 //                  as 64x48), initial_sigmas, noise_sigmas, support_level, min_half_width, padding
 //

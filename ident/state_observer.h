@@ -1,5 +1,5 @@
-// The common interface of ident's state observers (Kalman filter, log-concave Gaussian filter, grid
-// Bayesian observer, covariance bound tracker).
+// The common interface of ident's state observers (Kalman filter, log-concave Gaussian filter,
+// truncated-Gaussian assumed-density filter, grid Bayesian observer, covariance bound tracker).
 //
 // A state-space data item is d(k) = (u(k−1), y(k)): the input applied over the last sampling interval
 // and the reading taken at its end. Update(d) runs the time update with u(k−1) (dynamics and process
@@ -10,7 +10,7 @@
 //   covariance()                                   its covariance (for the bound tracker: the bound)
 //
 // Run time: AnyStateObserver wraps any such E behind a virtual interface; MakeStateObserver() in
-// ident/observer_registry.h builds "kalman", "lc_gaussian" or "grid" by name.
+// ident/observer_registry.h builds "kalman", "lc_gaussian", "lc_truncated" or "grid" by name.
 //
 // Example:
 //   ident::KalmanFilter kf(model, measurement, x0, P0);

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <utility>
 
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/owens_t.hpp>
@@ -210,6 +211,21 @@ TruncatedGaussianFilter::TruncatedGaussianFilter(const models::ThresholdSensor& 
   c_ = sensor.c().head<2>();
 }
 
+TruncatedGaussianFilter::TruncatedGaussianFilter(models::LinearStateSpace model, const models::ThresholdSensor& sensor,
+                                                 const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance)
+    : TruncatedGaussianFilter(sensor, mean, covariance) {
+  model.Validate();
+  IDENT_REQUIRE(model.num_states() == 2, "TruncatedGaussianFilter: the model has {} states; need 2",
+                model.num_states());
+  model_ = std::move(model);
+  has_model_ = true;
+}
+
+StepReport TruncatedGaussianFilter::Update(const StateSpaceItem& item) {
+  if (!has_model_) return {StepStatus::kRejectedInvalid};
+  return Step(model_, item.u, item.y);
+}
+
 StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                                          double y) {
   if (model.A.rows() != 2 || model.A.cols() != 2 || model.process_noise.rows() != 2 ||
@@ -222,7 +238,10 @@ StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, 
   const double hi = y > 0 ? kTgInf : (y < 0 ? -T : T);
   const Eigen::Matrix2d A = model.A;
   Eigen::Vector2d mp = A * pm_;
-  if (model.num_inputs() > 0) mp += model.B * u;
+  if (model.num_inputs() > 0) {
+    const Eigen::Vector2d Bu = model.B * u;   // not `mp += B u`: Eigen's aliasing-safe temporary is heap-allocated
+    mp += Bu;
+  }
   Eigen::Matrix2d Pp = A * pP_ * A.transpose() + model.process_noise;
   Pp = 0.5 * (Pp + Pp.transpose()).eval();
   // s = (c'x(k−1), c'x(k)) under the parent.

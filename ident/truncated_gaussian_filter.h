@@ -39,9 +39,14 @@
 // moments as read-out and sets the parent's variance along c to the largest value the Newton iteration
 // reached (counted in projection_failures()).
 //
+// With the model given at construction it is a StateObserver (ident/state_observer.h): Update(d) =
+// Step(model, d.u, d.y); the registry builds it as "lc_truncated" (ident/observer_registry.h).
+//
 // Example:
 //   ident::TruncatedGaussianFilter f(sensor, m0, P0);
 //   for (...) { f.Step(model, u, y); use(f.mean(), f.covariance()); }   // u = u(k−1), y = y(k)
+//   ident::TruncatedGaussianFilter g(model, sensor, m0, P0);
+//   for (const auto& d : items) g.Update(d);                            // d = (u(k−1), y(k))
 //
 // [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
 // [2] T. P. Minka, "A family of algorithms for approximate Bayesian inference", PhD thesis, MIT, 2001 (ADF).
@@ -50,6 +55,7 @@
 #include <Eigen/Core>
 
 #include "ident/common/step_report.h"
+#include "ident/state_observer.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 
@@ -79,6 +85,9 @@ class TruncatedGaussianFilter {
   // positive definite.
   TruncatedGaussianFilter(const models::ThresholdSensor& sensor, const Eigen::Vector2d& mean,
                           const Eigen::Matrix2d& covariance);
+  // With a stored model for Update(); also throws InvalidArgument for a model that is invalid or not 2-state.
+  TruncatedGaussianFilter(models::LinearStateSpace model, const models::ThresholdSensor& sensor,
+                          const Eigen::Vector2d& mean, const Eigen::Matrix2d& covariance);
 
   // One step: time update with u = u(k−1), then the reading y = y(k) ∈ {−1, 0, 1}. kRejectedInvalid (state
   // unchanged) for a model that is not 2-state, u of the wrong size or not finite, or an invalid reading.
@@ -86,6 +95,8 @@ class TruncatedGaussianFilter {
   // the prediction restricted to nothing new (parent = predicted parent, interval = the new reading's) and is
   // counted in failures(); the step is still kUpdated.
   StepReport Step(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u, double y);
+  // Step with the stored model (second constructor); kRejectedInvalid without one.
+  StepReport Update(const StateSpaceItem& item);
 
   const Eigen::Vector2d& mean() const { return mean_; }           // moments of q_k (read-out)
   const Eigen::Matrix2d& covariance() const { return cov_; }
@@ -101,6 +112,8 @@ class TruncatedGaussianFilter {
   Eigen::Matrix2d pP_, cov_;
   double lo_, hi_;   // interval of the current reading (−∞, ∞ before the first)
   long failures_ = 0, projection_failures_ = 0;
+  bool has_model_ = false;   // stored model for Update()
+  models::LinearStateSpace model_;
 };
 
 }  // namespace ident

@@ -1,5 +1,6 @@
 // Shared fixtures of the observer tests: a stable, lightly coupled 2-state model with one input, and
-// linear-Gaussian data from it (y = c'x + e, e ~ N(0, r), input sin(0.3k), seeded).
+// linear-Gaussian data from it (y = c'x + e, e ~ N(0, r), input sin(0.3k), seeded); a threshold-sensor
+// record of a 2-state model under a ping-pong input (seeded).
 #pragma once
 
 #include <cmath>
@@ -10,6 +11,7 @@
 #include <Eigen/Core>
 
 #include "ident/state_observer.h"
+#include "models/measurement.h"
 #include "models/state_space.h"
 
 namespace ident::testing {
@@ -35,6 +37,27 @@ inline std::vector<StateSpaceItem> SimulateLinearGaussian(const models::LinearSt
     const Eigen::VectorXd u = Eigen::VectorXd::Constant(1, std::sin(0.3 * k));
     x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
     items.push_back({u, c.dot(x) + std::sqrt(r) * normal(rng)});
+  }
+  return items;
+}
+
+// `steps` readings y(k) = sensor(x(k)) of a 2-state model (the MEMS accelerometer: position, velocity)
+// from x = (0, 2), with a ping-pong input: after an event push back, else track velocity ∓4.
+inline std::vector<StateSpaceItem> SimulateThresholdSensor(const models::LinearStateSpace& model,
+                                                           const models::ThresholdSensor& sensor, int steps,
+                                                           unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal;
+  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
+  Eigen::Vector2d x(0, 2);
+  std::vector<StateSpaceItem> items;
+  double u = 0, dir = 1;
+  for (int k = 0; k < steps; ++k) {
+    x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
+    const double y = sensor.Measure(x);
+    items.push_back({Eigen::VectorXd::Constant(1, u), y});
+    if (y != 0) dir = -y;
+    u = y != 0 ? -y * 32 : -(x(1) - dir * 4) / 0.125;
   }
   return items;
 }

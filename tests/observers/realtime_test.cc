@@ -3,17 +3,18 @@
 // step is not kUpdated, and fixed-size filters that equal an independent textbook recursion.
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numbers>
-#include <random>
 #include <stdexcept>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
 #include "ident/grid_observer.h"
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
+#include "ident/observer_registry.h"
+#include "ident/truncated_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "tests/observers/linear_gaussian_data.h"
@@ -171,19 +172,7 @@ TYPED_TEST(LcGaussianRealtime, StepsAreNoexceptAndAllocateNothingOver10kSteps) {
   const auto model = models::MemsAccelerometerDynamics(0.01, 1.0);
   const Eigen::Vector2d c(1.0, 0.0);
   auto sensor = std::make_shared<models::ThresholdSensor>(c, 1.0);
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> normal;
-  const Eigen::Matrix2d L = Eigen::LLT<Eigen::Matrix2d>(Eigen::Matrix2d(model.process_noise)).matrixL();
-  Eigen::Vector2d x(0, 2);
-  std::vector<StateSpaceItem> items;
-  double u = 0, dir = 1;
-  for (int k = 0; k < 10000; ++k) {
-    x = model.A * x + model.B * u + L * Eigen::Vector2d(normal(rng), normal(rng));
-    const double y = sensor->Measure(x);
-    items.push_back({Eigen::VectorXd::Constant(1, u), y});
-    if (y != 0) dir = -y;
-    u = y != 0 ? -y * 32 : -(x(1) - dir * 4) / 0.125;
-  }
+  const auto items = testing::SimulateThresholdSensor(model, *sensor, 10000, 7);
   Eigen::Matrix2d P0;
   P0 << 0.3, 0, 0, 1;
   TypeParam f(model, sensor, Eigen::Vector2d(0, 2), P0);
@@ -273,6 +262,65 @@ TYPED_TEST(LcGaussianRealtime, RejectedOrFailedStepsLeaveTheStateBitIdentical) {
   EXPECT_EQ(stored.Update({Eigen::VectorXd::Zero(1), 0.0}).status, StepStatus::kNumericalFailure);
   EXPECT_TRUE(SameBits(Eigen::Vector2d(stored.mean()), Eigen::Vector2d(0, 1)));
   EXPECT_TRUE(SameBits(Eigen::Matrix2d(stored.covariance()), Eigen::Matrix2d(Eigen::Matrix2d::Identity())));
+}
+
+// ------------------------------------------------------------------------------------------------
+// Assumed-density filter on the reading's interval (lc_truncated): fixed-size state, no workspace.
+
+TEST(TruncatedGaussianRealtime, UpdateAllocatesNothingOver10kSteps) {
+  const auto model = models::MemsAccelerometerDynamics(0.01, 1.0);
+  const models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
+  const auto items = testing::SimulateThresholdSensor(model, sensor, 10000, 7);
+  Eigen::Matrix2d P0;
+  P0 << 0.3, 0, 0, 1;
+  TruncatedGaussianFilter f(model, sensor, Eigen::Vector2d(0, 2), P0);
+  const ObserverProblem problem{model, std::make_shared<models::ThresholdSensor>(sensor), Eigen::Vector2d(0, 2), P0};
+  auto registered = MakeStateObserver(ParseObserverSpec("lc_truncated"), problem);
+  int updated = 0, events = 0;
+  {
+    testing::AllocationCounter count;
+    for (const auto& d : items) {
+      updated += f.Update(d).updated();
+      updated += registered->Update(d).updated();   // through AnyStateObserver
+      events += d.y != 0;
+    }
+    EXPECT_EQ(count.allocations(), 0);
+  }
+  EXPECT_EQ(updated, 20000);
+  EXPECT_GT(events, 100);   // many ±1 readings: changes of reading and repeated ±1, not only y = 0
+  EXPECT_TRUE(f.mean().allFinite() && f.covariance().allFinite());
+}
+
+TEST(TruncatedGaussianRealtime, RejectedItemsLeaveTheStateBitIdentical) {
+  const auto model = models::MemsAccelerometerDynamics(0.01, 1.0);
+  const models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
+  TruncatedGaussianFilter f(model, sensor, Eigen::Vector2d(0.5, 1), 0.01 * Eigen::Matrix2d::Identity());
+  ASSERT_TRUE(f.Update({Eigen::VectorXd::Zero(1), 0.0}).updated());
+  ASSERT_TRUE(f.Update({Eigen::VectorXd::Constant(1, 3.0), 0.0}).updated());
+  const Eigen::Vector2d m = f.mean(), pm = f.parent_mean();
+  const Eigen::Matrix2d P = f.covariance(), pP = f.parent_covariance();
+  auto unchanged = [&] {
+    return SameBits(f.mean(), m) && SameBits(f.covariance(), P) && SameBits(f.parent_mean(), pm) &&
+           SameBits(f.parent_covariance(), pP);
+  };
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(2), 0.0}).status, StepStatus::kRejectedInvalid);   // u of wrong size
+  EXPECT_EQ(f.Update({Eigen::VectorXd(), 0.0}).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Constant(1, std::nan("")), 0.0}).status, StepStatus::kRejectedInvalid);
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Constant(1, inf), 0.0}).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), 0.5}).status, StepStatus::kRejectedInvalid);   // not a reading
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), std::nan("")}).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), 2.0}).status, StepStatus::kRejectedInvalid);
+  EXPECT_TRUE(unchanged());
+  EXPECT_EQ(f.failures(), 0);
+  // Without a stored model Update() refuses every item.
+  TruncatedGaussianFilter no_model(sensor, m, P);
+  EXPECT_EQ(no_model.Update({Eigen::VectorXd::Zero(1), 0.0}).status, StepStatus::kRejectedInvalid);
+  EXPECT_TRUE(SameBits(no_model.mean(), m) && SameBits(no_model.covariance(), P));
+  // A model that is not 2-state is refused at construction.
+  const auto three = models::LinearStateSpace::Make(Eigen::MatrixXd::Identity(3, 3), Eigen::MatrixXd::Zero(3, 1),
+                                                    Eigen::MatrixXd::Identity(3, 3));
+  EXPECT_THROW(TruncatedGaussianFilter(three, sensor, m, P), InvalidArgument);
 }
 
 // ------------------------------------------------------------------------------------------------

@@ -3,6 +3,7 @@
 // filter to the grid's discretisation error), options reach the observer, and every bad spec, option or
 // problem is refused with a message naming the observer and the option.
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <random>
 #include <string>
@@ -15,6 +16,7 @@
 #include "ident/kalman_filter.h"
 #include "ident/lc_gaussian_filter.h"
 #include "ident/observer_registry.h"
+#include "ident/truncated_gaussian_filter.h"
 #include "tests/observers/linear_gaussian_data.h"
 
 namespace ident {
@@ -39,8 +41,8 @@ std::string ErrorOf(const std::string& spec, const ObserverProblem& problem) {
   return "(no error)";
 }
 
-TEST(ObserverRegistry, ListsTheThreeObservers) {
-  EXPECT_EQ(StateObserverNames(), (std::vector<std::string>{"kalman", "lc_gaussian", "grid"}));
+TEST(ObserverRegistry, ListsTheFourObservers) {
+  EXPECT_EQ(StateObserverNames(), (std::vector<std::string>{"kalman", "lc_gaussian", "lc_truncated", "grid"}));
 }
 
 TEST(ObserverRegistry, EachNameBuildsTheDocumentedObserver) {
@@ -99,7 +101,8 @@ TEST(ObserverRegistry, GridTakesPointsPerAxisAndItsOtherOptions) {
 
 TEST(ObserverRegistry, BadSpecsOptionsAndProblemsNameTheObserverAndOption) {
   const auto problem = GaussianProblem();
-  EXPECT_CONTAINS(ErrorOf("kalmann", problem), "unknown observer 'kalmann' (known: kalman, lc_gaussian, grid)");
+  EXPECT_CONTAINS(ErrorOf("kalmann", problem),
+                  "unknown observer 'kalmann' (known: kalman, lc_gaussian, lc_truncated, grid)");
   EXPECT_CONTAINS(ErrorOf("kalman:points=3", problem), "observer 'kalman' takes no options; got 'points'");
   EXPECT_CONTAINS(ErrorOf("lc_gaussian:x=1", problem), "observer 'lc_gaussian' takes no options; got 'x'");
   EXPECT_CONTAINS(ErrorOf("grid:point=64", problem), "observer 'grid' has no option 'point'");
@@ -125,6 +128,54 @@ TEST(ObserverRegistry, BadSpecsOptionsAndProblemsNameTheObserverAndOption) {
   auto null_meas = problem;
   null_meas.measurement = nullptr;
   EXPECT_CONTAINS(ErrorOf("lc_gaussian", null_meas), "measurement must not be null");
+}
+
+// lc_truncated on the MEMS accelerometer with its threshold sensor: the registry's observer is the filter
+// driven directly through Step(), bit for bit.
+TEST(ObserverRegistry, LcTruncatedEqualsTheDirectlyDrivenFilterBitForBit) {
+  const auto model = models::MemsAccelerometerDynamics(0.01, 1.0);
+  const auto sensor = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
+  const Eigen::Vector2d x0(0, 2);
+  Eigen::Matrix2d P0;
+  P0 << 0.3, 0, 0, 1;
+  const auto items = testing::SimulateThresholdSensor(model, *sensor, 400, 11);
+  auto obs = MakeStateObserver(ParseObserverSpec("lc_truncated"), {model, sensor, x0, P0});
+  EXPECT_EQ(obs->name(), "lc_truncated");
+  EXPECT_EQ(obs->num_states(), 2);
+  TruncatedGaussianFilter direct(*sensor, x0, P0);
+  int events = 0;
+  for (const auto& d : items) {
+    ASSERT_TRUE(obs->Update(d).updated());
+    ASSERT_TRUE(direct.Step(model, d.u, d.y).updated());
+    events += d.y != 0;
+  }
+  EXPECT_GT(events, 5);   // the record crosses the thresholds
+  const Eigen::VectorXd m = obs->mean(), md = direct.mean();
+  const Eigen::MatrixXd P = obs->covariance(), Pd = direct.covariance();
+  EXPECT_EQ(std::memcmp(m.data(), md.data(), 2 * sizeof(double)), 0) << m.transpose() << " vs " << md.transpose();
+  EXPECT_EQ(std::memcmp(P.data(), Pd.data(), 4 * sizeof(double)), 0) << P << "\nvs\n" << Pd;
+  EXPECT_EQ(direct.failures(), 0);
+}
+
+TEST(ObserverRegistry, LcTruncatedNeedsATwoStateThresholdSensorAndTakesNoOptions) {
+  auto mems = GaussianProblem();
+  mems.model = models::MemsAccelerometerDynamics(0.01, 1.0);
+  EXPECT_EQ(ErrorOf("lc_truncated", mems), "observer 'lc_truncated' needs a threshold sensor on 2 states; "
+                                           "'gaussian' is not (use lc_gaussian or grid)");
+  mems.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
+  EXPECT_EQ(ErrorOf("lc_truncated:points=3", mems), "observer 'lc_truncated' takes no options; got 'points'");
+  EXPECT_NO_THROW(MakeStateObserver(ParseObserverSpec("lc_truncated"), mems));
+  auto three = mems;
+  three.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector3d(1, 0, 0), 1.0);
+  EXPECT_EQ(ErrorOf("lc_truncated", three), "observer 'lc_truncated' needs a threshold sensor on 2 states; "
+                                            "'threshold' is not (use lc_gaussian or grid)");
+  auto bad_prior = mems;
+  bad_prior.P0 = Eigen::Matrix2d::Zero();
+  EXPECT_CONTAINS(ErrorOf("lc_truncated", bad_prior), "prior covariance not positive definite");
+  auto wrong_size = mems;
+  wrong_size.x0 = Eigen::Vector3d::Zero();
+  EXPECT_EQ(ErrorOf("lc_truncated", wrong_size),
+            "observer 'lc_truncated': x0 has 3 entries and P0 is 2×2; need 2 and 2×2");
 }
 
 }  // namespace
