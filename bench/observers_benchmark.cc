@@ -173,6 +173,18 @@ void BM_LcExcursionVariant(benchmark::State& state) {
 }
 BENCHMARK(BM_LcExcursionVariant)->Unit(benchmark::kMicrosecond);
 
+// One filter step (Step(model, u(k−1), y(k))) per benchmark iteration, cycling through the precomputed run.
+template <class Filter>
+void StepThroughMemsRun(benchmark::State& state, Filter& f, const ident::models::LinearStateSpace& model) {
+  const Run& run = MemsRun();
+  size_t k = 0;
+  for (auto _ : state) {
+    auto report = f.Step(model, run.u[k], run.y[k]);
+    benchmark::DoNotOptimize(report);
+    k = (k + 1) % run.y.size();
+  }
+}
+
 // The study's lc_window variant (ident/window_ep_filter.h), averaged per step over the precomputed run:
 // every reading of the last W steps an exact site, banded EP sweeps until the sites settle (1e-6).
 void BM_LcWindowVariant(benchmark::State& state) {
@@ -181,13 +193,7 @@ void BM_LcWindowVariant(benchmark::State& state) {
   ident::WindowEpOptions opt;
   opt.window = static_cast<int>(state.range(0));
   ident::WindowEpFilter f(sensor, Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity(), opt);
-  const Run& run = MemsRun();
-  size_t k = 0;
-  for (auto _ : state) {
-    auto report = f.Step(model, run.u[k], run.y[k]);
-    benchmark::DoNotOptimize(report);
-    k = (k + 1) % run.y.size();
-  }
+  StepThroughMemsRun(state, f, model);
   state.counters["refits_per_step"] = static_cast<double>(f.refits()) / static_cast<double>(state.iterations());
   state.counters["failures"] = static_cast<double>(f.failures());
   state.SetItemsProcessed(state.iterations());
@@ -200,13 +206,7 @@ void BM_LcTruncatedVariant(benchmark::State& state) {
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
   const ident::models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
   ident::TruncatedGaussianFilter f(sensor, Eigen::Vector2d(0, 2), Eigen::Matrix2d::Identity());
-  const Run& run = MemsRun();
-  size_t k = 0;
-  for (auto _ : state) {
-    auto report = f.Step(model, run.u[k], run.y[k]);
-    benchmark::DoNotOptimize(report);
-    k = (k + 1) % run.y.size();
-  }
+  StepThroughMemsRun(state, f, model);
   state.counters["failures"] = static_cast<double>(f.failures() + f.projection_failures());
   state.SetItemsProcessed(state.iterations());
 }

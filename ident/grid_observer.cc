@@ -117,9 +117,7 @@ StepReport GridObserver::Predict(const models::LinearStateSpace& model, const Ei
 
 StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                                      const LogDensity* log_noise) {
-  if (model.A.rows() != dim_ || model.A.cols() != dim_ || model.B.rows() != dim_ ||
-      model.process_noise.rows() != dim_ || model.process_noise.cols() != dim_ || u.size() != model.num_inputs() ||
-      !u.allFinite() || !model.A.allFinite() || !model.B.allFinite() || !model.process_noise.allFinite()) {
+  if (!model.FitsStep(dim_, u) || !model.A.allFinite() || !model.B.allFinite() || !model.process_noise.allFinite()) {
     return {StepStatus::kRejectedInvalid};
   }
   // Small matrices live on the stack (at most 3 × 3): no heap allocation per step.

@@ -228,9 +228,7 @@ StepReport TruncatedGaussianFilter::Update(const StateSpaceItem& item) {
 
 StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                                          double y) {
-  if (model.A.rows() != 2 || model.A.cols() != 2 || model.process_noise.rows() != 2 ||
-      model.process_noise.cols() != 2 || u.size() != model.num_inputs() || model.B.rows() != 2 || !u.allFinite() ||
-      !(y == -1.0 || y == 0.0 || y == 1.0)) {
+  if (!model.FitsStep(2, u) || !(y == -1.0 || y == 0.0 || y == 1.0)) {
     return {StepStatus::kRejectedInvalid};
   }
   const double T = threshold_;

@@ -243,9 +243,7 @@ void WindowEpFilter::Backward(const Slot& s, Slot& prev) {
 
 StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                                 double y) {
-  if (model.A.rows() != 2 || model.A.cols() != 2 || model.process_noise.rows() != 2 ||
-      model.process_noise.cols() != 2 || u.size() != model.num_inputs() || model.B.rows() != 2 || !u.allFinite() ||
-      !(y == -1.0 || y == 0.0 || y == 1.0)) {
+  if (!model.FitsStep(2, u) || !(y == -1.0 || y == 0.0 || y == 1.0)) {
     return {StepStatus::kRejectedInvalid};
   }
   // A change of reading: the wedge of (s(k−1), s(k)) takes over the reading of step k−1 if that step's

@@ -24,6 +24,12 @@ struct LinearStateSpace {
 
   int num_states() const { return static_cast<int>(A.rows()); }
   int num_inputs() const { return static_cast<int>(B.cols()); }
+  // Whether one step of an n-state observer can use this model with input u: A and P_N are n × n, B has n
+  // rows, u has num_inputs() finite entries. (The observers' steps return kRejectedInvalid otherwise.)
+  bool FitsStep(Eigen::Index n, const Eigen::Ref<const Eigen::VectorXd>& u) const {
+    return A.rows() == n && A.cols() == n && B.rows() == n && process_noise.rows() == n && process_noise.cols() == n &&
+           u.size() == num_inputs() && u.allFinite();
+  }
 
   // Throws InvalidArgument (naming the matrix) on wrong sizes, non-finite entries or P_N not PSD.
   static LinearStateSpace Make(Eigen::MatrixXd A, Eigen::MatrixXd B, Eigen::MatrixXd process_noise);
