@@ -15,10 +15,14 @@
 namespace ident::approx {
 namespace {
 
+// t'Vt with t = (−1, θ), written out so that it allocates nothing (it runs in the innermost loops).
 double QuadForm(const Eigen::MatrixXd& V, const Eigen::VectorXd& theta) {
-  Eigen::VectorXd t(theta.size() + 1);
-  t << -1, theta;
-  return t.dot(V * t);
+  double q = V(0, 0);
+  for (Eigen::Index i = 0; i < theta.size(); ++i) {
+    q -= theta(i) * (V(i + 1, 0) + V(0, i + 1));
+    for (Eigen::Index j = 0; j < theta.size(); ++j) q += theta(i) * V(i + 1, j + 1) * theta(j);
+  }
+  return q;
 }
 
 struct Frame {  // centre and widths of the class member in Θ
@@ -35,7 +39,7 @@ Frame FrameOf(const Eigen::MatrixXd& V) {
   return f;
 }
 
-// Nelder–Mead on f: R^n → R from x0 with initial step `step`.
+// Nelder–Mead on f: R^n → R from x0 with initial step `step`. Its work vectors are allocated once.
 template <class F>
 double NelderMead(const F& f, Eigen::VectorXd x0, double step, int iterations) {
   const Eigen::Index n = x0.size();
@@ -43,25 +47,26 @@ double NelderMead(const F& f, Eigen::VectorXd x0, double step, int iterations) {
   std::vector<double> fx(n + 1);
   for (Eigen::Index i = 0; i < n; ++i) x[i + 1](i) += step;
   for (Eigen::Index i = 0; i <= n; ++i) fx[i] = f(x[i]);
+  std::vector<int> idx(n + 1);
+  Eigen::VectorXd c(n), xr(n), xe(n), xc(n);
   for (int it = 0; it < iterations; ++it) {
-    std::vector<int> idx(n + 1);
     for (int i = 0; i <= n; ++i) idx[i] = i;
     std::sort(idx.begin(), idx.end(), [&](int a, int b) { return fx[a] < fx[b]; });
     const int best = idx[0], worst = idx[n], second = idx[n - 1];
     if (std::abs(fx[worst] - fx[best]) <= 1e-15 * (1 + std::abs(fx[best]))) break;
-    Eigen::VectorXd c = Eigen::VectorXd::Zero(n);
+    c.setZero();
     for (int i = 0; i < n; ++i) c += x[idx[i]] / static_cast<double>(n);
-    const Eigen::VectorXd xr = c + (c - x[worst]);
+    xr = c + (c - x[worst]);
     const double fr = f(xr);
     if (fr < fx[best]) {
-      const Eigen::VectorXd xe = c + 2 * (c - x[worst]);
+      xe = c + 2 * (c - x[worst]);
       const double fe = f(xe);
       if (fe < fr) x[worst] = xe, fx[worst] = fe;
       else x[worst] = xr, fx[worst] = fr;
     } else if (fr < fx[second]) {
       x[worst] = xr, fx[worst] = fr;
     } else {
-      const Eigen::VectorXd xc = c + 0.5 * (x[worst] - c);
+      xc = c + 0.5 * (x[worst] - c);
       const double fc = f(xc);
       if (fc < fx[worst]) {
         x[worst] = xc, fx[worst] = fc;
@@ -78,8 +83,9 @@ double LogIntegral(double nu, const Eigen::MatrixXd& V, const LogShapeFn& log_sh
   const Eigen::Index rho = V.rows() - 1;
   const Frame fr = FrameOf(V);
   // Integrand in (σ = log ω, u): s(Θ̂ + w∘u, e^σ) e^{σ(1−δ/2)} Π w_i; shift by its peak over σ at u = 0.
+  Eigen::VectorXd theta(rho);  // work vector of log_f, which the quadratures call millions of times
   auto log_f = [&](double sigma, const Eigen::VectorXd& u) {
-    const Eigen::VectorXd theta = fr.centre + fr.width.cwiseProduct(u);
+    theta = fr.centre + fr.width.cwiseProduct(u);
     return log_shape(nu, V, theta, std::exp(sigma)) + sigma * (1 - delta / 2.0);
   };
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(rho);
@@ -131,16 +137,18 @@ OneSidedStepResult NumericalEvaluate(const NormalisedStatistics& s, const Eigen:
   OneSidedStepResult r{RankOneCandidate(s, h, beta), beta, 0, 0};
   // essinf over w = (Θ, log ω) of the ratio m·l(t−1)/s(t), in the prior's frame.
   const Frame fr = FrameOf(s.V);
+  Eigen::VectorXd u(rho), theta(rho);  // work vectors of F
   auto F = [&](const Eigen::VectorXd& x) {  // x = (u, σ)
-    const Eigen::VectorXd u = x.head(rho).cwiseMax(-30).cwiseMin(30);
+    u = x.head(rho).cwiseMax(-30).cwiseMin(30);
     const double sigma = std::clamp(x(rho), -40.0, 40.0);
-    const Eigen::VectorXd theta = fr.centre + fr.width.cwiseProduct(u);
+    theta = fr.centre + fr.width.cwiseProduct(u);
     const double w = std::exp(sigma);
     return log_model(h, theta, w) + log_shape(s.nu, s.V, theta, w) - log_shape(r.stats.nu, r.stats.V, theta, w);
   };
   std::vector<std::pair<double, Eigen::VectorXd>> grid;
   Eigen::VectorXd x(rho + 1);
   const int nu_pts = rho == 1 ? 61 : 21;
+  grid.reserve(static_cast<std::size_t>(nu_pts) * (rho == 1 ? 1 : nu_pts) * 41);
   for (int i = 0; i < nu_pts; ++i)
     for (int j = 0; j < (rho == 1 ? 1 : nu_pts); ++j)
       for (int l = 0; l <= 40; ++l) {

@@ -1,17 +1,17 @@
 # Install rules: `cmake --install <build> [--prefix <dir>]` puts in place
 #   include/ident/{ident,models,approx}/**.h   the public headers, paths preserved (consumers write
 #                                               #include "ident/rls.h" as inside the tree)
-#   lib/libident_{core,models,approx}.a         the layer libraries
+#   lib/libident_{core,regression,models,approx}.a  the layer libraries
 #   lib/cmake/Ident/IdentConfig.cmake, IdentConfigVersion.cmake, IdentTargets*.cmake
-# Consumers: find_package(Ident 0.1 REQUIRED) and link Ident::ident (or Ident::models, Ident::approx,
-# Ident::common). Everything here is in the COMPONENT `ident_development`, so
+# Consumers: find_package(Ident 0.1 REQUIRED) and link Ident::ident (or Ident::regression, Ident::models,
+# Ident::approx, Ident::common). Everything here is in the COMPONENT `ident_development`, so
 # `cmake --install <build> --component ident_development` installs only the library package.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(IDENT_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/Ident")
 
-set(ident_installed_targets ident_common ident_models ident_approx ident_core)
+set(ident_installed_targets ident_common ident_models ident_approx ident_regression ident_core)
 install(TARGETS ${ident_installed_targets}
         EXPORT IdentTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT ident_development

@@ -6,11 +6,18 @@ function(ident_set_warnings target)
                                            $<$<CXX_COMPILER_ID:GNU>:-Wno-maybe-uninitialized>)
 endfunction()
 
-# ident_add_layer(<target> <alias> <dir> DEPS ...): a static library made of every .cc file in <dir>
-# (recursively; files added later are picked up at build time), include root = the repository root.
+# ident_add_layer(<target> <alias> <dir> [SOURCES ...] [EXCLUDE ...] DEPS ...): a static library made of
+# every .cc file in <dir> (recursively; files added later are picked up at build time) except those named
+# in EXCLUDE, or of exactly the files named in SOURCES; include root = the repository root.
 function(ident_add_layer target alias dir)
-  cmake_parse_arguments(ARG "" "" "DEPS" ${ARGN})
-  file(GLOB_RECURSE sources CONFIGURE_DEPENDS "${dir}/*.cc")
+  cmake_parse_arguments(ARG "" "" "DEPS;SOURCES;EXCLUDE" ${ARGN})
+  if(ARG_SOURCES)
+    list(TRANSFORM ARG_SOURCES PREPEND "${dir}/" OUTPUT_VARIABLE sources)
+  else()
+    file(GLOB_RECURSE sources CONFIGURE_DEPENDS "${dir}/*.cc")
+    list(TRANSFORM ARG_EXCLUDE PREPEND "${dir}/")
+    list(REMOVE_ITEM sources ${ARG_EXCLUDE})
+  endif()
   if(sources)
     add_library(${target} STATIC ${sources})
     target_include_directories(${target} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>

@@ -75,7 +75,7 @@ TEST(OneSidedFramework, StudentStepMaximisesTheTradeOffOverBothBranches) {
     const int n = 3000;
     auto at = [&](int j) { return std::pow(10.0, -10 + 10.0 * j / n) * (1 - 1e-9); };
     for (int j = 0; j <= n; ++j)
-      if (f(at(j)) > top) top = f(at(j)), arg = j;
+      if (const double v = f(at(j)); v > top) top = v, arg = j;
     EXPECT_GE(best.objective(), top - 1e-9 * (1 + std::abs(top)));
     double a = at(std::max(arg - 1, 0)), b = at(std::min(arg + 1, n));
     const double g = (std::sqrt(5.0) - 1) / 2;
