@@ -6,6 +6,8 @@
 // the full Cauchy step against it (what the root of the weighting cubic adds, docs/kh.md).
 //
 //   ./build/bench/kh_benchmark --benchmark_min_time=0.2
+//   ./build/bench/kh_benchmark --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
+//                                 (medians of five repetitions in random order: steadier on a shared machine)
 #include <Eigen/Core>
 #include <benchmark/benchmark.h>
 
