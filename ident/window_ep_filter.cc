@@ -15,7 +15,7 @@
 namespace ident {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A 1-D site whose cavity has every bound farther than this many sd is the identity to double precision
 // (normal tail mass beyond 8.5 sd is 9.5e-18).
@@ -84,7 +84,7 @@ double WindowEpFilter::Refit(Slot& s) {
     s.cav_mean << m, 0;
     s.cav_cov << v, 0, 0, 0;
     const double sd = std::sqrt(v);
-    if ((s.lo == -kInf || m - s.lo > kFarSd * sd) && (s.hi == kInf || s.hi - m > kFarSd * sd)) {
+    if ((s.lo == -kInfinity || m - s.lo > kFarSd * sd) && (s.hi == kInfinity || s.hi - m > kFarSd * sd)) {
       zero_site = true;
       mt << m, 0;
       vt << v, 0, 0, 0;
@@ -282,8 +282,8 @@ StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eig
     s.sides = region.sides;
   } else {
     s.dim = 1;
-    s.lo = y > 0 ? threshold_ : (y < 0 ? -kInf : -threshold_);
-    s.hi = y > 0 ? kInf : (y < 0 ? -threshold_ : threshold_);
+    s.lo = y > 0 ? threshold_ : (y < 0 ? -kInfinity : -threshold_);
+    s.hi = y > 0 ? kInfinity : (y < 0 ? -threshold_ : threshold_);
   }
   // Freeze the sites that leave the window into the filtering prior (their last EP fit).
   while (count_ > options_.window) {
