@@ -1,17 +1,20 @@
 // ident mems end to end: table, CSV columns, traces, bad options.
 #include <sstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
 #include "tests/support/cli.h"
+#include "tests/support/sanitizer.h"
 
 namespace ident {
 namespace {
 
 TEST(MemsCli, WritesOneCsvRowPerRateWithTheRequiredColumns) {
   const std::string dir = testing::TempDir();
-  const auto r = testing::RunCli("mems --steps 400 --grid-points 32 --t-mean 0.5,1 --csv " + dir +
-                                 "/fig9.csv --trace " + dir + "/fig8.csv");
+  const int steps = testing::FullOrUnderSanitizer(400, 150);  // tests/support/sanitizer.h
+  const auto r = testing::RunCli("mems --steps " + std::to_string(steps) + " --grid-points 32 --t-mean 0.5,1 --csv " +
+                                 dir + "/fig9.csv --trace " + dir + "/fig8.csv");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("RMS velocity error"), std::string::npos);
   std::istringstream csv(testing::ReadFile(dir + "/fig9.csv"));
@@ -29,7 +32,7 @@ TEST(MemsCli, WritesOneCsvRowPerRateWithTheRequiredColumns) {
   EXPECT_EQ(header, "t,x1,y,var_grid,var_tuned_kalman,var_lc_gaussian,var_bound");
   rows = 0;
   while (std::getline(trace, line)) if (!line.empty()) ++rows;
-  EXPECT_EQ(rows, 400);
+  EXPECT_EQ(rows, steps);
 }
 
 TEST(MemsCli, BadOptionsExitWithOneLineNamingTheOption) {
