@@ -7,6 +7,7 @@
 //   ASan builds:     the sanitizer owns malloc; a sanitizer malloc hook counts instead.
 // The global operator new/delete forward to malloc/free, so each allocation is counted exactly once.
 #include "tests/support/alloc_counter.h"
+#include "tests/support/sanitizer.h"  // IDENT_TESTS_UNDER_ASAN
 
 #include <cstddef>
 #include <cstdlib>
@@ -19,15 +20,6 @@ thread_local std::int64_t g_allocations = 0;
 namespace ident::testing {
 std::int64_t AllocationsSoFar() { return g_allocations; }
 }  // namespace ident::testing
-
-// GCC says __SANITIZE_ADDRESS__, clang __has_feature(address_sanitizer).
-#if defined(__SANITIZE_ADDRESS__)
-#define IDENT_TESTS_UNDER_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define IDENT_TESTS_UNDER_ASAN 1
-#endif
-#endif
 
 #if defined(IDENT_TESTS_UNDER_ASAN)
 

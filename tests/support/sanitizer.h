@@ -11,17 +11,20 @@
 //   }
 #pragma once
 
-namespace ident::testing {
-
-// GCC says __SANITIZE_ADDRESS__, clang __has_feature(address_sanitizer).
+// IDENT_TESTS_UNDER_ASAN (for #if, e.g. tests/support/alloc_counter.cc): GCC says __SANITIZE_ADDRESS__,
+// clang __has_feature(address_sanitizer).
 #if defined(__SANITIZE_ADDRESS__)
-inline constexpr bool kUnderSanitizer = true;
+#define IDENT_TESTS_UNDER_ASAN 1
 #elif defined(__has_feature)
 #if __has_feature(address_sanitizer)
-inline constexpr bool kUnderSanitizer = true;
-#else
-inline constexpr bool kUnderSanitizer = false;
+#define IDENT_TESTS_UNDER_ASAN 1
 #endif
+#endif
+
+namespace ident::testing {
+
+#if defined(IDENT_TESTS_UNDER_ASAN)
+inline constexpr bool kUnderSanitizer = true;
 #else
 inline constexpr bool kUnderSanitizer = false;
 #endif
