@@ -244,8 +244,10 @@ TEST(CrossingReading, UpdateEqualsQuadratureOfTheBackwardFormTo1e9) {
   Eigen::Matrix2d P_before;
   P_before << 0.002, 0.01, 0.01, 0.3;
   // Under the sanitizer the braking case only (tests/support/sanitizer.h).
-  for (double u : {-40.0, 0.0}) {
-    if (ident::testing::kUnderSanitizer && u == 0.0) continue;
+  const double inputs[] = {-40.0, 0.0};
+  for (int c = 0; c < 2; ++c) {
+    if (!ident::testing::RunsCase(c, 2)) continue;
+    const double u = inputs[c];
     BasicLcGaussianFilter<2> f(m_before, P_before);
     f.Predict(model, Eigen::VectorXd::Constant(1, u));
     const Eigen::Vector2d m = f.mean();
