@@ -11,6 +11,8 @@
 //   double     nu(), Dy()                 sample count ν(t) and residual dispersion D_y
 //   double     noise_std()                estimated noise standard deviation (or scale)
 //   void       Reset()                    back to the prior
+// and optionally
+//   std::optional<LockInStatus> lock_in() the lock-in safeguard's state, if the estimator has one
 //
 // Run time: AnyRegressionEstimator wraps any such E behind a virtual interface, and
 // MakeRegressionEstimator() builds one by name ("rls", "cauchy", "student:3", ...) from
@@ -19,6 +21,7 @@
 
 #include <concepts>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -41,6 +44,19 @@ concept RegressionEstimator = requires(E& e, const E& ce, double y, const Eigen:
   { e.Reset() };
 };
 
+// The state of a robust estimator's lock-in safeguard (ident/lock_in_monitor.h, docs/kh.md "Lock-in"):
+// the monitor flags a lock-in when more than half of the last `window` updated samples had a normalised
+// weight νβ below `threshold`; with `restart` the estimator then restarts from the recent samples.
+struct LockInStatus {
+  int window = 0;                  // M, samples watched
+  double threshold = 0;            // νβ below this counts as a low weight
+  bool restart = true;             // restart when flagged (else: flag only)
+  int flagged = 0;                 // updates at which the monitor was flagged (without restart: every
+                                   // update of a lasting lock-in; with restart: each one restarts)
+  int restarts = 0;                // restarts made because of it
+  double low_weight_fraction = 0;  // share of the current window with νβ < threshold
+};
+
 // Type-erased regression estimator for selection at run time.
 class AnyRegressionEstimator {
  public:
@@ -56,6 +72,8 @@ class AnyRegressionEstimator {
   // Estimated noise standard deviation (for RLS s; for Student-t/Cauchy the scale σ ≈ √D_y).
   virtual double noise_std() const = 0;
   virtual void Reset() = 0;
+  // The lock-in safeguard's state; nullopt for estimators without one (RLS, --exact).
+  virtual std::optional<LockInStatus> lock_in() const { return std::nullopt; }
 };
 
 // Adapter: wraps a concrete estimator E.
@@ -75,6 +93,12 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
   double Dy() const override { return e_.Dy(); }
   double noise_std() const override { return e_.noise_std(); }
   void Reset() override { e_.Reset(); }
+  std::optional<LockInStatus> lock_in() const override {
+    if constexpr (requires { e_.lock_in(); })
+      return e_.lock_in();
+    else
+      return std::nullopt;
+  }
   E& get() { return e_; }
   const E& get() const { return e_; }
 

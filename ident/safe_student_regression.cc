@@ -25,6 +25,12 @@ SafeStudentRegression::SafeStudentRegression(int num_parameters, const SafeStude
       monitor_(DefaultMonitorWindow(options, num_parameters), options.lock_in_threshold) {
   IDENT_REQUIRE(std::isfinite(options.scale_growth) && options.scale_growth >= 1,
                 "scale_growth = {}; need a finite G >= 1", options.scale_growth);
+  // νβ ≈ (k+1)/(k + ê²/D_y) [spec §7a]: (k+1)/k for a sample the model fits exactly, so a threshold at or
+  // above it would count every sample as low and restart every M samples.
+  const double k = options.base.dof, top = (k + 1) / k;
+  IDENT_REQUIRE(options.lock_in_threshold < top,
+                "lock-in threshold = {}; need 0 < threshold < (k+1)/k = {} (the weight nu*beta of a sample fitted "
+                "exactly)", options.lock_in_threshold, top);
   IDENT_REQUIRE(options.startup_window == 0 || options.startup_window >= 2,
                 "startup_window = {}; need 0 (automatic) or at least 2 samples", options.startup_window);
   if (options_.base.exact) return;

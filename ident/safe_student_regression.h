@@ -32,6 +32,7 @@
 
 #include "ident/common/step_report.h"
 #include "ident/lock_in_monitor.h"
+#include "ident/regression_estimator.h"
 #include "ident/student_regression.h"
 
 namespace ident {
@@ -75,6 +76,12 @@ class SafeStudentRegression {
   int lock_ins() const { return lock_ins_; }
   int restarts() const { return options_.restart_on_lock_in ? lock_ins_ : 0; }
   const LockInMonitor& monitor() const { return monitor_; }
+  // The same for the common interface (ident/regression_estimator.h); nullopt with `base.exact` (no monitor).
+  std::optional<LockInStatus> lock_in() const {
+    if (options_.base.exact) return std::nullopt;
+    return LockInStatus{monitor_.window(), monitor_.threshold(), options_.restart_on_lock_in,
+                        lock_ins_,         restarts(),           monitor_.low_fraction()};
+  }
 
   int num_parameters() const { return est_->num_parameters(); }
   const ParamVector& parameters() const { return est_->parameters(); }

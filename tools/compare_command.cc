@@ -170,7 +170,15 @@ void RunCompare(CompareCommandOptions& o) {
   std::unique_ptr<DataSource> source = structure.MakeSource(table.names, path);
   std::vector<EstimatorSettings> settings;
   for (const std::string& name : o.estimators) IDENT_REQUIRE(!name.empty(), "--estimators: an empty estimator name");
-  for (const std::string& name : o.estimators) settings.push_back(o.estimator.Resolve(source->num_parameters(), name));
+  for (const std::string& name : o.estimators) {
+    settings.push_back(o.estimator.Resolve(source->num_parameters(), name));
+    // The lock-in options are for the robust estimators of the comparison; RLS has no such safeguard.
+    if (settings.back().name == "rls") {
+      settings.back().lock_in_window.reset();
+      settings.back().lock_in_threshold.reset();
+      settings.back().lock_in_restart = true;
+    }
+  }
 
   CompareOptions options;
   options.fit.split = split;

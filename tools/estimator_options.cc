@@ -38,6 +38,13 @@ void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
       ->excludes(vy0_option)
       ->excludes(vz0_option);
   app.add_flag("--exact", exact, "The paper's exact recursion: switch off every safeguard beyond it");
+  app.add_option("--lock-in-window", lock_in_window,
+                 "cauchy/student: samples M the lock-in monitor watches (0 = max(100, 20ρ))");
+  app.add_option("--lock-in-threshold", lock_in_threshold,
+                 "cauchy/student: a weight νβ below this counts as low; more than half of the window low = lock-in "
+                 "(default 0.3)");
+  app.add_flag("--no-lock-in-restart", no_lock_in_restart,
+               "cauchy/student: report lock-ins but do not restart the estimator");
 }
 
 EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::string& spec) const {
@@ -52,6 +59,9 @@ EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::st
   s.forgetting.factor = forgetting;
   s.forgetting.stabilised = stabilised;
   s.exact = exact;
+  s.lock_in_window = lock_in_window;
+  s.lock_in_threshold = lock_in_threshold;
+  s.lock_in_restart = !no_lock_in_restart;
   if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
   if (!prior_file.empty()) s.prior = ReadPriorJson(prior_file, num_parameters);
   const std::string error = s.forgetting.Validate();

@@ -1,6 +1,6 @@
 // Command-line options shared by every subcommand that builds a regression estimator
 // (ident fit, ident compare): --estimator, --dof, --delta, --forgetting, --stabilised,
-// --nu0/--vy0/--vz0, --prior FILE.json, --exact.
+// --nu0/--vy0/--vz0, --prior FILE.json, --exact, --lock-in-window, --lock-in-threshold, --no-lock-in-restart.
 #pragma once
 
 #include <optional>
@@ -21,6 +21,9 @@ struct EstimatorCliOptions {
   std::optional<double> nu0, vy0, vz0;
   std::string prior_file;
   bool exact = false;
+  std::optional<int> lock_in_window;
+  std::optional<double> lock_in_threshold;
+  bool no_lock_in_restart = false;
 
   // Adds the options to `app` (`with_estimator`: also --estimator).
   void AddTo(CLI::App& app, bool with_estimator = true);

@@ -247,6 +247,7 @@ FitResult Summarise(const DataSource& source, const AnyRegressionEstimator& esti
   result.samples_estimation = estimation.count;
   result.samples_validation = validation.count;
   result.cleaned = source.cleaned();
+  result.lock_in = estimator.lock_in();
   return result;
 }
 

@@ -65,6 +65,7 @@ struct FitResult {
   int samples_estimation = 0, samples_validation = 0;
   int updates = 0, rejected = 0;      // estimator steps taken / rejected (missing or invalid samples)
   long cleaned = 0;                   // outputs cleaned in later regressors (--clean-regressors on)
+  std::optional<LockInStatus> lock_in;  // the robust estimators' lock-in safeguard at the end of estimation
   FitScores validation;
 };
 

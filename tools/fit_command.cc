@@ -58,6 +58,16 @@ nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, doubl
   j["updates"] = r.updates;
   j["rejected"] = r.rejected;
   j["cleaned"] = r.cleaned;
+  // The robust estimators' lock-in safeguard (null for RLS and with --exact).
+  if (r.lock_in)
+    j["lock_in"] = {{"window", r.lock_in->window},
+                    {"threshold", r.lock_in->threshold},
+                    {"restart", r.lock_in->restart},
+                    {"flagged", r.lock_in->flagged},
+                    {"restarts", r.lock_in->restarts},
+                    {"low_weight_fraction", r.lock_in->low_weight_fraction}};
+  else
+    j["lock_in"] = nullptr;
   j["nu"] = r.nu;
   j["Dy"] = r.Dy;
   j["split"] = split;
@@ -114,6 +124,12 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
   for (int i = 0; i < r.theta.size(); ++i)
     fmt::print("  {:<12} {:>14.6g} {:>12.4g}\n", r.parameter_names[i], r.theta(i), r.theta_std(i));
   fmt::print("\n  noise std {:.4g}\n", r.noise_std);
+  if (r.lock_in) {
+    const LockInStatus& l = *r.lock_in;
+    fmt::print("  lock-in monitor (window {}, weight threshold {}): flagged at {} update{}, {} restart{}; {:.0f} % of "
+               "the last window below the threshold\n", l.window, l.threshold, l.flagged, l.flagged == 1 ? "" : "s",
+               l.restarts, l.restarts == 1 ? "" : "s", 100 * l.low_weight_fraction);
+  }
   // Fit % is undefined (0/0) when the validation output is constant; the JSON has null there.
   auto percent = [](double p) { return std::isfinite(p) ? fmt::format("{:.2f} %", p) : std::string("undefined"); };
   fmt::print("  validation fit: one-step {} (RMS {:.4g})", percent(r.validation.one_step), r.validation.rms_one_step);

@@ -14,38 +14,16 @@
 #include "ident/rls.h"
 #include "ident/safe_student_regression.h"
 #include "ident/student_regression.h"
+#include "tests/kh/lock_in_data.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {
 namespace {
 
-// ARX(2,2) of examples/kh_outlier_study.cc: Θ = (1.5, −0.7, 1.0, 0.5), binary input, σ = 0.1,
-// 10 % innovation outliers of ±5 (or none).
-const Eigen::Vector4d kTheta(1.5, -0.7, 1.0, 0.5);
+const Eigen::Vector4d& kTheta = testing::kLockInTheta;
+using Arx = testing::LockInArx;
 
-struct Arx {
-  std::vector<double> y;
-  std::vector<Eigen::Vector4d> z;
-};
-
-Arx Simulate(unsigned seed, int n, double outlier_rate = 0.1) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> g(0, 0.1);
-  std::uniform_real_distribution<double> uni(0, 1);
-  std::vector<double> y(n, 0), u(n, 0);
-  for (int t = 0; t < n; ++t) {
-    u[t] = uni(rng) < 0.5 ? -1 : 1;
-    const double e = g(rng);
-    const double o = uni(rng) < outlier_rate ? (uni(rng) < 0.5 ? -5.0 : 5.0) : 0.0;
-    y[t] = (t < 2 ? 0.0 : kTheta.dot(Eigen::Vector4d(y[t - 1], y[t - 2], u[t - 1], u[t - 2]))) + e + o;
-  }
-  Arx d;
-  for (int t = 2; t < n; ++t) {
-    d.y.push_back(y[t]);
-    d.z.emplace_back(y[t - 1], y[t - 2], u[t - 1], u[t - 2]);
-  }
-  return d;
-}
+Arx Simulate(unsigned seed, int n, double outlier_rate = 0.1) { return testing::SimulateLockInArx(seed, n, outlier_rate); }
 
 double MedianOf(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -276,6 +254,10 @@ TEST(SafeStudentRegression, RejectsBadOptionsNamingThem) {
   o = {};
   o.lock_in_threshold = -1;
   EXPECT_NE(message(o).find("lock-in threshold = -1"), std::string::npos) << message(o);
+  o = {};
+  o.lock_in_threshold = 2;  // νβ ≤ (k+1)/k = 2 for Cauchy: every sample would count as low
+  EXPECT_NE(message(o).find("lock-in threshold = 2; need 0 < threshold < (k+1)/k = 2"), std::string::npos)
+      << message(o);
   o = {};
   o.startup_window = 1;
   EXPECT_NE(message(o).find("startup_window = 1"), std::string::npos) << message(o);
