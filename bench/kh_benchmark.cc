@@ -2,6 +2,7 @@
 // against the LD-form RLS (ident/rls.h), all dynamic-size, exponential forgetting 0.99, on a
 // pre-generated regression stream with Cauchy noise and ρ ∈ {2, 4, 8, 16, 32} parameters. The closing
 // tables give cauchy / RLS and student / RLS per ρ, measured in this run. Goal (issue 3): cauchy ≤ 1.3× RLS.
+// BM_SafeCauchy: the Cauchy estimator with ident fit's lock-in safeguard (ident/safe_student_regression.h).
 // BM_CauchyWithoutRoot splits the ratio: the Cauchy step with a free weight (β = 1/ν) against RLS, and
 // the full Cauchy step against it (what the root of the weighting cubic adds, docs/kh.md).
 //
@@ -15,6 +16,7 @@
 #include "bench/support/regression_stream.h"
 #include "ident/extended_information.h"
 #include "ident/rls.h"
+#include "ident/safe_student_regression.h"
 #include "ident/step_driver.h"
 #include "ident/student_regression.h"
 
@@ -56,6 +58,19 @@ void BM_Student(benchmark::State& state, double k) {
 }
 void BM_Cauchy(benchmark::State& state) { BM_Student(state, 1.0); }
 
+// What `ident fit --estimator cauchy` runs: the same estimator inside SafeStudentRegression (the start-up
+// prior, then the lock-in monitor's O(1) bookkeeping and the sample ring per update; restarts, if any,
+// included). Explicit prior as above, so the start-up window is off and the comparison is the monitor's cost.
+void BM_SafeCauchy(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const ident::bench::RegressionStream s = MakeStream(n);
+  ident::SafeStudentOptions o;
+  o.base.forgetting.factor = kForgetting;
+  o.base.prior = o.base.DefaultPrior(n);
+  ident::SafeStudentRegression est(n, o);
+  Run(state, est, s);
+}
+
 // Everything a Cauchy update does except the root of the weighting cubic: the same guarded step
 // (StepDriver<>::Run<true>: ξ, ξ_z and the sums the plan reuses, the plan from those sums, the guard,
 // the commit) with β = 1/ν + 0·(ξ + ξ_z) — the weight kept dependent on ξ, ξ_z as the root is, but free.
@@ -82,6 +97,7 @@ void BM_Student3(benchmark::State& state) { BM_Student(state, 3.0); }
 BENCHMARK(BM_LdRls)->RangeMultiplier(2)->Range(2, 32);
 BENCHMARK(BM_Cauchy)->RangeMultiplier(2)->Range(2, 32);
 BENCHMARK(BM_Student3)->RangeMultiplier(2)->Range(2, 32);
+BENCHMARK(BM_SafeCauchy)->RangeMultiplier(2)->Range(2, 32);
 BENCHMARK(BM_CauchyWithoutRoot)->RangeMultiplier(2)->Range(2, 32);
 
 }  // namespace
@@ -91,6 +107,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   ident::bench::RatioReporter reporter({{"BM_Cauchy", "BM_LdRls", "Cauchy (Kárný–Hangos) vs LD-form RLS"},
                                         {"BM_Student3", "BM_LdRls", "Student-t k = 3 vs LD-form RLS"},
+                                        {"BM_SafeCauchy", "BM_Cauchy", "Cauchy with the lock-in safeguard (ident fit's default) vs without"},
                                         {"BM_CauchyWithoutRoot", "BM_LdRls", "Cauchy's step without the root vs LD-form RLS"},
                                         {"BM_Cauchy", "BM_CauchyWithoutRoot", "Cauchy vs its step without the root"}});
   benchmark::RunSpecifiedBenchmarks(&reporter);
