@@ -2,6 +2,9 @@
 // against the closed forms: the Student/Cauchy cubic root and the Gaussian β = 1/ν (ρ = 1 and 2) [issue item 1].
 // At ρ = 2 one evaluation (a 3-D quadrature and a 3-D minimisation) takes about a second, so the maximin β there
 // is checked as the vertex of the numerical objective around the closed-form root instead of by the full search.
+// The ρ = 2 tests are skipped under the sanitizer: there an evaluation (1.4e7 instrumented integrand calls) takes
+// about a minute (the three tests 211 CPU-s, a sixth of the CI budget); the sanitizer suite runs the same
+// functions at ρ = 1 above.
 #include "approx/numerical_step.h"
 
 #include <cmath>
@@ -74,13 +77,12 @@ LogModelFn StudentModel(double k) {
 }
 
 TEST(NumericalStep, RhoTwoLogGammaAndLogIntegralMatchTheClosedForms) {
+  if (testing::kUnderSanitizer) GTEST_SKIP() << "rho = 2 quadrature: Release suite only (see the header)";
   struct Case {
     double k, nu, outlier;
   };
   const Case cases[] = {{1, 6, 0.2}, {1, 7, 6.0}, {3, 6, 1.5}};
-  for (int i = 0; i < 3; ++i) {
-    if (!testing::RunsCase(i, /*sanitizer_stride=*/3)) continue;
-    const Case& c = cases[i];
+  for (const Case& c : cases) {
     const NormalisedStatistics s = RhoTwoStatistics(c.nu);
     Eigen::VectorXd h(3);
     h << 0.5 * 0.8 - 0.3 * 0.4 + c.outlier, 0.8, -0.4;
@@ -96,6 +98,7 @@ TEST(NumericalStep, RhoTwoLogGammaAndLogIntegralMatchTheClosedForms) {
 // The numerical objective log γ + log ∫ at β·e^{−d}, β, β·e^{d}: the closed-form β is its maximum, and the
 // vertex of the parabola through the three values (in log β) lies on it to O(d²).
 TEST(NumericalStep, RhoTwoClosedFormRootIsTheMaximumOfTheNumericalObjective) {
+  if (testing::kUnderSanitizer) GTEST_SKIP() << "rho = 2 quadrature: Release suite only (see the header)";
   const NormalisedStatistics s = RhoTwoStatistics(7);
   Eigen::VectorXd h(3);
   h << 2.5, 0.8, -0.4;  // ê ≈ 2.2: a moderate outlier, β well inside (β0, β_hi)
@@ -113,6 +116,7 @@ TEST(NumericalStep, RhoTwoClosedFormRootIsTheMaximumOfTheNumericalObjective) {
 }
 
 TEST(NumericalStep, RhoTwoGaussianLogIntegralMatchesTheNormalGammaClass) {
+  if (testing::kUnderSanitizer) GTEST_SKIP() << "rho = 2 quadrature: Release suite only (see the header)";
   const NormalisedStatistics s = RhoTwoStatistics(5);
   Eigen::VectorXd h(3);
   h << 0.4, 1.1, 0.3;
