@@ -19,7 +19,7 @@ using Factory = std::function<std::unique_ptr<AnyRegressionEstimator>(const Esti
 
 std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int rho) {
   IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator 'rls'", *s.dof);
-  IDENT_REQUIRE(!s.lock_in_options_set(),
+  IDENT_REQUIRE(!s.lock_in.any(),
                 "the lock-in options apply to the robust estimators (cauchy, student), not to 'rls'");
   RlsOptions options;
   options.forgetting = s.forgetting;
@@ -36,11 +36,11 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, 
   options.base.forgetting = s.forgetting;
   options.base.prior = s.prior;
   options.base.exact = s.exact;
-  IDENT_REQUIRE(!s.exact || !s.lock_in_options_set(),
+  IDENT_REQUIRE(!s.exact || !s.lock_in.any(),
                 "the lock-in options have no effect with exact (the paper's recursion has no lock-in safeguard)");
-  if (s.lock_in_window) options.lock_in_window = *s.lock_in_window;
-  if (s.lock_in_threshold) options.lock_in_threshold = *s.lock_in_threshold;
-  options.restart_on_lock_in = s.lock_in_restart;
+  if (s.lock_in.window) options.lock_in_window = *s.lock_in.window;
+  if (s.lock_in.threshold) options.lock_in_threshold = *s.lock_in.threshold;
+  options.restart_on_lock_in = s.lock_in.restart;
   return std::make_unique<RegressionEstimatorModel<SafeStudentRegression>>(name, rho, options);
 }
 

@@ -24,6 +24,15 @@
 
 namespace ident {
 
+// The lock-in safeguard of the robust estimators (ident/safe_student_regression.h); unset = its defaults
+// (window max(100, 20ρ), threshold 0.3, restart on).
+struct LockInSettings {
+  std::optional<int> window;        // M ≥ 2 (0 = automatic)
+  std::optional<double> threshold;  // 0 < threshold < (k+1)/k
+  bool restart = true;              // false: flag lock-ins only, never restart
+  bool any() const { return window || threshold || !restart; }
+};
+
 // Options common to the command line and the registry; each estimator reads those it knows and
 // rejects ones that make no sense for it, naming the option.
 struct EstimatorSettings {
@@ -33,12 +42,7 @@ struct EstimatorSettings {
   std::optional<double> dof;             // Student-t degrees of freedom k
   int delta = 1;                         // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos)
   bool exact = false;                    // switch off every safeguard beyond the spec's recursion
-  // Lock-in safeguard of the robust estimators (ident/safe_student_regression.h); unset = its defaults
-  // (window max(100, 20ρ), threshold 0.3, restart on). Refused for "rls" and together with `exact`.
-  std::optional<int> lock_in_window;        // M ≥ 2 (0 = automatic)
-  std::optional<double> lock_in_threshold;  // 0 < threshold < (k+1)/k
-  bool lock_in_restart = true;              // false: flag lock-ins only, never restart
-  bool lock_in_options_set() const { return lock_in_window || lock_in_threshold || !lock_in_restart; }
+  LockInSettings lock_in;                // refused (if any() is set) for "rls" and together with `exact`
 };
 
 // Parses "name" or "name:value" / "name:k=value" (e.g. "student:3", "student:k=3") into

@@ -173,11 +173,7 @@ void RunCompare(CompareCommandOptions& o) {
   for (const std::string& name : o.estimators) {
     settings.push_back(o.estimator.Resolve(source->num_parameters(), name));
     // The lock-in options are for the robust estimators of the comparison; RLS has no such safeguard.
-    if (settings.back().name == "rls") {
-      settings.back().lock_in_window.reset();
-      settings.back().lock_in_threshold.reset();
-      settings.back().lock_in_restart = true;
-    }
+    if (settings.back().name == "rls") settings.back().lock_in = {};
   }
 
   CompareOptions options;

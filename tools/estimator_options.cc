@@ -59,9 +59,7 @@ EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::st
   s.forgetting.factor = forgetting;
   s.forgetting.stabilised = stabilised;
   s.exact = exact;
-  s.lock_in_window = lock_in_window;
-  s.lock_in_threshold = lock_in_threshold;
-  s.lock_in_restart = !no_lock_in_restart;
+  s.lock_in = {lock_in_window, lock_in_threshold, !no_lock_in_restart};
   if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
   if (!prior_file.empty()) s.prior = ReadPriorJson(prior_file, num_parameters);
   const std::string error = s.forgetting.Validate();

@@ -22,6 +22,14 @@ double Residual(const Eigen::VectorXd& h, const Eigen::VectorXd& theta) {
   return h(0) - theta.dot(h.tail(h.size() - 1));
 }
 
+// log m(h|Θ, ω) of Student-t noise with k degrees of freedom (k = 1: Cauchy) [spec §1].
+LogModelFn StudentModel(double k) {
+  return [kappa = (k + 1) / 2](const Eigen::VectorXd& h, const Eigen::VectorXd& th, double w) {
+    const double e = Residual(h, th);
+    return 0.5 * std::log(w) - kappa * std::log1p(w * e * e);
+  };
+}
+
 TEST(NumericalStep, AgreesWithTheCubicRootForCauchyAndStudent) {
   struct Case {
     double k, nu, outlier;
@@ -32,11 +40,7 @@ TEST(NumericalStep, AgreesWithTheCubicRootForCauchyAndStudent) {
     const NormalisedStatistics s{c.nu, V};
     Eigen::VectorXd h(2);
     h << 0.6 * 0.8 + c.outlier, 0.8;
-    const double kappa = (c.k + 1) / 2;
-    auto log_m = [&](const Eigen::VectorXd& hh, const Eigen::VectorXd& th, double w) {
-      const double e = Residual(hh, th);
-      return 0.5 * std::log(w) - kappa * std::log1p(w * e * e);
-    };
+    const LogModelFn log_m = StudentModel(c.k);
     const OneSidedStepResult num = NumericalStep(s, h, log_m, StudentShape{c.k}, 1);
     const OneSidedStepResult closed = StudentClass{c.k, 1}.Step(s, h);
     EXPECT_NEAR(num.beta / closed.beta, 1, 2e-7)  /* seen: up to 9.2e-8 */ << "k=" << c.k << " nu=" << c.nu << " outlier=" << c.outlier;
@@ -68,12 +72,6 @@ NormalisedStatistics RhoTwoStatistics(double nu) {
   Eigen::MatrixXd V(3, 3);
   V << 1.0, 0.3, -0.2, 0.3, 0.5, 0.1, -0.2, 0.1, 0.8;
   return {nu, V};
-}
-LogModelFn StudentModel(double k) {
-  return [kappa = (k + 1) / 2](const Eigen::VectorXd& h, const Eigen::VectorXd& th, double w) {
-    const double e = Residual(h, th);
-    return 0.5 * std::log(w) - kappa * std::log1p(w * e * e);
-  };
 }
 
 TEST(NumericalStep, RhoTwoLogGammaAndLogIntegralMatchTheClosedForms) {
