@@ -29,8 +29,9 @@
 //            (starts × screening_iterations + polished × iterations) steps; n = 500, ρ = 4 with the
 //            default options: about 5 ms on a 2-core x86-64 (tests/batch/batch_regression_test.cc, "Runtime").
 //
-// BatchRegressionEstimator wraps either behind the RegressionEstimator concept (ident/regression_estimator.h):
-// Update() stores the sample, the read-outs solve the whole batch lazily (cached until the next sample).
+// BatchRegressionEstimator wraps either behind the RegressionEstimator concept
+// (ident/regression_estimator.h): Update() stores the sample, the read-outs solve the whole batch lazily
+// (cached until the next sample).
 //
 // Example:
 //   Eigen::MatrixXd Z(n, 2);   // [1, x_i]

@@ -223,13 +223,26 @@ TEST(CauchyMlRegression, LeastSquaresStartAloneEndsAtTheLocalOptimumOfStarsCyg) 
 
 // Gradient of the NLL in (Θ, log γ), computed here on Z directly: each component relative to the sum of the
 // magnitudes of its terms.
+// The default fit with its residuals r_i, γ² and the scores ψ(r_i) = 2r_i/(γ² + r_i²), computed here on Z.
+struct CauchyOptimum {
+  BatchRegressionResult m;
+  Eigen::ArrayXd r, psi;
+  double g2 = 0;
+};
+
+CauchyOptimum SolveCauchy(const Record& d) {
+  CauchyOptimum o;
+  o.m = CauchyMlRegression(d.Z, d.y);
+  o.r = (d.y - d.Z * o.m.theta).array();
+  o.g2 = o.m.scale * o.m.scale;
+  o.psi = 2 * o.r / (o.g2 + o.r.square());
+  return o;
+}
+
 TEST(CauchyMlRegression, GradientVanishesAtTheOptimum) {
   for (const CauchyCase& c : CauchyCases()) {
     const Record d = c.load();
-    const BatchRegressionResult m = CauchyMlRegression(d.Z, d.y);
-    const Eigen::ArrayXd r = (d.y - d.Z * m.theta).array();
-    const double g2 = m.scale * m.scale;
-    const Eigen::ArrayXd psi = 2 * r / (g2 + r.square());
+    const auto [m, r, psi, g2] = SolveCauchy(d);
     const Eigen::VectorXd g_theta = -(d.Z.transpose() * psi.matrix());
     const Eigen::VectorXd size_theta = d.Z.cwiseAbs().transpose() * psi.abs().matrix();
     const double g_log_gamma = (2 * g2 / (g2 + r.square())).sum() - static_cast<double>(r.size());
@@ -285,10 +298,7 @@ TEST(CauchyMlRegression, NoneOfTwoThousandRandomStartsBeatsIt) {
 TEST(CauchyMlRegression, CovarianceIsTheSandwich) {
   for (const CauchyCase& c : CauchyCases()) {
     const Record d = c.load();
-    const BatchRegressionResult m = CauchyMlRegression(d.Z, d.y);
-    const Eigen::ArrayXd r = (d.y - d.Z * m.theta).array();
-    const double g2 = m.scale * m.scale;
-    const Eigen::ArrayXd psi = 2 * r / (g2 + r.square());
+    const auto [m, r, psi, g2] = SolveCauchy(d);
     const Eigen::ArrayXd dpsi = 2 * (g2 - r.square()) / (g2 + r.square()).square();
     const Eigen::MatrixXd A = d.Z.transpose() * (d.Z.array().colwise() * dpsi).matrix();
     const Eigen::MatrixXd B = d.Z.transpose() * (d.Z.array().colwise() * psi.square()).matrix();
@@ -315,7 +325,9 @@ TEST(BatchRegression, IsScaleAndRegressionEquivariant) {
   const Record d = Stackloss();
   const Eigen::VectorXd b = Vec({3, -0.5, 0.25, 0.1});
   for (bool huber : {true, false}) {
-    const auto fit = [&](const Eigen::VectorXd& y) { return huber ? HuberRegression(d.Z, y) : CauchyMlRegression(d.Z, y); };
+    const auto fit = [&](const Eigen::VectorXd& y) {
+      return huber ? HuberRegression(d.Z, y) : CauchyMlRegression(d.Z, y);
+    };
     const BatchRegressionResult base = fit(d.y), scaled = fit(-2.5 * d.y), shifted = fit(d.y + d.Z * b);
     EXPECT_LE(MaxRelativeDifference(scaled.theta, -2.5 * base.theta), 1e-8) << huber;
     EXPECT_NEAR(scaled.scale, 2.5 * base.scale, 1e-8 * base.scale) << huber;
