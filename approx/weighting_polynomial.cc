@@ -118,6 +118,7 @@ void SolveOnPieces(const WeightingProblem& p, const std::array<double, 4>& mu, W
   // Several local maxima: keep the one with the largest log H0 (only then is log H0 evaluated).
   s.num_maxima = nc;
   s.beta = candidates[0];
+  s.smallest_maximum = *std::min_element(candidates.begin(), candidates.begin() + nc);
   if (nc > 1) {
     double best_value = LogH0(p, s.beta);
     for (int i = 1; i < nc; ++i) {
@@ -138,7 +139,7 @@ WeightSolution Bracket(const WeightingProblem& p) {
 // h = 0 (ξ = ξ_z = 1): P(β_hi) = 0 analytically and β = β_hi exactly [spec §4].
 bool IsZeroData(const WeightingProblem& p) { return p.xi == 1 && p.xi_z == 1; }
 WeightSolution ZeroDataSolution(WeightSolution s) {
-  s.beta = s.beta_hi;
+  s.beta = s.smallest_maximum = s.beta_hi;
   s.num_maxima = 1;
   return s;
 }
@@ -183,7 +184,7 @@ WeightSolution SolveWeight(const WeightingProblem& p) {
   const double dpa = (A * a + B) * a + C, dpb = (A * b + B) * b + C;
   const bool interior_max = B + 2 * A * a > 0 && B + 2 * A * b < 0 && B * B - 4 * A * C > 0;
   if (dpa <= 0 && dpb <= 0 && !interior_max && EvalP(mu, a) > 0 && EvalP(mu, b) < 0) {
-    s.beta = HouseholderRoot(mu, a, b, guess, s.iterations);
+    s.beta = s.smallest_maximum = HouseholderRoot(mu, a, b, guess, s.iterations);
     s.num_maxima = 1;
     return s;
   }

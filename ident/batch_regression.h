@@ -160,6 +160,7 @@ class BatchRegressionEstimator {
   // Forgets every sample.
   void Reset();
   const BatchRegressionOptions& options() const { return options_; }
+  std::string kind() const { return "batch"; }
 
  private:
   const BatchRegressionResult& Solved() const;

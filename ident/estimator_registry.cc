@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "ident/batch_regression.h"
 #include "ident/common/error.h"
 #include "ident/rls.h"
 #include "ident/safe_student_regression.h"
@@ -56,11 +57,30 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudentT(const EstimatorSettings& s,
   return MakeStudent(s, rho, fmt::format("student:{}", *s.dof), *s.dof);
 }
 
+// The batch robust references (ident/batch_regression.h): they solve on all samples, with no prior,
+// forgetting or safeguard to set.
+std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, int rho, const std::string& name,
+                                                  BatchMethod method) {
+  IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator '{}'", *s.dof, name);
+  IDENT_REQUIRE(s.forgetting.factor == 1 && !s.forgetting.stabilised,
+                "forgetting does not apply to the batch estimator '{}' (it weighs every sample of the record)", name);
+  IDENT_REQUIRE(!s.prior, "a prior does not apply to the batch estimator '{}'", name);
+  IDENT_REQUIRE(!s.exact, "exact does not apply to the batch estimator '{}'", name);
+  IDENT_REQUIRE(!s.lock_in.any(), "the lock-in options apply to the robust recursive estimators (cauchy, student), "
+                "not to '{}'", name);
+  BatchRegressionOptions options;
+  options.method = method;
+  return std::make_unique<RegressionEstimatorModel<BatchRegressionEstimator>>(name, rho, options);
+}
+
 const std::vector<std::pair<std::string, Factory>>& Registry() {
   static const std::vector<std::pair<std::string, Factory>> registry = {
       {"rls", MakeRls},
       {"cauchy", MakeCauchy},
       {"student", MakeStudentT},
+      {"huber", [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); }},
+      {"cauchy-ml",
+       [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); }},
   };
   return registry;
 }

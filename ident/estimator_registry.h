@@ -4,6 +4,8 @@
 //   "cauchy"                  SafeStudentRegression with k = 1 (Kárný–Hangos; rejects dof ≠ 1)
 //   "student" (needs dof)     SafeStudentRegression with k = dof ("student:3" or dof = 3)
 //                             (exact = true: the plain StudentRegression recursion, no safeguards)
+//   "huber"                   batch Huber M-estimation (IRLS, MAD scale; ident/batch_regression.h)
+//   "cauchy-ml"               batch Cauchy maximum likelihood in Θ and scale, global optimum from many starts
 //   (further names are registered in estimator_registry.cc as estimators are added)
 //
 // Example:

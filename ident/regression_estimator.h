@@ -24,6 +24,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -44,6 +45,17 @@ concept RegressionEstimator = requires(E& e, const E& ce, double y, const Eigen:
   { e.Reset() };
 };
 
+// One restart of a robust estimator's lock-in safeguard (ident/safe_student_regression.h).
+struct RestartEvent {
+  long update = 0;                  // the update (1-based) at which the monitor flagged the lock-in
+  long replayed = 0;                // samples the restarted estimator was run on (all kept samples)
+  long dropped = 0;                 // samples seen but no longer kept (history limit), not replayed
+  double low_weight_before = 0;     // share of the monitor window with νβ < threshold, at the flag
+  double low_weight_after = 0;      // the same over the last window of the replay
+  bool resolved = true;             // false: still more than half low after the replay (heavy tails, not
+                                    // a lock-in); the next restart then waits twice as long
+};
+
 // The state of a robust estimator's lock-in safeguard (ident/lock_in_monitor.h, docs/kh.md "Lock-in"):
 // the monitor flags a lock-in when more than half of the last `window` updated samples had a normalised
 // weight νβ below `threshold`; with `restart` the estimator then restarts from the recent samples.
@@ -55,6 +67,7 @@ struct LockInStatus {
                                    // update of a lasting lock-in; with restart: each one restarts)
   int restarts = 0;                // restarts made because of it
   double low_weight_fraction = 0;  // share of the current window with νβ < threshold
+  std::vector<RestartEvent> events;  // one per restart, in order
 };
 
 // Type-erased regression estimator for selection at run time.
@@ -74,6 +87,15 @@ class AnyRegressionEstimator {
   virtual void Reset() = 0;
   // The lock-in safeguard's state; nullopt for estimators without one (RLS, --exact).
   virtual std::optional<LockInStatus> lock_in() const { return std::nullopt; }
+  // True if the estimator weighs samples by their fit (its steps' weights can flag outliers), false if
+  // every sample counts alike (least squares) or it reports no per-sample weights (batch).
+  virtual bool judges_outliers() const { return false; }
+  // "recursive" (one O(ρ²) update per sample) or "batch" (solves on all samples at read-out).
+  virtual std::string kind() const { return "recursive"; }
+  // Prepares another pass over the same samples, which the caller then feeds again from the first:
+  // the estimator restarts from a prior centred at its current estimate. False (state unchanged) where a
+  // further pass cannot change the result (RLS and the batch estimators reach their optimum in one pass).
+  virtual bool BeginPass() { return false; }
 };
 
 // Adapter: wraps a concrete estimator E.
@@ -98,6 +120,19 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
       return e_.lock_in();
     else
       return std::nullopt;
+  }
+  bool judges_outliers() const override { return requires { e_.lock_in(); }; }
+  std::string kind() const override {
+    if constexpr (requires { e_.kind(); })
+      return e_.kind();
+    else
+      return "recursive";
+  }
+  bool BeginPass() override {
+    if constexpr (requires { e_.BeginPass(); })
+      return e_.BeginPass();
+    else
+      return false;
   }
   E& get() { return e_; }
   const E& get() const { return e_; }

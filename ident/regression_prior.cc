@@ -46,24 +46,32 @@ RegressionPrior RegressionPrior::FromGuess(const Eigen::VectorXd& theta0, const 
 }
 
 RegressionPrior RegressionPrior::FromWindow(const Eigen::Ref<const Eigen::MatrixXd>& window, double nu0, int delta,
-                                            double noise_scale) {
+                                            double noise_scale, const Eigen::VectorXd& theta0) {
   const int rho = static_cast<int>(window.cols()) - 1;
   IDENT_REQUIRE(rho >= 1, "prior window has {} columns; need (y, z1..z_rho), rho >= 1", window.cols());
   IDENT_REQUIRE(window.rows() >= 2, "prior window has {} rows; need at least 2 samples", window.rows());
   IDENT_REQUIRE(window.allFinite(), "prior window has a non-finite entry");
   IDENT_REQUIRE(nu0 > rho + delta, "nu0 = {}; need nu0 > rho + delta = {}", nu0, rho + delta);
   IDENT_REQUIRE(std::isfinite(noise_scale) && noise_scale >= 0, "noise_scale = {}; need >= 0 (0: s_y)", noise_scale);
+  IDENT_REQUIRE(theta0.size() == 0 || (theta0.size() == rho && theta0.allFinite()),
+                "prior centre has {} entries; need {} finite values", theta0.size(), rho);
   const double sy = RobustScale(window.col(0));
   const double sigma0 = noise_scale > 0 ? noise_scale : sy;
+  const auto Z = window.rightCols(rho);
+  Eigen::MatrixXd M = Z.transpose() * Z / static_cast<double>(window.rows());
+  for (int i = 0; i < rho; ++i)
+    if (!(M(i, i) > 0)) M(i, i) = 1;
+  M.diagonal() *= 1 + 1e-9;
+  // V_z(0) = σ0² P0⁻¹/(ν0−δ−ρ), P0 = (10·s_y)²·M⁻¹ [spec §8]; then V_zy(0) = V_z(0)Θ0, V_y(0) = σ0² + Θ0'V_z(0)Θ0.
+  const Eigen::MatrixXd Vz = sigma0 * sigma0 / (100 * sy * sy * (nu0 - delta - rho)) * M;
+  const Eigen::VectorXd t0 = theta0.size() ? theta0 : Eigen::VectorXd::Zero(rho);
   RegressionPrior prior;
   prior.nu0 = nu0;
-  prior.V0 = Eigen::MatrixXd::Zero(rho + 1, rho + 1);
-  prior.V0(0, 0) = sigma0 * sigma0;  // Θ0 = 0: V_y(0) = σ0² [spec §8]
-  for (int i = 1; i <= rho; ++i) {
-    const double sz = RobustScale(window.col(i));
-    // V_z(0) = σ0² P0⁻¹/(ν0−δ−ρ) with P0_ii = (10·s_y/s_{z_i})² [spec §8]
-    prior.V0(i, i) = sigma0 * sigma0 * sz * sz / (100 * sy * sy * (nu0 - delta - rho));
-  }
+  prior.V0.resize(rho + 1, rho + 1);
+  prior.V0.bottomRightCorner(rho, rho) = Vz;
+  prior.V0.bottomLeftCorner(rho, 1) = Vz * t0;
+  prior.V0.topRightCorner(1, rho) = prior.V0.bottomLeftCorner(rho, 1).transpose();
+  prior.V0(0, 0) = sigma0 * sigma0 + t0.dot(Vz * t0);
   prior.Validate();
   return prior;
 }

@@ -26,12 +26,15 @@ struct RegressionPrior {
   static RegressionPrior FromGuess(const Eigen::VectorXd& theta0, const Eigen::MatrixXd& P0, double sigma0,
                                    double nu0, int delta);
 
-  // The robust data-driven prior from a window of samples (row t = (y(t), z(t)')), spec §8 recipe with
-  //   Θ0 = 0,  σ0 = noise_scale (0: s_y),  P0 = diag((10·s_y/s_{z_i})²),  i.e.
-  //   V_y(0) = D_y(0) = σ0²,  V_z(0) = diag(s_{z_i}²)·σ0²/(100·s_y²·(ν0−δ−ρ)),
-  // where s = RobustScale() of the column. Scaling y or a regressor scales the prior along (spec §10.8).
+  // The data-driven prior from a window of samples (row t = (y(t), z(t)')), spec §8 recipe with
+  //   Θ0 = theta0 (empty: 0),  σ0 = noise_scale (0: s_y),  P0 = (10·s_y)²·M⁻¹,  M = Z'Z/n,
+  // i.e. V_z(0) = σ0²·M/(100·s_y²·(ν0−δ−ρ)): the prior spread of Θ'z for a typical regressor is ten times
+  // the output's robust scale s_y = RobustScale(y). M, the regressors' second moments about 0, makes the
+  // prior equivariant: under y → c·y + b'z, z → T·z (T regular, e.g. an intercept with an uncentred
+  // regressor) and Θ0 → T⁻ᵀ(c·Θ0 + b), V(0) transforms as spec §10.8 asks. A regressor that is zero
+  // throughout the window gets M_ii = 1; a singular M is regularised by 1e−9·diag(M).
   static RegressionPrior FromWindow(const Eigen::Ref<const Eigen::MatrixXd>& window, double nu0, int delta,
-                                    double noise_scale = 0);
+                                    double noise_scale = 0, const Eigen::VectorXd& theta0 = {});
 
   // Flat prior for least squares: information ν0·V0 = 1e-12·I (negligible against any real
   // record's Z'Z, so RLS reproduces batch least squares).

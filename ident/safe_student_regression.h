@@ -1,32 +1,43 @@
-// SafeStudentRegression: the Kárný–Hangos Student-t/Cauchy estimator (ident/student_regression.h)
-// with the start-up and lock-in safeguards that `ident` uses by default (issue 3 item 6, docs/kh.md).
+// SafeStudentRegression: the Kárný–Hangos Student-t/Cauchy estimator (ident/student_regression.h) with the
+// safeguards that make it robust on data nobody tuned it for. It is what `ident fit --estimator cauchy`
+// and the registry's "cauchy"/"student" run, and what an embedding should use (docs/kh.md).
 //
-//   1. Robust data-driven start-up prior (spec §8). The first W = max(20, 4ρ) samples are processed
-//      with the provisional prior ν(0) = ρ+k+δ, V(0) = diag(1, 1e−3·I) and kept. Then the estimator
-//      restarts from RegressionPrior::FromWindow (Θ0 = 0, σ0 = s_y, P0 = diag((10 s_y/s_{z_i})²)) and
-//      replays the window; with `refine_scale` it then takes σ0² = G^{(k+1)/k}·s_e², where s_e is the
-//      robust scale (1.4826·MAD) of the window residuals y − Θ̂'z of that fit, restarts once more and
-//      replays again (G = scale_growth, see docs/kh.md for the reason of the dof-dependent factor).
-//   2. Lock-in monitor and recovery. After start-up, a LockInMonitor watches νβ(t) over the last
-//      M = max(100, 20ρ) samples. When more than half of them have νβ < 0.3, the estimator restarts as
-//      in 1 from the last max(W, M) samples. Each restart is the exact one-sided recursion (spec §3–§6)
-//      from a proper prior over the replayed samples, so the result is a valid one-sided bound of the
-//      posterior given those samples (older data are dropped, as with a restarted window).
+//   1. Robust start. The first W = max(20, 4ρ) samples run on the provisional prior ν(0) = ρ+k+δ,
+//      V(0) = diag(1, 1e−3·I). Then a high-breakdown batch fit of the window (Cauchy maximum likelihood
+//      from elemental-subset starts, ident/batch_regression.h, leaving out rows with a regressor beyond
+//      five robust scales) gives Θ_r, and the estimator restarts from the class member of W pseudo-samples
+//      centred there (D_y(0) = G^{(k+1)/k}·s_e², s_e the residuals' robust scale) and replays the window.
+//      Outliers in y and in the regressors, up to the fit's breakdown point, do not move the start. While
+//      the regressors are not identifiable (a record that starts in steady state), the start waits and
+//      is tried again every W samples on the last (up to) 5W.
+//   2. Leverage guard (StudentRegressionOptions::leverage_guard): when a sample is both unlike every
+//      regressor seen and grossly mispredicted, it is read as an outlier, not as new information.
+//   3. Lock-in monitor and recovery. A LockInMonitor watches νβ(t) over the last M = max(100, 20ρ)
+//      samples; when more than half are below the threshold the estimator restarts as in 1 from the last
+//      max(W, M) samples and then replays every sample seen, so the estimate rests on all the data
+//      (ν at the end is the number of updates plus ν(0)). A restart that leaves the last window still
+//      mostly low-weighted was not a lock-in (the noise is heavier-tailed than the model); the next
+//      restart then waits twice as long. Each restart is recorded (restart_events()).
 //   With `base.exact` none of this happens: the spec's recursion with the fixed prior (the --exact option).
-//   An explicit `base.prior` switches off 1 (the prior is used as given); 2 stays on.
+//   An explicit `base.prior` switches off 1 (the prior is used as given); 2 and 3 stay on.
 //
-// Update() is O(ρ²) and allocation-free except at the (rare) restarts, which rebuild the estimator and
-// replay at most max(W, M) samples (O(Mρ²)).
+// The covariance() is the sandwich covariance of ident/student_regression.h (calibrated whatever the
+// noise law); posterior_covariance() the one-sided posterior's own.
+//
+// Memory and cost: every updated sample is kept (ρ+1 doubles; `history_limit` caps it, then a restart
+// replays the most recent ones and says so). Update() is O(ρ²); it allocates only when the history grows
+// (geometrically; `history_reserve` pre-sizes it) and at restarts, which replay the history (O(nρ²)).
 //
 // Example:
 //   ident::SafeStudentOptions o;            // Cauchy, δ = 1, safeguards on
 //   o.base.dof = 3;                         // Student-t with k = 3
 //   ident::SafeStudentRegression est(/*num_parameters=*/4, o);
 //   for (...) est.Update(y, z);
-//   est.parameters(); est.restarts(); est.monitor().low_fraction();
+//   est.parameters(); est.covariance(); est.restarts(); est.restart_events();
 #pragma once
 
 #include <optional>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -40,13 +51,15 @@ namespace ident {
 struct SafeStudentOptions {
   StudentRegressionOptions base;  // dof, delta, forgetting, explicit prior, exact
   int startup_window = 0;         // W; 0 = max(20, 4ρ)
-  bool refine_scale = true;       // σ0 = scale_factor·s_e from the residuals of the window fit (else s_y)
+  bool refine_scale = true;       // σ0 from the residuals of the robust window fit (else s_y)
   // G > 1: D_y(0) = G^{(k+1)/k}·s_e², above the noise scale² (the safe side of spec §8's hazard) by the
   // amount that the recursion's D_y(t) ∝ ν^{−(k+1)/k} decay removes while ν grows G-fold.
   double scale_growth = 4;
   bool restart_on_lock_in = true;
   int lock_in_window = 0;          // M; 0 = max(100, 20ρ)
   double lock_in_threshold = 0.3;  // νβ below this counts as a low weight
+  long history_limit = 0;          // samples kept for replay; 0 = all
+  long history_reserve = 0;        // samples the history is sized for at construction
 };
 
 class SafeStudentRegression {
@@ -62,26 +75,24 @@ class SafeStudentRegression {
     if (options_.base.exact || !report.updated()) return report;
     Store(y, z);
     if (in_startup()) {
-      if (count_ == startup_window_) Restart(startup_window_);
+      // Every W samples until the regressors of the last (up to 5W) samples are identifiable.
+      if (updates_ % startup_window_ == 0) Restart(std::min<long>(stored_, 5L * startup_window_), /*lock_in=*/false);
     } else if (monitor_.Add(report.nu * report.weight)) {
       ++lock_ins_;
-      if (options_.restart_on_lock_in) Restart(capacity());
+      if (options_.restart_on_lock_in && updates_ >= next_restart_) Restart(RecentWindow(), /*lock_in=*/true);
     }
     return report;
   }
 
   // True while the start-up window is being collected.
   bool in_startup() const { return startup_window_ > 0 && !started_; }
-  // Number of times the monitor flagged a lock-in / restarts made because of it.
+  // Updates at which the monitor flagged a lock-in / restarts made because of it.
   int lock_ins() const { return lock_ins_; }
-  int restarts() const { return options_.restart_on_lock_in ? lock_ins_ : 0; }
+  int restarts() const { return static_cast<int>(events_.size()); }
+  const std::vector<RestartEvent>& restart_events() const { return events_; }
   const LockInMonitor& monitor() const { return monitor_; }
   // The same for the common interface (ident/regression_estimator.h); nullopt with `base.exact` (no monitor).
-  std::optional<LockInStatus> lock_in() const {
-    if (options_.base.exact) return std::nullopt;
-    return LockInStatus{monitor_.window(), monitor_.threshold(), options_.restart_on_lock_in,
-                        lock_ins_,         restarts(),           monitor_.low_fraction()};
-  }
+  std::optional<LockInStatus> lock_in() const;
 
   int num_parameters() const { return est_->num_parameters(); }
   const ParamVector& parameters() const { return est_->parameters(); }
@@ -89,7 +100,10 @@ class SafeStudentRegression {
   double Predict(const Eigen::MatrixBase<Derived>& z) const {
     return est_->Predict(z);
   }
+  // The sampling covariance of Θ̂ (StudentRegression::covariance, a sandwich) and the one-sided
+  // posterior's own.
   Eigen::MatrixXd covariance() const { return est_->covariance(); }
+  Eigen::MatrixXd posterior_covariance() const { return est_->posterior_covariance(); }
   double nu() const { return est_->nu(); }
   double Dy() const { return est_->Dy(); }
   double noise_std() const { return est_->noise_std(); }
@@ -98,33 +112,51 @@ class SafeStudentRegression {
   const RegressionPrior& prior() const { return est_->prior(); }
   const StudentRegression& estimator() const { return *est_; }
   const SafeStudentOptions& options() const { return options_; }
-  // Back to the current prior (the data-driven one once start-up is done); clears the monitor.
-  void Reset() {
-    est_->Reset();
-    monitor_.Clear();
-  }
+  // Number of samples kept for replay.
+  long history_size() const { return stored_; }
+
+  // Another pass over the same samples (AnyRegressionEstimator::BeginPass): the recursion restarts from
+  // the current posterior's shape with the weight of ν(0) = ρ+k+δ pseudo-samples — V(0) = V(t), so
+  // Θ0 = Θ̂ and D_y(0) = D_y — and the history and monitor are cleared; the caller then feeds the samples
+  // again, each weighed against an estimate near the end result. False (state unchanged) with `base.exact`
+  // or before any update.
+  bool BeginPass();
+
+  // Back to the state of a freshly built estimator with the same options: the provisional prior (the
+  // explicit one if given), an empty history and a clear monitor.
+  void Reset();
 
  private:
-  int capacity() const { return static_cast<int>(buffer_.rows()); }
   template <class Derived>
   void Store(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
-    buffer_(next_, 0) = y;
-    buffer_.row(next_).tail(num_parameters()) = z.transpose();
-    next_ = next_ + 1 == capacity() ? 0 : next_ + 1;
-    if (count_ < capacity()) ++count_;
+    ++updates_;
+    if (options_.history_limit > 0 && stored_ == options_.history_limit) {  // a ring of the last samples
+      history_.col(ring_start_) << y, z;
+      ring_start_ = (ring_start_ + 1) % stored_;
+      return;
+    }
+    if (stored_ == history_.cols()) Grow();
+    history_.col(stored_++) << y, z;
   }
-  // Rebuilds the estimator from the robust prior of the last min(n, count_) samples and replays them.
-  void Restart(int n) noexcept;
-  void Replay(int n) noexcept;
+  void Grow() noexcept;
+  long RecentWindow() const;
+  // Column i (0 = oldest) of the kept samples.
+  Eigen::Index Column(long i) const { return (ring_start_ + i) % stored_; }
+  // Rebuilds the estimator from the robust fit of the last `recent` samples and replays every kept sample
+  // (the start-up, or a lock-in restart, which is recorded).
+  void Restart(long recent, bool lock_in) noexcept;
+  // Replays every kept sample into est_ (the last M weights refill the monitor).
+  void Replay() noexcept;
 
   SafeStudentOptions options_;
   std::optional<StudentRegression> est_;
   int startup_window_ = 0;  // 0 = no start-up (explicit prior or exact)
   bool started_ = false;
   LockInMonitor monitor_;
-  Eigen::MatrixXd buffer_;  // ring of the last max(W, M) samples: y, z'
-  Eigen::MatrixXd ordered_;  // the same in time order (restart scratch)
-  int next_ = 0, count_ = 0, lock_ins_ = 0;
+  Eigen::MatrixXd history_;  // (ρ+1) x capacity: y, z of every updated sample (column = sample)
+  long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
+  int lock_ins_ = 0;
+  std::vector<RestartEvent> events_;
 };
 
 }  // namespace ident

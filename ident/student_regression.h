@@ -70,6 +70,13 @@ struct StudentRegressionOptions {
   std::optional<RegressionPrior> prior;
   // Only the spec's recursion: no data-driven start-up (the command line's --exact).
   bool exact = false;
+  // Leverage guard: when H0 has two local maxima — a regressor unlike any seen so far together with a
+  // gross prediction error, "new information or outlier?" [spec §5] — take the outlier reading (the
+  // smaller β) instead of the larger H0. The maximin choice gives such a sample the weight of new
+  // information, an influence that grows without bound with the size of the regressor (a gross output
+  // outlier entering later ARX regressors); the guard bounds it, as GM-estimators bound leverage.
+  // A regressor that is new and fitted by the model has one maximum and is learnt as usual.
+  bool leverage_guard = false;
   // Data-driven start-up (used when `prior` is unset and not `exact`): the first W samples are run
   // with DefaultPrior() and kept; after sample W the estimator restarts from the prior
   //   ν(0) = ρ+k+δ,  Θ0 = 0,  σ0 = s_y,  V_y(0) = s_y²,  V_z(0) = diag(s_{z_i}²)/(100·(ν0−δ−ρ)),
@@ -106,6 +113,33 @@ struct StudentStepDetails {
   double beta0 = std::numeric_limits<double>::quiet_NaN();
   double beta_hi = std::numeric_limits<double>::quiet_NaN();
   int num_maxima = 0;
+};
+
+// The scalar sandwich of M-estimation for the Student-t score (Huber 1981, §7.6). With u = ê²/D_y and the
+// EM weight w = (k+1)/(k+u) [spec §7a]: ψ = w·ê, ψ' = (k+1)(k−u)/(k+u)². The one-sided recursion's V_z
+// tends to E[w zz']/E[w] (the stationary point of V ← V + β(hh' − V) [spec §3]), so for noise independent
+// of z the sandwich A⁻¹BA⁻¹ (A = Σψ'zz', B = Σψ²zz') is
+//   Cov(Θ̂) ≈ c·(νV_z)⁻¹,   c = n/(n−ρ)·mean(ψ²)/mean(ψ')².
+// Under t_k noise of scale σ, c → σ²(k+3)/(k+1) (the inverse Fisher information; the posterior's
+// D_y V_z⁻¹/(ν−δ−ρ) is smaller by that factor); under other noise c is what it is. The means run over the
+// steps' own prediction errors ê (each against the estimate of its time), which also carries the extra
+// variance of weighing every sample once, against that estimate. u = ξ_z − ξ of the step [spec §3].
+// Sums are discounted by the step's λ. O(1) per update, no allocation.
+struct SandwichFactor {
+  double psi2 = 0, dpsi = 0, n = 0;
+
+  void Add(double k, double u, double e, double lambda) noexcept {
+    if (!(std::isfinite(u) && std::isfinite(e) && u >= 0)) return;
+    const double w = (k + 1) / (k + u);
+    psi2 = lambda * psi2 + w * w * e * e;
+    dpsi = lambda * dpsi + (k + 1) * (k - u) / ((k + u) * (k + u));
+    n = lambda * n + 1;
+  }
+  // NaN until more than ρ+1 updates, or while mean(ψ') ≤ 0.
+  double Factor(int rho) const noexcept {
+    if (!(n > rho + 1 && dpsi > 0)) return std::numeric_limits<double>::quiet_NaN();
+    return n / (n - rho) * (psi2 / n) / ((dpsi / n) * (dpsi / n));
+  }
 };
 
 template <int Rho = Eigen::Dynamic>
@@ -174,6 +208,7 @@ class BasicStudentRegression {
       window_count_ = 0;
     }
     stats_.Reset(prior_.nu0, prior_factor_);
+    sandwich_ = {};
     last_beta_ = std::numeric_limits<double>::quiet_NaN();
     details_ = {};
   }
@@ -205,7 +240,10 @@ class BasicStudentRegression {
                                 options_.exact ? 0.0 : kWindupFloor};
     const DrivenStep s = driver_.Run(stats_, settings, prior_.nu0, prior_factor_, y, z,  // [spec §7b, §6]
                                      [this](double nu, const Innovation& in) { return Weight(nu, in); });
-    if (s.report.updated()) last_beta_ = s.report.weight;
+    if (s.report.updated()) {
+      last_beta_ = s.report.weight;
+      sandwich_.Add(options_.dof, details_.xi_z - details_.xi, s.report.prediction_error, s.lambda);
+    }
     return s.report;
   }
 
@@ -217,7 +255,8 @@ class BasicStudentRegression {
     if (!(nu == weight_constants_.nu)) weight_constants_.Set(problem);  // ν(t) settles under forgetting
     const approx::WeightSolution w = approx::SolveWeightInline(problem, weight_constants_);  // = SolveWeight
     details_ = {in.xi, in.xi_z, w.beta0, w.beta_hi, w.num_maxima};
-    return w.ok ? w.beta : std::numeric_limits<double>::quiet_NaN();
+    if (!w.ok) return std::numeric_limits<double>::quiet_NaN();
+    return options_.leverage_guard && w.num_maxima > 1 ? w.smallest_maximum : w.beta;
   }
 
   // s = 1.4826·MAD of column c of the window (RMS if 0, else 1).
@@ -254,6 +293,7 @@ class BasicStudentRegression {
     prior_.V0.diagonal() = v0;
     prior_factor_.SetDiagonal(v0);
     stats_.Reset(nu0, prior_factor_);
+    sandwich_ = {};
     for (int t = 0; t < window_size_; ++t) Step(window_(t, 0), window_.row(t).tail(rho).transpose());
   }
 
@@ -271,18 +311,33 @@ class BasicStudentRegression {
   const StudentStepDetails& last_step() const { return details_; }
   // The noise scale σ (D_y → σ² for large ν [spec §2]).
   double noise_std() const { return std::sqrt(stats_.Dy()); }
-  // Cov(Θ) = D_y V_z⁻¹/(ν−δ−ρ) (multivariate t, ν−δ−ρ+2 d.o.f.); +inf entries while ν ≤ δ+ρ.
+  // The sampling covariance of Θ̂: the sandwich c·(νV_z)⁻¹ of M-estimation (see SandwichFactor), which
+  // holds whatever the noise law; +inf entries until more than ρ+1 updates. posterior_covariance() is the
+  // one-sided posterior's own D_y V_z⁻¹/(ν−δ−ρ), too small by (k+3)/(k+1) even under the model.
   Eigen::MatrixXd covariance() const {
     Eigen::MatrixXd out(num_parameters(), num_parameters());
     CovarianceInto(out);
     return out;
   }
-  // The same Cov(Θ) into a caller-owned ρ x ρ matrix, without allocating, at any time. ~(5/6)ρ³ flops.
-  // Throws InvalidArgument only if `out` has the wrong size.
+  // The same covariance into a caller-owned ρ x ρ matrix, without allocating, at any time. ~(5/6)ρ³
+  // flops. Throws InvalidArgument only if `out` has the wrong size.
   void CovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
-    IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
-                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(),
-                  num_parameters());
+    CheckCovarianceSize(out);
+    const double c = sandwich_.Factor(num_parameters());
+    if (!(c > 0))
+      out.setConstant(std::numeric_limits<double>::infinity());
+    else
+      stats_.ScaledVzInverse(c / sandwich_.n, out);
+  }
+  // Cov(Θ) of the one-sided posterior: D_y V_z⁻¹/(ν−δ−ρ) (multivariate t, ν−δ−ρ+2 d.o.f.) [spec §2];
+  // +inf entries while ν ≤ δ+ρ.
+  Eigen::MatrixXd posterior_covariance() const {
+    Eigen::MatrixXd out(num_parameters(), num_parameters());
+    PosteriorCovarianceInto(out);
+    return out;
+  }
+  void PosteriorCovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
+    CheckCovarianceSize(out);
     const double dof = stats_.nu() - options_.delta - num_parameters();
     if (!(dof > 0))
       out.setConstant(std::numeric_limits<double>::infinity());
@@ -305,6 +360,11 @@ class BasicStudentRegression {
   const RegressionPrior& prior() const { return prior_; }
 
  private:
+  void CheckCovarianceSize(const Eigen::Ref<Eigen::MatrixXd>& out) const {
+    IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
+                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(),
+                  num_parameters());
+  }
   static const StudentRegressionOptions& Checked(int num_parameters, const StudentRegressionOptions& options) {
     const std::string error = options.Validate(num_parameters);
     IDENT_REQUIRE(error.empty(), "{}", error);
@@ -320,6 +380,7 @@ class BasicStudentRegression {
   double last_beta_ = std::numeric_limits<double>::quiet_NaN();
   StudentStepDetails details_;
   approx::WeightConstants weight_constants_;  // of the last ν(t) (Weight())
+  SandwichFactor sandwich_;
   bool enabled_ = true;
   int window_size_ = 0, window_count_ = 0;  // data-driven start-up (0 = off)
   Eigen::MatrixXd window_;                  // W x (ρ+1): y, z of the first W samples

@@ -66,6 +66,7 @@ void ArxRegressor::Reset() {
   for (auto& p : past_u_) p.setZero();
   samples_ = 0;
   outputs_ = 0;
+  last_cleaned_ = false;
   cleaner_.Reset();
 }
 
@@ -92,16 +93,39 @@ bool ArxRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<E
 
 void ArxRegressor::PushOutput(double y) {
   IDENT_REQUIRE(outputs_ + 1 == samples_, "ArxRegressor::PushOutput called without Next");
+  last_cleaned_ = false;
   const Eigen::Index m = past_y_.size();
   for (Eigen::Index k = m - 1; k > 0; --k) past_y_(k) = past_y_(k - 1);
   if (m > 0) past_y_(0) = y;
   ++outputs_;
 }
 
-double ArxRegressor::PushCheckedOutput(double y, double y_hat, double scale, bool flagged) {
-  const double stored = cleaner_.Clean(y, y_hat, scale, flagged);
+double ArxRegressor::PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged) {
+  const long cleaned_before = cleaner_.cleaned();
+  const double stored = cleaner_.Clean(y, y_hat, scale, flagged, judged);
   PushOutput(stored);
+  last_measured_ = y;
+  last_cleaned_ = cleaner_.cleaned() > cleaned_before;
   return stored;
+}
+
+bool ArxRegressor::MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const {
+  if (!last_cleaned_ || structure_.na() == 0 || samples_ <= structure_.first_regression_index()) return false;
+  IDENT_REQUIRE(z_measured.size() == structure_.num_parameters(), "regressor has {} entries; the model has {} parameters",
+                z_measured.size(), structure_.num_parameters());
+  // z(t) as Next() formed it, with −y(t−1) measured (the first entry, models/arx.h's ordering).
+  Eigen::Index col = 0;
+  for (int k = 0; k < structure_.na(); ++k) z_measured(col++) = k == 0 ? -last_measured_ : -past_y_(k);
+  for (int i = 0; i < structure_.num_inputs(); ++i)
+    for (int k = 0; k < structure_.nb()[i]; ++k) z_measured(col++) = past_u_[i](structure_.nk()[i] + k);
+  return true;
+}
+
+void ArxRegressor::RestoreMeasured() {
+  if (!last_cleaned_) return;
+  past_y_(0) = last_measured_;
+  cleaner_.Restore(last_measured_);
+  last_cleaned_ = false;
 }
 
 std::vector<std::string> StaticRegression::ParameterNames() const {

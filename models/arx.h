@@ -71,13 +71,22 @@ class ArxRegressor {
   void PushOutput(double y);
   // Stores the measured y, or its cleaned value if cleaning is on and `flagged` (prediction ŷ = Θ̂'z(t),
   // scale s = the estimator's noise scale). Returns the stored value.
-  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged);
+  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged = true);
+  // Additive outlier or innovation? After Next() has formed z(t), if y(t−1) was cleaned: writes z(t)
+  // with the measured y(t−1) instead into z_measured and returns true (else false). The caller compares
+  // how well each predicts y(t) — an additive outlier leaves y(t) consistent with the cleaned value, an
+  // innovation outlier (carried on by the dynamics) with the measured one — and, for the measured,
+  // calls RestoreMeasured(), which puts the measured y(t−1) back for every later regressor.
+  bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const;
+  void RestoreMeasured();
   const ArxStructure& structure() const { return structure_; }
   const OutputCleaner& cleaner() const { return cleaner_; }
 
  private:
   ArxStructure structure_;
-  Eigen::VectorXd past_y_;                 // past_y_(k) = y(t−1−k), k < na
+  Eigen::VectorXd past_y_;                 // past_y_(k) = y(t−1−k), k < na (as stored: maybe cleaned)
+  double last_measured_ = 0;               // the measured y(t−1)
+  bool last_cleaned_ = false;              // past_y_(0) is a cleaned value
   std::vector<Eigen::VectorXd> past_u_;    // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
   long samples_ = 0;                       // samples pushed with Next()
   long outputs_ = 0;

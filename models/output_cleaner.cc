@@ -11,6 +11,8 @@ namespace ident::models {
 
 std::string OutputCleaningOptions::Validate() const {
   if (!(std::isfinite(clip) && clip > 0)) return fmt::format("cleaning clip = {}; need clip > 0", clip);
+  if (!(std::isfinite(screen) && screen >= 0)) return fmt::format("cleaning screen = {}; need screen >= 0", screen);
+  if (!(std::isfinite(gross) && gross >= 0)) return fmt::format("cleaning gross = {}; need gross >= 0", gross);
   if (max_run < 1) return fmt::format("cleaning max_run = {}; need max_run >= 1", max_run);
   if (warm_up < 0) return fmt::format("cleaning warm_up = {}; need warm_up >= 0", warm_up);
   return "";
@@ -26,6 +28,31 @@ void OutputCleaner::Reset() {
   run_ = 0;
   y_min_ = y_max_ = 0;
   have_range_ = false;
+  last_ = 0;
+  num_differences_ = next_difference_ = 0;
+  num_errors_ = next_error_ = 0;
+}
+
+void OutputCleaner::Restore(double y) {
+  if (cleaned_ == 0 || !std::isfinite(y)) return;
+  --cleaned_;
+  run_ = 0;
+  if (num_differences_ > 0) differences_[(next_difference_ + kDifferences - 1) % kDifferences] += y - last_;
+  last_ = y;
+  y_min_ = std::min(y_min_, y);
+  y_max_ = std::max(y_max_, y);
+}
+
+double OutputCleaner::Store(double y) {
+  if (std::isfinite(y)) {
+    if (have_range_) {
+      differences_[next_difference_] = y - last_;
+      next_difference_ = (next_difference_ + 1) % kDifferences;
+      num_differences_ = std::min(num_differences_ + 1, kDifferences);
+    }
+    last_ = y;
+  }
+  return y;
 }
 
 double OutputCleaner::Accept(double y) {
@@ -33,21 +60,46 @@ double OutputCleaner::Accept(double y) {
   if (std::isfinite(y)) {
     y_min_ = have_range_ ? std::min(y_min_, y) : y;
     y_max_ = have_range_ ? std::max(y_max_, y) : y;
+    Store(y);
     have_range_ = true;
   }
   return y;
 }
 
-double OutputCleaner::Clean(double y, double y_hat, double scale, bool flagged) {
+double OutputCleaner::RingScale(const double* ring, int count) {
+  if (count < 5) return 0;
+  double work[kDifferences];
+  for (int i = 0; i < count; ++i) work[i] = std::abs(ring[i]);
+  std::nth_element(work, work + count / 2, work + count);
+  return 1.4826 * work[count / 2];
+}
+
+double OutputCleaner::DifferenceScale() const { return RingScale(differences_, num_differences_); }
+double OutputCleaner::ErrorScale() const { return RingScale(errors_, num_errors_); }
+
+double OutputCleaner::Clean(double y, double y_hat, double scale, bool flagged, bool judged) {
   const long t = seen_++;
-  if (!options_.enabled || !flagged || t < options_.warm_up || !have_range_ || run_ >= options_.max_run ||
-      !std::isfinite(y) || !std::isfinite(y_hat) || !(std::isfinite(scale) && scale > 0))
-    return Accept(y);
+  if (!options_.enabled || !judged || !have_range_ || run_ >= options_.max_run || !std::isfinite(y)) return Accept(y);
+  if (t < options_.warm_up) {  // (4): the model-free screen
+    const double s = DifferenceScale();
+    if (!(options_.screen > 0 && s > 0 && std::abs(y - last_) > options_.screen * s)) return Accept(y);
+    y_hat = last_;
+    scale = s;
+  } else {
+    if (!std::isfinite(y_hat)) return Accept(y);
+    const double gross_scale = ErrorScale();
+    errors_[next_error_] = y - y_hat;
+    next_error_ = (next_error_ + 1) % kDifferences;
+    num_errors_ = std::min(num_errors_ + 1, kDifferences);
+    if (!flagged || !(std::isfinite(scale) && scale > 0) ||
+        (options_.gross > 0 && !(std::abs(y - y_hat) > options_.gross * gross_scale)))
+      return Accept(y);
+  }
   const double bound = options_.clip * scale;
   const double cleaned = y_hat + std::clamp(y - y_hat, -bound, bound);  // (1)
   ++run_;
   ++cleaned_;
-  return std::clamp(cleaned, y_min_, y_max_);  // (2)
+  return Store(std::clamp(cleaned, y_min_, y_max_));  // (2)
 }
 
 }  // namespace ident::models

@@ -36,6 +36,13 @@ class RecordingEstimator final : public AnyRegressionEstimator {
   double Dy() const override { return inner_.Dy(); }
   double noise_std() const override { return inner_.noise_std(); }
   void Reset() override { inner_.Reset(); }
+  std::optional<LockInStatus> lock_in() const override { return inner_.lock_in(); }
+  bool judges_outliers() const override { return inner_.judges_outliers(); }
+  std::string kind() const override { return inner_.kind(); }
+  bool BeginPass() override {
+    count_ = 0;  // the timed replay is of the last pass
+    return inner_.BeginPass();
+  }
 
   // Nanoseconds per update of `fresh` over the recorded sequence (repeated to last ≥ 5 ms).
   double TimeReplay(AnyRegressionEstimator& fresh) const {
@@ -144,6 +151,10 @@ Spread Spread::Of(std::vector<double> v) {
   s.max = v.back();
   const std::size_t h = v.size() / 2;
   s.median = v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+  const double position = 0.9 * (n - 1);
+  const std::size_t below = static_cast<std::size_t>(std::floor(position));
+  const std::size_t above = std::min(below + 1, v.size() - 1);
+  s.p90 = v[below] + (position - static_cast<double>(below)) * (v[above] - v[below]);
   return s;
 }
 
@@ -193,6 +204,8 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   std::vector<std::vector<double>> one_step(estimators.size()), simulation(estimators.size()),
       distance(estimators.size()), ns(estimators.size()), cleaned(estimators.size());
   std::vector<Eigen::VectorXd> theta_sum(estimators.size(), Eigen::VectorXd::Zero(rho));
+  std::vector<std::string> kinds(estimators.size());
+  std::vector<int> passes(estimators.size(), 1);
   const int y_col = source.output_column();
   int done = 0;
   for (int trial = 0; trial < options.trials; ++trial) {
@@ -204,11 +217,14 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
     for (std::size_t e = 0; e < estimators.size(); ++e) {
       auto estimator = MakeRegressionEstimator(settings[e], rho);
       RecordingEstimator recorder(*estimator, result.estimation.count);
-      Estimate(corrupted, result.estimation, source, recorder, fit);
+      Estimate(corrupted, result.estimation, source, recorder, fit, &passes[e]);
+      kinds[e] = estimator->kind();
       cleaned[e].push_back(static_cast<double>(source.cleaned()));
       const Eigen::VectorXd theta = estimator->parameters();
       theta_sum[e] += theta;
-      const FitScores s = Score(corrupted, result.validation, source, theta);
+      // Scored on the uncorrupted record: with split = 1 the validation rows are the estimation rows,
+      // whose corrupted outputs would reward the estimator that fits the outliers.
+      const FitScores s = Score(data, result.validation, source, theta);
       one_step[e].push_back(s.one_step);
       if (s.simulation) simulation[e].push_back(*s.simulation);
       distance[e].push_back((theta - result.theta_ls).norm() / result.theta_ls.norm());
@@ -222,6 +238,8 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   for (std::size_t e = 0; e < estimators.size(); ++e) {
     EstimatorScore score;
     score.estimator = labels[e];
+    score.kind = kinds[e];
+    score.passes = passes[e];
     score.theta = theta_sum[e] / options.trials;
     score.one_step = Spread::Of(one_step[e]);
     score.one_step_per_trial = one_step[e];

@@ -5,7 +5,7 @@
 // fit (RLS with the flat prior = batch LS) on the estimation part gives θ_LS and the residual std σ.
 // Each trial adds ±SIZE·σ (random sign) to y at ⌊RATE·N_est + ½⌋ distinct estimation rows drawn with
 // seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the
-// untouched validation part: fit % one-step and simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and
+// untouched (uncorrupted) validation rows — with split = 1 the clean estimation rows themselves: fit % one-step and simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and
 // time per update (the recorded update sequence replayed on a fresh estimator, timed as one block;
 // the fastest of the first 5 trials, the one least disturbed by other processes).
 //
@@ -43,14 +43,15 @@ struct OutlierSpec {
 std::vector<int> InjectOutliers(Eigen::Ref<Eigen::VectorXd> y, Segment segment, double rate, double amplitude,
                                 std::uint64_t seed);
 
-// Mean, standard deviation (n − 1; 0 for one value), min, median, max of a sample.
+// Mean, standard deviation (n − 1; 0 for one value), min, median, 90th percentile (linear interpolation
+// between order statistics, as numpy's default), max of a sample.
 struct Spread {
-  double mean = 0, std = 0, min = 0, median = 0, max = 0;
+  double mean = 0, std = 0, min = 0, median = 0, p90 = 0, max = 0;
   static Spread Of(std::vector<double> values);
 };
 
 struct CompareOptions {
-  FitOptions fit;            // split, detrend, outlier decision for regressor cleaning
+  FitOptions fit;            // split, detrend, outlier decision for regressor cleaning, passes
   OutlierSpec outliers;
   int trials = 1;
   // Called after each (trial, estimator) run with (done, total).
@@ -59,6 +60,8 @@ struct CompareOptions {
 
 struct EstimatorScore {
   std::string estimator;           // as given ("student:3")
+  std::string kind;                // "recursive" or "batch"
+  int passes = 1;                  // passes over the estimation part that ran (FitOptions::passes)
   Eigen::VectorXd theta;           // mean over trials
   Spread one_step, simulation, theta_distance;
   std::vector<double> one_step_per_trial;

@@ -30,6 +30,7 @@ struct CompareCommandOptions {
   std::vector<std::string> estimators{"rls", "cauchy", "student:3"};
   std::string outliers = "0.05:20:1";
   int trials = 1;
+  int passes = 1;
   std::optional<double> split;
   std::string detrend;
   bool json = false, csv = false;
@@ -56,7 +57,7 @@ nlohmann::ordered_json Number(double v) { return std::isfinite(v) ? nlohmann::or
 
 nlohmann::ordered_json SpreadJson(const Spread& s) {
   return {{"mean", Number(s.mean)}, {"std", Number(s.std)}, {"min", Number(s.min)}, {"median", Number(s.median)},
-          {"max", Number(s.max)}};
+          {"p90", Number(s.p90)}, {"max", Number(s.max)}};
 }
 
 std::vector<double> ToStd(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
@@ -82,6 +83,8 @@ nlohmann::ordered_json ToJson(const CompareResult& r, const std::string& path, c
   for (const EstimatorScore& s : r.scores) {
     nlohmann::ordered_json e;
     e["estimator"] = s.estimator;
+    e["kind"] = s.kind;
+    e["passes"] = s.passes;
     e["theta"] = ToStd(s.theta);
     e["fit_percent"] = {{"one_step", Number(s.one_step.mean)},
                         {"simulation", s.has_simulation ? Number(s.simulation.mean) : nullptr}};
@@ -133,11 +136,11 @@ void PrintTable(const CompareResult& r, const std::string& name, const OutlierSp
   if (r.reference.simulation) fmt::print(", simulation fit {:.2f} %", *r.reference.simulation);
   fmt::print("\n\n");
   const int w = trials > 1 ? 16 : 10;
-  fmt::print("  {:<14} {:>{}} {:>{}} {:>{}} {:>11}\n", "estimator", "one-step %", w, "simulation %", w,
+  fmt::print("  {:<14} {:<9} {:>{}} {:>{}} {:>{}} {:>11}\n", "estimator", "kind", "one-step %", w, "simulation %", w,
              "θ distance", w, "ns/update");
   for (const EstimatorScore& s : r.scores) {
-    fmt::print("  {:<14} {:>{}} {:>{}} {:>{}} {:>11.0f}\n", s.estimator, Cell(s.one_step, trials, "{:.2f}"), w,
-               s.has_simulation ? Cell(s.simulation, trials, "{:.2f}") : "-", w,
+    fmt::print("  {:<14} {:<9} {:>{}} {:>{}} {:>{}} {:>11.0f}\n", s.estimator, s.kind,
+               Cell(s.one_step, trials, "{:.2f}"), w, s.has_simulation ? Cell(s.simulation, trials, "{:.2f}") : "-", w,
                Cell(s.theta_distance, trials, "{:.3f}"), w, s.ns_per_update);
   }
   fmt::print("\n  fit % = 100·(1 − ‖y − ŷ‖/‖y − mean y‖) on the clean validation rows (100 = perfect; one-step uses\n"
@@ -178,6 +181,7 @@ void RunCompare(CompareCommandOptions& o) {
 
   CompareOptions options;
   options.fit.split = split;
+  options.fit.passes = o.passes;
   options.fit.detrend = detrend == "none" ? Detrend::kNone : Detrend::kMean;
   options.fit.decision = structure.Decision();
   options.outliers = spec;
@@ -213,6 +217,9 @@ void AddCompareCommand(CLI::App& app) {
       ->capture_default_str();
   o->structure.AddTo(*cmd, /*require_output=*/false);
   o->estimator.AddTo(*cmd, /*with_estimator=*/false);
+  cmd->add_option("--passes", o->passes,
+                  "Passes over the estimation part for the robust recursive estimators (see ident fit --passes)")
+      ->capture_default_str();
   cmd->add_option("--split", o->split, "Fraction of rows used for estimation (default: the dataset's, else 0.5)");
   cmd->add_option("--detrend", o->detrend, "Subtract the estimation-part means (mean) or not (none)")
       ->check(CLI::IsMember({"mean", "none"}));

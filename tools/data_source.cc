@@ -37,10 +37,14 @@ class ArxSource final : public DataSource {
     return regressor_.Next(u_, z);
   }
   void PushOutput(double y) override { regressor_.PushOutput(y); }
-  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged) override {
-    return regressor_.PushCheckedOutput(y, y_hat, scale, flagged);
+  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged) override {
+    return regressor_.PushCheckedOutput(y, y_hat, scale, flagged, judged);
   }
   long cleaned() const override { return regressor_.cleaner().cleaned(); }
+  bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const override {
+    return regressor_.MeasuredRegressor(z_measured);
+  }
+  void RestoreMeasured() override { regressor_.RestoreMeasured(); }
 
  private:
   int output_;

@@ -35,12 +35,17 @@ class DataSource {
   virtual bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) = 0;
   virtual void PushOutput(double y) = 0;
   // During estimation: stores y, or (ARX with cleaning on) its cleaned value when the estimator
-  // flagged the sample (models/output_cleaner.h). Returns the stored value.
-  virtual double PushCheckedOutput(double y, double /*y_hat*/, double /*scale*/, bool /*flagged*/) {
+  // flagged the sample (models/output_cleaner.h); `judged` says whether the estimator gives verdicts at
+  // all (AnyRegressionEstimator::judges_outliers). Returns the stored value.
+  virtual double PushCheckedOutput(double y, double /*y_hat*/, double /*scale*/, bool /*flagged*/, bool /*judged*/) {
     PushOutput(y);
     return y;
   }
   virtual long cleaned() const { return 0; }  // samples cleaned since Reset()
+  // Additive outlier or innovation (models/arx.h ArxRegressor::MeasuredRegressor): after Regressor(), if
+  // the last output was cleaned, the regressor with the measured value instead, and a way to keep it.
+  virtual bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> /*z_measured*/) const { return false; }
+  virtual void RestoreMeasured() {}
 };
 
 // Throws DataError for an unknown column, InvalidArgument for bad orders.

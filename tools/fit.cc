@@ -67,7 +67,9 @@ class Estimation {
         decision_(options.decision),
         on_update_(options.on_update),
         z_(source.num_parameters()),
-        ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())) {
+        z_measured_(source.num_parameters()),
+        ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())),
+        judged_(estimator.judges_outliers()) {
     source_.Reset();
   }
 
@@ -77,6 +79,12 @@ class Estimation {
     bool flagged = false;
     double y_hat = std::nan(""), scale = std::nan("");
     if (source_.Regressor(row, z_)) {
+      // y(t−1) was cleaned: keep the reading of it (additive outlier or innovation) that predicts y(t) better.
+      if (source_.MeasuredRegressor(z_measured_) &&
+          std::abs(y - estimator_.Predict(z_measured_)) < std::abs(y - estimator_.Predict(z_))) {
+        source_.RestoreMeasured();
+        z_ = z_measured_;
+      }
       const StepReport report = estimator_.Update(y, z_);
       flagged = decision_.Flags(report);
       if (flagged) {  // the cleaned output of later regressors is built from ŷ and the noise scale
@@ -98,7 +106,7 @@ class Estimation {
         failed_ += report.status == StepStatus::kNumericalFailure;
       }
     }
-    source_.PushCheckedOutput(y, y_hat, scale, flagged);
+    source_.PushCheckedOutput(y, y_hat, scale, flagged, judged_);
   }
 
   // Identifiability: every regressor must vary and none may be a combination of the others.
@@ -145,8 +153,9 @@ class Estimation {
   double min_information_;
   OutlierDecision decision_;
   std::function<void(int row, const AnyRegressionEstimator&)> on_update_;
-  Eigen::VectorXd z_;
+  Eigen::VectorXd z_, z_measured_;
   Eigen::MatrixXd ZtZ_;
+  bool judged_;  // the estimator gives outlier verdicts (cleaning applies)
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
 };
 
@@ -222,21 +231,50 @@ class Scoring {
   FitAccumulator one_step_, simulation_;
 };
 
-std::pair<int, int> EstimateRows(const io::DataTable& data, Segment segment, DataSource& source,
-                                 AnyRegressionEstimator& estimator, const FitOptions& options) {
-  Estimation estimation(source, estimator, options);
-  Eigen::VectorXd row(data.values.cols());
-  for (int r = segment.first; r < segment.first + segment.count; ++r) {
-    row = data.values.row(r).transpose();
-    estimation.Row(row, r);
+// Runs `pass(options)` (one pass over the estimation part, returning its (updates, rejected)) options.passes
+// times, calling estimator.BeginPass() between passes; the trace and on_update see the last pass only. An
+// estimator that declines a further pass runs once (re-run with the trace if it was held back). Stores the
+// number of passes made in *passes_run.
+template <class Pass>
+std::pair<int, int> RunPasses(AnyRegressionEstimator& estimator, const FitOptions& options, int* passes_run,
+                              Pass&& pass) {
+  IDENT_REQUIRE(options.passes >= 1 && options.passes <= 100, "--passes {}; need 1 <= passes <= 100", options.passes);
+  FitOptions quiet = options;
+  quiet.trace = nullptr;
+  quiet.on_update = {};
+  int made = 1;
+  std::pair<int, int> counts = pass(options.passes == 1 ? options : quiet);
+  for (; made < options.passes; ++made) {
+    if (!estimator.BeginPass()) break;
+    counts = pass(made + 1 == options.passes ? options : quiet);
   }
-  return estimation.Finish(data.source);
+  if (made == 1 && options.passes > 1 && (options.trace || options.on_update)) {
+    estimator.Reset();
+    counts = pass(options);
+  }
+  if (passes_run) *passes_run = made;
+  return counts;
+}
+
+std::pair<int, int> EstimateRows(const io::DataTable& data, Segment segment, DataSource& source,
+                                 AnyRegressionEstimator& estimator, const FitOptions& options,
+                                 int* passes_run = nullptr) {
+  return RunPasses(estimator, options, passes_run, [&](const FitOptions& o) {
+    Estimation estimation(source, estimator, o);
+    Eigen::VectorXd row(data.values.cols());
+    for (int r = segment.first; r < segment.first + segment.count; ++r) {
+      row = data.values.row(r).transpose();
+      estimation.Row(row, r);
+    }
+    return estimation.Finish(data.source);
+  });
 }
 
 FitResult Summarise(const DataSource& source, const AnyRegressionEstimator& estimator, Segment estimation,
                     Segment validation) {
   FitResult result;
   result.estimator = estimator.name();
+  result.kind = estimator.kind();
   result.structure = source.structure();
   result.parameter_names = source.parameter_names();
   result.theta = estimator.parameters();
@@ -283,8 +321,8 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
 }
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, const FitOptions& options) {
-  return EstimateRows(data, segment, source, estimator, options);
+                             AnyRegressionEstimator& estimator, const FitOptions& options, int* passes_run) {
+  return EstimateRows(data, segment, source, estimator, options, passes_run);
 }
 
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta) {
@@ -300,8 +338,10 @@ FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, 
 FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options) {
   const auto [estimation, validation] = PrepareData(data, source, options);
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
-  const auto [updates, rejected] = EstimateRows(data, estimation, source, estimator, options);
+  int passes = 1;
+  const auto [updates, rejected] = EstimateRows(data, estimation, source, estimator, options, &passes);
   FitResult result = Summarise(source, estimator, estimation, validation);
+  result.passes = passes;
   result.updates = updates;
   result.rejected = rejected;
   result.validation = Score(data, validation, source, result.theta);
@@ -427,8 +467,31 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
   // Pass 2: detrending offsets (estimation-part means of the used columns, NaN = missing skipped).
   const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, estimation);
 
-  // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass.
+  // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass. With
+  // options.passes > 1 the passes before the last read the estimation part only.
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
+  int passes = 1;
+  if (options.passes > 1) {
+    FitOptions earlier = options;
+    earlier.passes = options.passes - 1;
+    earlier.trace = nullptr;
+    earlier.on_update = {};
+    RunPasses(estimator, earlier, &passes, [&](const FitOptions& o) {
+      Estimation estimating(source, estimator, o);
+      io::CsvReader reader(path, csv);
+      for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
+        row -= offset;
+        estimating.Row(row, r);
+      }
+      return estimating.Finish(path);
+    });
+    if (passes == options.passes - 1 && estimator.BeginPass()) {
+      ++passes;
+    } else {
+      estimator.Reset();
+      passes = 1;
+    }
+  }
   Estimation estimating(source, estimator, options);
   std::unique_ptr<Scoring> scoring;
   FitResult result;
@@ -438,6 +501,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
     std::tie(result.updates, result.rejected) = estimating.Finish(path);
     const int updates = result.updates, rejected = result.rejected;
     result = Summarise(source, estimator, estimation, validation);
+    result.passes = passes;
     result.updates = updates;
     result.rejected = rejected;
     scoring = std::make_unique<Scoring>(source, result.theta);

@@ -43,6 +43,10 @@ struct FitOptions {
   // (the command line does so when an explicit prior is given).
   double min_regressor_information = 1e-6;
   OutlierDecision decision;           // which updates count as outliers for regressor cleaning
+  // Passes over the estimation part (AnyRegressionEstimator::BeginPass): each further pass re-runs the
+  // recursion from the previous pass's estimate, regressor cleaning included; estimators for which a
+  // further pass cannot change the result (RLS, batch) run once. The trace shows the last pass.
+  int passes = 1;
   // If set: called after every estimator update with the (0-based) row (e.g. for parameter plots).
   std::function<void(int row, const AnyRegressionEstimator&)> on_update;
 };
@@ -63,7 +67,9 @@ struct FitResult {
   double noise_std = 0;
   double nu = 0, Dy = 0;
   int samples_estimation = 0, samples_validation = 0;
-  int updates = 0, rejected = 0;      // estimator steps taken / rejected (missing or invalid samples)
+  std::string kind;                   // "recursive" or "batch"
+  int passes = 1;                     // passes over the estimation part that ran
+  int updates = 0, rejected = 0;      // estimator steps taken / rejected (missing or invalid samples), last pass
   long cleaned = 0;                   // outputs cleaned in later regressors (--clean-regressors on)
   std::optional<LockInStatus> lock_in;  // the robust estimators' lock-in safeguard at the end of estimation
   FitScores validation;
@@ -82,16 +88,18 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
 // Runs the estimator over the segment (one Update per regression), writing trace rows if asked.
 // Each measured output is then stored for later regressors through source.PushCheckedOutput with
 // the one-step prediction, the estimator's noise scale and decision.Flags(report).
-// Returns the number of updates and rejected steps. Throws InvalidArgument if the regressors of the
-// segment are constant or collinear (the model is not identifiable from them).
+// Returns the number of updates and rejected steps (of the last pass, see FitOptions::passes). Throws
+// InvalidArgument if the regressors of the segment are constant or collinear (the model is not
+// identifiable from them).
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, std::FILE* trace,
                              const OutlierDecision& decision = {},
                              const std::function<void(int row, const AnyRegressionEstimator&)>& on_update = {});
 
-// The same with every option of `options` that applies (trace, decision, on_update, min_regressor_information).
+// The same with every option of `options` that applies (trace, decision, on_update, min_regressor_information,
+// passes); `passes_run`, if given, receives the number of passes made.
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, const FitOptions& options);
+                             AnyRegressionEstimator& estimator, const FitOptions& options, int* passes_run = nullptr);
 
 // One-step and (for dynamic sources) simulation scores of parameters θ on the segment.
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta);

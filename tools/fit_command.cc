@@ -29,6 +29,7 @@ struct FitCommandOptions {
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
   double split = 0.5;
+  int passes = 1;
   std::string detrend;
   bool missing = false;
   bool json = false;
@@ -36,11 +37,25 @@ struct FitCommandOptions {
   std::string plot;
 };
 
+nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const RestartEvent& e : events)
+    list.push_back({{"update", e.update},
+                    {"replayed", e.replayed},
+                    {"dropped", e.dropped},
+                    {"low_weight_before", e.low_weight_before},
+                    {"low_weight_after", e.low_weight_after},
+                    {"resolved", e.resolved}});
+  return list;
+}
+
 nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, double split, const std::string& detrend) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
   nlohmann::ordered_json j;
   j["data"] = data;
   j["estimator"] = r.estimator;
+  j["kind"] = r.kind;
+  j["passes"] = r.passes;
   j["structure"] = r.structure;
   j["parameter_names"] = r.parameter_names;
   j["theta"] = std::vector<double>(r.theta.data(), r.theta.data() + r.theta.size());
@@ -65,7 +80,8 @@ nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, doubl
                     {"restart", r.lock_in->restart},
                     {"flagged", r.lock_in->flagged},
                     {"restarts", r.lock_in->restarts},
-                    {"low_weight_fraction", r.lock_in->low_weight_fraction}};
+                    {"low_weight_fraction", r.lock_in->low_weight_fraction},
+                    {"events", RestartEventsJson(r.lock_in->events)}};
   else
     j["lock_in"] = nullptr;
   j["nu"] = r.nu;
@@ -110,7 +126,8 @@ nlohmann::ordered_json ResidualJson(const ResidualAnalysis& a) {
 }
 
 void PrintReport(const FitResult& r, const std::string& data, const FitCommandOptions& o) {
-  fmt::print("{}: {} fitted by {} ({} detrending)\n", data, r.structure, r.estimator, o.detrend);
+  fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
+             r.passes > 1 ? fmt::format(", {} passes", r.passes) : "", o.detrend);
   if (o.split == 1)
     fmt::print("estimation and validation on all {} rows ({} updates", r.samples_estimation, r.updates);
   else
@@ -129,6 +146,11 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
     fmt::print("  lock-in monitor (window {}, weight threshold {}): flagged at {} update{}, {} restart{}; {:.0f} % of "
                "the last window below the threshold\n", l.window, l.threshold, l.flagged, l.flagged == 1 ? "" : "s",
                l.restarts, l.restarts == 1 ? "" : "s", 100 * l.low_weight_fraction);
+    for (const RestartEvent& e : l.events)
+      fmt::print("    restart at update {}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n", e.update,
+                 e.replayed, e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
+                 100 * e.low_weight_before, 100 * e.low_weight_after,
+                 e.resolved ? "" : " (not a lock-in: the noise is heavier-tailed than the model; next restart waits)");
   }
   // Fit % is undefined (0/0) when the validation output is constant; the JSON has null there.
   auto percent = [](double p) { return std::isfinite(p) ? fmt::format("{:.2f} %", p) : std::string("undefined"); };
@@ -147,6 +169,7 @@ void RunFit(const FitCommandOptions& o) {
   std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, rho);  // checks the options
   FitOptions options;
   options.split = o.split;
+  options.passes = o.passes;
   options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
   options.decision = o.structure.Decision();
   if (settings.prior) options.min_regressor_information = 0;  // the user's prior, the user's scale
@@ -234,6 +257,10 @@ void AddFitCommand(CLI::App& app) {
   o->structure.AddTo(*fit);
   o->estimator.AddTo(*fit);
   fit->add_option("--split", o->split, "Fraction of rows used for estimation; 1 = estimate and validate on all")
+      ->capture_default_str();
+  fit->add_option("--passes", o->passes,
+                  "Passes over the estimation part: each further pass re-runs the recursion from the previous "
+                  "pass's estimate (cauchy, student; rls and the batch estimators need one)")
       ->capture_default_str();
   fit->add_option("--detrend", o->detrend,
                   "Subtract the estimation-part means (mean) or not (none); default mean, none with --intercept")

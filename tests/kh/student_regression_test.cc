@@ -317,7 +317,7 @@ TEST(StudentRegression, DyTracksTheSquaredScaleOfTheNoise) {  // spec §2: D_y �
   }
 }
 
-TEST(StudentRegression, CovarianceIsTheMultivariateTCovarianceOfTheClass) {  // spec §2
+TEST(StudentRegression, PosteriorCovarianceIsTheMultivariateTCovarianceOfTheClass) {  // spec §2
   // For ρ = 1, integrate the class ω^{ν/2}(1+ω[−1;θ]'V[−1;θ])^{−κν} over ω analytically-free by
   // quadrature on a θ-grid: the θ-marginal ∝ ∫ ω^{(ν−δ)/2}(1+ω q(θ))^{−κν} dω with q = D_y + V_z(θ−θ̂)².
   const Data d = MakeData(1, 30, 8);
@@ -343,7 +343,7 @@ TEST(StudentRegression, CovarianceIsTheMultivariateTCovarianceOfTheClass) {  // 
     m0 += p;
     m2 += p * x * x;
   }
-  EXPECT_NEAR(m2 / m0 / est.covariance()(0, 0), 1, 2e-3);
+  EXPECT_NEAR(m2 / m0 / est.posterior_covariance()(0, 0), 1, 2e-3);
 }
 
 TEST(StudentRegression, UpdateDoesNotAllocate) {

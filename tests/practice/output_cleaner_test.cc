@@ -74,7 +74,7 @@ TEST(OutputCleaner, NonFiniteInputsAndBadOptions) {
 TEST(ArxRegressorCleaning, AWrongModelFlaggingEverythingCannotRunAway) {
   const models::ArxStructure arx(1, {1}, {1});
   models::ArxRegressor naive(arx);  // naive replacement: store ŷ for every flagged sample
-  models::ArxRegressor bounded(arx, {.enabled = true, .clip = 2.0, .max_run = 2, .warm_up = 5});
+  models::ArxRegressor bounded(arx, {.enabled = true, .clip = 2.0, .max_run = 2, .warm_up = 5, .gross = 0});
   const Eigen::Vector2d theta_wrong(-2.5, -0.1);  // z = [−y(t−1), u(t−1)]
   std::mt19937_64 rng(11);
   std::normal_distribution<double> noise(0.0, 0.1);
@@ -108,6 +108,66 @@ TEST(ArxRegressorCleaning, AWrongModelFlaggingEverythingCannotRunAway) {
   // Bounded: |ŷ| ≤ 2.5·max|y| + 0.1·max|u| (the stored outputs lie in the measured range).
   EXPECT_LE(bounded_max_pred, 2.5 * std::max(-y_min, y_max) + 0.1 + 1e-12);
   EXPECT_GT(bounded.cleaner().cleaned(), 100);
+}
+
+// (4): during warm-up only a jump beyond `screen` robust scales of the stored differences is cleaned,
+// towards the last stored value; `judged` = false (least squares) stores every measurement.
+TEST(OutputCleaner, WarmUpScreensGrossJumpsModelFree) {
+  OutputCleaner c({.enabled = true, .clip = 2.0, .warm_up = 100, .screen = 10});
+  OutputCleaner ls({.enabled = true, .clip = 2.0, .warm_up = 100, .screen = 10});
+  double y = 0;
+  for (int t = 0; t < 20; ++t) {  // steps of ±1: s_Δ = 1.4826
+    y += t % 2 ? 1.0 : -1.0;
+    EXPECT_EQ(c.Clean(y, std::nan(""), std::nan(""), false), y);
+    ls.Clean(y, 0, 1, false, /*judged=*/false);
+  }
+  EXPECT_EQ(c.Clean(y + 14.0, std::nan(""), std::nan(""), false), y + 14.0);  // 14 < 10·1.4826: kept
+  const double last = y + 14.0;
+  // 1000 ≫ 10·s_Δ: cleaned towards the last stored value, last + c·s_Δ, whatever the estimator says, and
+  // clamped to the measured range, whose top is `last` (eq. (2)).
+  EXPECT_DOUBLE_EQ(c.Clean(last + 1000, std::nan(""), std::nan(""), false), last);
+  EXPECT_EQ(c.cleaned(), 1);
+  EXPECT_EQ(ls.Clean(y + 1000, 0, 1, true, /*judged=*/false), y + 1000);
+  EXPECT_EQ(ls.cleaned(), 0);
+}
+
+// (5): after warm-up a flagged sample is cleaned only if its error is gross against the recent errors.
+TEST(OutputCleaner, AfterWarmUpOnlyGrossFlaggedErrorsAreCleaned) {
+  OutputCleaner c({.enabled = true, .clip = 2.0, .max_run = 5, .warm_up = 1, .gross = 5});
+  c.Clean(0.0, 0.0, 1.0, false);
+  for (int t = 0; t < 16; ++t) c.Clean(t % 2 ? 0.1 : -0.1, 0.0, 1.0, false);  // errors ±0.1: scale 0.148
+  EXPECT_EQ(c.Clean(0.5, 0.0, 0.05, true), 0.5);  // flagged, but 0.5 < 5·0.148
+  EXPECT_EQ(c.cleaned(), 0);
+  EXPECT_DOUBLE_EQ(c.Clean(0.9, 0.0, 0.05, true), 0.1);  // gross: ŷ + clip(0.9, ±2·0.05), in range
+  EXPECT_EQ(c.cleaned(), 1);
+  EXPECT_THROW(OutputCleaner({.gross = -1}), InvalidArgument);
+  EXPECT_THROW(OutputCleaner({.screen = std::nan("")}), InvalidArgument);
+}
+
+// Additive outlier or innovation: the regressor with the measured y(t−1) is offered after a cleaning,
+// and restoring it puts the measurement back into every later regressor.
+TEST(ArxRegressorCleaning, MeasuredRegressorAndRestoreAfterACleanedOutput) {
+  const models::ArxStructure arx(2, {1}, {1});  // z = [−y(t−1), −y(t−2), u(t−1)]
+  models::ArxRegressor r(arx, {.enabled = true, .clip = 1.0, .max_run = 5, .warm_up = 2, .gross = 0});
+  Eigen::VectorXd u(1), z(3), zm(3);
+  u(0) = 0.5;
+  for (double y : {1.0, 2.0, 3.0}) {
+    r.Next(u, z);
+    r.PushCheckedOutput(y, 0.0, 1.0, false);
+  }
+  EXPECT_TRUE(r.Next(u, z));
+  EXPECT_FALSE(r.MeasuredRegressor(zm));  // nothing cleaned
+  EXPECT_DOUBLE_EQ(r.PushCheckedOutput(50.0, 2.5, 0.5, true), 3.0);  // 2.5 + clip(47.5, ±0.5), range [1, 3]
+  EXPECT_TRUE(r.Next(u, z));
+  EXPECT_EQ(z, Eigen::Vector3d(-3.0, -3.0, 0.5));
+  ASSERT_TRUE(r.MeasuredRegressor(zm));
+  EXPECT_EQ(zm, Eigen::Vector3d(-50.0, -3.0, 0.5));
+  r.RestoreMeasured();
+  EXPECT_EQ(r.cleaner().cleaned(), 0);
+  EXPECT_FALSE(r.MeasuredRegressor(zm));  // decided
+  r.PushCheckedOutput(4.0, 4.0, 1.0, false);
+  EXPECT_TRUE(r.Next(u, z));
+  EXPECT_EQ(z, Eigen::Vector3d(-4.0, -50.0, 0.5));  // the measurement, not the cleaned 3
 }
 
 TEST(OutlierDecision, FlagsSmallRelativeWeightsOnlyOnUpdatedSteps) {

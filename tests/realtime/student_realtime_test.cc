@@ -131,10 +131,10 @@ TYPED_TEST(StudentRealtime, ResetEqualsAFreshlyBuiltEstimator) {
   }
 }
 
-// Cov(Θ) = D_y V_z⁻¹/(ν−δ−ρ) [spec §2]. Reference: V recomputed densely from the reported weights,
-// V(t) = (1−β_t)V(t−1) + β_t h h' (exponential forgetting leaves V unchanged [spec §7b]), ν(t) = λν + 1,
-// D_y = V_y − V_zy'V_z⁻¹V_zy, the inverse by Cholesky.
-TYPED_TEST(StudentRealtime, CovarianceAtAnyTimeEqualsTheDenseMultivariateT) {
+// The posterior's Cov(Θ) = D_y V_z⁻¹/(ν−δ−ρ) [spec §2]. Reference: V recomputed densely from the reported
+// weights, V(t) = (1−β_t)V(t−1) + β_t h h' (exponential forgetting leaves V unchanged [spec §7b]),
+// ν(t) = λν + 1, D_y = V_y − V_zy'V_z⁻¹V_zy, the inverse by Cholesky.
+TYPED_TEST(StudentRealtime, PosteriorCovarianceAtAnyTimeEqualsTheDenseMultivariateT) {
   const auto data = ArxDataWithOutliers(34, 400);
   const StudentRegressionOptions o = Cauchy(0.99);
   TypeParam est(4, o);
@@ -153,23 +153,57 @@ TYPED_TEST(StudentRealtime, CovarianceAtAnyTimeEqualsTheDenseMultivariateT) {
     const Eigen::VectorXd Vzy = V.bottomLeftCorner(4, 1);
     const double Dy = V(0, 0) - Vzy.dot(Vz.solve(Vzy));
     const Eigen::MatrixXd cov = Dy / (nu - 1 - 4) * Vz.solve(Eigen::MatrixXd::Identity(4, 4));
-    est.CovarianceInto(P);
+    est.PosteriorCovarianceInto(P);
     EXPECT_NEAR(est.nu(), nu, 1e-12 * nu) << "t = " << t;
     EXPECT_LT((P - cov).norm(), 1e-9 * cov.norm()) << "t = " << t;
-    EXPECT_LT((P - est.covariance()).norm(), 1e-14 * cov.norm()) << "t = " << t;
+    EXPECT_LT((P - est.posterior_covariance()).norm(), 1e-14 * cov.norm()) << "t = " << t;
     EXPECT_EQ(P, P.transpose());
   }
 }
 
-TYPED_TEST(StudentRealtime, CovarianceIsInfiniteWhileNuIsAtMostDeltaPlusRho) {
+// The sampling covariance c·V_z⁻¹/n with c = n/(n−ρ)·mean(ψ²)/mean(ψ')², ψ = wê, ψ' = (k+1)(k−u)/(k+u)²,
+// w = (k+1)/(k+u), u = ξ_z − ξ, means discounted by λ [ident/student_regression.h]. Reference: the sums
+// formed here from the step reports and details, V_z densely from the reported weights as above.
+TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
+  const auto data = ArxDataWithOutliers(35, 400);
+  const StudentRegressionOptions o = Cauchy(0.99);
+  TypeParam est(4, o);
+  Eigen::MatrixXd V = o.prior->V0;
+  double psi2 = 0, dpsi = 0, n = 0;
+  Eigen::Matrix4d P;
+  for (int t = 0; t < 400; ++t) {
+    const StepReport r = est.Update(data[t].y, data[t].z);
+    ASSERT_TRUE(r.updated());
+    Eigen::Matrix<double, 5, 1> h;
+    h << data[t].y, data[t].z;
+    V = (1 - r.weight) * V + r.weight * h * h.transpose();
+    const double u = est.last_step().xi_z - est.last_step().xi, w = 2 / (1 + u);
+    psi2 = 0.99 * psi2 + w * w * r.prediction_error * r.prediction_error;
+    dpsi = 0.99 * dpsi + 2 * (1 - u) / ((1 + u) * (1 + u));
+    n = 0.99 * n + 1;
+    est.CovarianceInto(P);
+    if (t < 5) {  // n ≤ ρ + 1
+      EXPECT_TRUE((P.array() == std::numeric_limits<double>::infinity()).all()) << t;
+      continue;
+    }
+    if (t != 5 && t != 30 && t != 399) continue;
+    const double c = n / (n - 4) * (psi2 / n) / std::pow(dpsi / n, 2);
+    const Eigen::MatrixXd cov =
+        c / n * Eigen::LLT<Eigen::MatrixXd>(V.bottomRightCorner(4, 4)).solve(Eigen::MatrixXd::Identity(4, 4));
+    EXPECT_LT((P - cov).norm(), 1e-9 * cov.norm()) << "t = " << t;
+    EXPECT_LT((P - est.covariance()).norm(), 1e-14 * cov.norm()) << "t = " << t;
+  }
+}
+
+TYPED_TEST(StudentRealtime, PosteriorCovarianceIsInfiniteWhileNuIsAtMostDeltaPlusRho) {
   StudentRegressionOptions o;
   o.prior = RegressionPrior::Diagonal(4, 4.5, 1, 0.01);  // ν0 − δ − ρ = −0.5; ν(1) = 5.5 > ν_hard = 4
   TypeParam est(4, o);
   Eigen::Matrix4d P;
-  est.CovarianceInto(P);
+  est.PosteriorCovarianceInto(P);
   EXPECT_TRUE((P.array() == std::numeric_limits<double>::infinity()).all());
   est.Update(1.0, Eigen::Vector4d(1, 0, 0, 0));  // ν = 5.5: finite
-  est.CovarianceInto(P);
+  est.PosteriorCovarianceInto(P);
   EXPECT_TRUE(P.allFinite());
 }
 
@@ -246,7 +280,9 @@ TYPED_TEST(StudentRealtime, TenThousandLoopIterationsAllocateNothing) {
       const StepReport r = t % 11 == 5 ? est.Skip() : est.Update(data[t].y, data[t].z);
       updated += r.updated();
       skipped += r.status == StepStatus::kSkipped;
-      est.CovarianceInto(P);
+      est.CovarianceInto(P);  // +inf until ρ+2 updates after a Reset()
+      sink += std::isfinite(P(0, 0)) ? P(0, 0) : 0;
+      est.PosteriorCovarianceInto(P);
       sink += est.parameters()(0) + est.Predict(data[t].z) + P(0, 0);
       if (t == 5000) est.Reset();
     }
