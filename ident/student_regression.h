@@ -118,27 +118,31 @@ struct StudentStepDetails {
 // The scalar sandwich of M-estimation for the Student-t score (Huber 1981, §7.6). With u = ê²/D_y and the
 // EM weight w = (k+1)/(k+u) [spec §7a]: ψ = w·ê, ψ' = (k+1)(k−u)/(k+u)². The one-sided recursion's V_z
 // tends to E[w zz']/E[w] (the stationary point of V ← V + β(hh' − V) [spec §3]), so for noise independent
-// of z the sandwich A⁻¹BA⁻¹ (A = Σψ'zz', B = Σψ²zz') is
-//   Cov(Θ̂) ≈ c·(νV_z)⁻¹,   c = n/(n−ρ)·mean(ψ²)/mean(ψ')².
+// of z the sandwich A⁻¹BA⁻¹ (A = Σψ'zz', B = Σψ²zz') is, with Huber's small-sample correction
+// κ = 1 + (ρ/n)·var(ψ')/mean(ψ')² (Huber 1981, eq. 7.6.4; as MASS::rlm reports it),
+//   Cov(Θ̂) ≈ c·V_z⁻¹/n,   c = κ²·n/(n−ρ)·mean(ψ²)/mean(ψ')².
 // Under t_k noise of scale σ, c → σ²(k+3)/(k+1) (the inverse Fisher information; the posterior's
 // D_y V_z⁻¹/(ν−δ−ρ) is smaller by that factor); under other noise c is what it is. The means run over the
 // steps' own prediction errors ê (each against the estimate of its time), which also carries the extra
 // variance of weighing every sample once, against that estimate. u = ξ_z − ξ of the step [spec §3].
 // Sums are discounted by the step's λ. O(1) per update, no allocation.
 struct SandwichFactor {
-  double psi2 = 0, dpsi = 0, n = 0;
+  double psi2 = 0, dpsi = 0, dpsi2 = 0, n = 0;
 
   void Add(double k, double u, double e, double lambda) noexcept {
     if (!(std::isfinite(u) && std::isfinite(e) && u >= 0)) return;
     const double w = (k + 1) / (k + u);
     psi2 = lambda * psi2 + w * w * e * e;
-    dpsi = lambda * dpsi + (k + 1) * (k - u) / ((k + u) * (k + u));
+    const double d = (k + 1) * (k - u) / ((k + u) * (k + u));
+    dpsi = lambda * dpsi + d;
+    dpsi2 = lambda * dpsi2 + d * d;
     n = lambda * n + 1;
   }
   // NaN until more than ρ+1 updates, or while mean(ψ') ≤ 0.
   double Factor(int rho) const noexcept {
     if (!(n > rho + 1 && dpsi > 0)) return std::numeric_limits<double>::quiet_NaN();
-    return n / (n - rho) * (psi2 / n) / ((dpsi / n) * (dpsi / n));
+    const double mean = dpsi / n, kappa = 1 + rho / n * std::max(dpsi2 / n - mean * mean, 0.0) / (mean * mean);
+    return kappa * kappa * n / (n - rho) * (psi2 / n) / (mean * mean);
   }
 };
 

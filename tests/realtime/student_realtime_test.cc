@@ -161,7 +161,8 @@ TYPED_TEST(StudentRealtime, PosteriorCovarianceAtAnyTimeEqualsTheDenseMultivaria
   }
 }
 
-// The sampling covariance c·V_z⁻¹/n with c = n/(n−ρ)·mean(ψ²)/mean(ψ')², ψ = wê, ψ' = (k+1)(k−u)/(k+u)²,
+// The sampling covariance c·V_z⁻¹/n with c = κ²·n/(n−ρ)·mean(ψ²)/mean(ψ')², κ = 1 + (ρ/n)·var(ψ')/mean(ψ')²,
+// ψ = wê, ψ' = (k+1)(k−u)/(k+u)²,
 // w = (k+1)/(k+u), u = ξ_z − ξ, means discounted by λ [ident/student_regression.h]. Reference: the sums
 // formed here from the step reports and details, V_z densely from the reported weights as above.
 TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
@@ -169,7 +170,7 @@ TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
   const StudentRegressionOptions o = Cauchy(0.99);
   TypeParam est(4, o);
   Eigen::MatrixXd V = o.prior->V0;
-  double psi2 = 0, dpsi = 0, n = 0;
+  double psi2 = 0, dpsi = 0, dpsi2 = 0, n = 0;
   Eigen::Matrix4d P;
   for (int t = 0; t < 400; ++t) {
     const StepReport r = est.Update(data[t].y, data[t].z);
@@ -179,7 +180,9 @@ TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
     V = (1 - r.weight) * V + r.weight * h * h.transpose();
     const double u = est.last_step().xi_z - est.last_step().xi, w = 2 / (1 + u);
     psi2 = 0.99 * psi2 + w * w * r.prediction_error * r.prediction_error;
-    dpsi = 0.99 * dpsi + 2 * (1 - u) / ((1 + u) * (1 + u));
+    const double d = 2 * (1 - u) / ((1 + u) * (1 + u));
+    dpsi = 0.99 * dpsi + d;
+    dpsi2 = 0.99 * dpsi2 + d * d;
     n = 0.99 * n + 1;
     est.CovarianceInto(P);
     if (t < 5) {  // n ≤ ρ + 1
@@ -187,7 +190,8 @@ TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
       continue;
     }
     if (t != 5 && t != 30 && t != 399) continue;
-    const double c = n / (n - 4) * (psi2 / n) / std::pow(dpsi / n, 2);
+    const double m = dpsi / n, kappa = 1 + 4 / n * (dpsi2 / n - m * m) / (m * m);
+    const double c = kappa * kappa * n / (n - 4) * (psi2 / n) / (m * m);
     const Eigen::MatrixXd cov =
         c / n * Eigen::LLT<Eigen::MatrixXd>(V.bottomRightCorner(4, 4)).solve(Eigen::MatrixXd::Identity(4, 4));
     EXPECT_LT((P - cov).norm(), 1e-9 * cov.norm()) << "t = " << t;
