@@ -139,6 +139,7 @@ void SafeStudentRegression::Replay() noexcept {
   monitor_.Clear();
   for (long i = 0; i < stored_; ++i) {
     const auto sample = history_.col(Column(i));
+    est_->set_leverage_guard(Outlying(sample.tail(rho)));
     const StepReport r = est_->Update(sample(0), sample.tail(rho));
     if (r.updated() && i >= stored_ - monitor_.window()) monitor_.Add(r.nu * r.weight);
   }
@@ -149,6 +150,13 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart) noexcept 
   const double low_before = monitor_.low_fraction();
   Eigen::MatrixXd window(recent, rho + 1);  // the last `recent` samples, oldest first
   for (long i = 0; i < recent; ++i) window.row(i) = history_.col(Column(stored_ - recent + i)).transpose();
+  Eigen::VectorXd centre(rho), spread(rho);
+  for (int j = 0; j < rho; ++j) {
+    Eigen::VectorXd column = window.col(j + 1);
+    std::nth_element(column.data(), column.data() + recent / 2, column.data() + recent);
+    centre(j) = column(recent / 2);
+    spread(j) = RobustScale(window.col(j + 1));
+  }
   StudentRegressionOptions o = options_.base;
   o.leverage_guard = true;
   const double growth = std::pow(options_.scale_growth, (o.dof + 1) / (2 * o.dof));
@@ -157,6 +165,8 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart) noexcept 
   const double nu0 = lock_in_restart ? rho + o.dof + o.delta : static_cast<double>(recent);
   std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth);
   if (!prior && !lock_in_restart) return;  // not identifiable yet: the start-up waits for more samples
+  centre_ = centre;
+  spread_ = spread;
   if (!prior) prior = RegressionPrior::FromWindow(window, rho + o.dof + o.delta, o.delta);  // vague, equivariant
   try {
     o.prior = *prior;
@@ -164,8 +174,8 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart) noexcept 
   } catch (...) {
     // Not reached for a finite window (the prior is validated); the current estimator is kept.
   }
-  Replay();
   started_ = true;
+  Replay();
   if (!lock_in_restart) return;
   RestartEvent event;
   event.update = updates_;

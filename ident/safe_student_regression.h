@@ -11,7 +11,10 @@
 //      the regressors are not identifiable (a record that starts in steady state), the start waits and
 //      is tried again every W samples on the last (up to) 5W.
 //   2. Leverage guard (StudentRegressionOptions::leverage_guard): when a sample is both unlike every
-//      regressor seen and grossly mispredicted, it is read as an outlier, not as new information.
+//      regressor seen and grossly mispredicted, and its regressor is outlying — some coordinate beyond
+//      five robust scales of that coordinate in the last start or restart window — it is read as an
+//      outlier, not as new information. A new direction of ordinary values (an input that starts to
+//      move) is learnt as the maximin recursion would.
 //   3. Lock-in monitor and recovery. A LockInMonitor watches νβ(t) over the last M = max(100, 20ρ)
 //      samples; when more than half are below the threshold the estimator restarts as in 1 from the last
 //      max(W, M) samples and then replays every sample seen, so the estimate rests on all the data
@@ -71,6 +74,7 @@ class SafeStudentRegression {
 
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
+    if (!options_.base.exact) est_->set_leverage_guard(Outlying(z));
     const StepReport report = est_->Update(y, z);
     if (options_.base.exact || !report.updated()) return report;
     Store(y, z);
@@ -139,6 +143,15 @@ class SafeStudentRegression {
     history_.col(stored_++) << y, z;
   }
   void Grow() noexcept;
+  // Some coordinate of z beyond kLeverage robust scales of its column in the last (re)start window.
+  template <class Derived>
+  bool Outlying(const Eigen::MatrixBase<Derived>& z) const noexcept {
+    if (!started_ || centre_.size() != z.size()) return false;
+    for (Eigen::Index i = 0; i < z.size(); ++i)
+      if (std::abs(z(i) - centre_(i)) > kLeverage * spread_(i)) return true;
+    return false;
+  }
+  static constexpr double kLeverage = 5;
   long RecentWindow() const;
   // Column i (0 = oldest) of the kept samples.
   Eigen::Index Column(long i) const { return (ring_start_ + i) % stored_; }
@@ -154,6 +167,7 @@ class SafeStudentRegression {
   bool started_ = false;
   LockInMonitor monitor_;
   Eigen::MatrixXd history_;  // (ρ+1) x capacity: y, z of every updated sample (column = sample)
+  Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the last (re)start window
   long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
   int lock_ins_ = 0;
   std::vector<RestartEvent> events_;

@@ -75,7 +75,9 @@ struct StudentRegressionOptions {
   // smaller β) instead of the larger H0. The maximin choice gives such a sample the weight of new
   // information, an influence that grows without bound with the size of the regressor (a gross output
   // outlier entering later ARX regressors); the guard bounds it, as GM-estimators bound leverage.
-  // A regressor that is new and fitted by the model has one maximum and is learnt as usual.
+  // A regressor that is new and fitted by the model has one maximum and is learnt as usual. Callers that
+  // can tell an outlying regressor from a new direction of ordinary values switch it per sample
+  // (set_leverage_guard; SafeStudentRegression does).
   bool leverage_guard = false;
   // Data-driven start-up (used when `prior` is unset and not `exact`): the first W samples are run
   // with DefaultPrior() and kept; after sample W the estimator restarts from the prior
@@ -216,6 +218,9 @@ class BasicStudentRegression {
     last_beta_ = std::numeric_limits<double>::quiet_NaN();
     details_ = {};
   }
+
+  // Switches the leverage guard (StudentRegressionOptions::leverage_guard) for the next updates. noexcept.
+  void set_leverage_guard(bool on) noexcept { options_.leverage_guard = on; }
 
   // Changes λ on the fly (the next update uses it). Throws InvalidArgument if λ ∉ (0, 1] or if λ is
   // inadmissible — ν(t) would reach ν_hard from the current ν or from ν(0) after a Reset() [spec §5, §7b].
