@@ -5,6 +5,9 @@
 #include <optional>
 #include <vector>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
 #include "ident/batch_regression.h"
 
 namespace ident {
@@ -40,7 +43,7 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
   // Rows with a regressor coordinate beyond kLeverage robust scales of its column are left out of the fit
   // and of M_w (a gross output outlier entering later ARX regressors is such a row), as long as at least
   // 2ρ+1 rows remain.
-  constexpr double kLeverage = 5;
+  constexpr double kLeverage = 5, kInlierShare = 0.1, kMaxLeverage = 0.8;
   const Eigen::Index n = window.rows();
   Eigen::Array<bool, Eigen::Dynamic, 1> keep = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(n, true);
   for (Eigen::Index j = 1; j <= rho; ++j) {
@@ -74,6 +77,24 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
     const Eigen::VectorXd w = 2 / (1 + r.array().square() / gamma2);
     Eigen::MatrixXd M = Z.transpose() * w.asDiagonal() * Z / w.sum();
     M = 0.5 * (M + M.transpose());
+    // The fit must rest on its inliers in every direction: the information of the weighted rows, M_w,
+    // against that of all kept rows, M_0 = Z'Z/n, generalised eigenvalues ≥ kInlierShare. A direction
+    // that only a few rows carry (a binary input that has switched twice) can be left to rows the
+    // fit calls outliers, and a start there would be arbitrary.
+    const Eigen::MatrixXd M0 = Z.transpose() * Z / static_cast<double>(Z.rows());
+    const Eigen::LLT<Eigen::MatrixXd> chol(M0);
+    IDENT_REQUIRE(chol.info() == Eigen::Success, "the window's regressors are rank-deficient");
+    const Eigen::MatrixXd Linv = chol.matrixL().solve(Eigen::MatrixXd::Identity(rho, rho));
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> relative(Linv * M * Linv.transpose(), Eigen::EigenvaluesOnly);
+    IDENT_REQUIRE(relative.eigenvalues()(0) >= kInlierShare, "a direction rests on the fit's outliers");
+    // Nor may a direction rest on one row: every weighted leverage w_i z_i'(Z'WZ)⁻¹z_i ≤ kMaxLeverage (a
+    // binary input that has switched once in the window leaves the row of the switch to decide its
+    // coefficients alone — and to fit a gross outlier there exactly).
+    const Eigen::LLT<Eigen::MatrixXd> information(Z.transpose() * w.asDiagonal() * Z);
+    for (Eigen::Index i = 0; i < Z.rows(); ++i) {
+      const Eigen::VectorXd zi = Z.row(i).transpose();
+      IDENT_REQUIRE(w(i) * zi.dot(information.solve(zi)) <= kMaxLeverage, "a direction rests on a few rows");
+    }
     const double sigma0 = options.refine_scale ? growth * se : RobustScale(window.col(0));
     RegressionPrior prior;
     prior.nu0 = nu0;

@@ -8,8 +8,10 @@
 //      five robust scales) gives Θ_r, and the estimator restarts from the class member of W pseudo-samples
 //      centred there (D_y(0) = G^{(k+1)/k}·s_e², s_e the residuals' robust scale) and replays the window.
 //      Outliers in y and in the regressors, up to the fit's breakdown point, do not move the start. While
-//      the regressors are not identifiable (a record that starts in steady state), the start waits and
-//      is tried again every W samples on the last (up to) 5W.
+//      the window does not determine every coefficient from its inliers — regressors not identifiable (a
+//      record that starts in steady state), more than half of the rows fitted exactly, a direction whose
+//      information the fit's outliers carry, or one row alone deciding a direction (weighted leverage
+//      above 0.8) — the start waits and is tried again every W samples on the last (up to) 5W.
 //   2. Leverage guard (StudentRegressionOptions::leverage_guard): when a sample is both unlike every
 //      regressor seen and grossly mispredicted, and its regressor is outlying — some coordinate beyond
 //      five robust scales of that coordinate in the last start or restart window — it is read as an

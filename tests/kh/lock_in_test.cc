@@ -236,6 +236,26 @@ TEST(SafeStudentRegression, StartUpPriorFollowsTheRule) {
   EXPECT_EQ(safe.nu(), 20 + 200);
 }
 
+// The start waits while the window cannot determine every coefficient from its inliers: here the second
+// regressor moves at one row of the first 20 only (that row alone would decide its coefficient, and
+// would be fitted exactly whatever it holds), so the start comes at the next attempt, on the last 40 rows.
+TEST(SafeStudentRegression, StartWaitsUntilNoRowAloneDecidesADirection) {
+  std::mt19937_64 rng(12);
+  std::normal_distribution<double> g;
+  SafeStudentRegression est(2);
+  for (int t = 0; t < 40; ++t) {
+    const Eigen::Vector2d z(g(rng), t == 7 || t >= 20 ? g(rng) : 0.0);
+    const double y = z.dot(Eigen::Vector2d(1, -2)) + 0.1 * g(rng) + (t == 7 ? 50.0 : 0.0);
+    est.Update(y, z);
+    if (t == 19) {
+      EXPECT_TRUE(est.in_startup());
+    }
+  }
+  EXPECT_FALSE(est.in_startup());
+  EXPECT_EQ(est.prior().nu0, 40);
+  EXPECT_LT((est.parameters() - Eigen::Vector2d(1, -2)).norm(), 0.1);
+}
+
 // A quarter of the start-up window gross output outliers: the high-breakdown start keeps the estimate where
 // the clean record's is (outliers that also enter later ARX regressors are the workflow's to clean,
 // models/output_cleaner.h).
