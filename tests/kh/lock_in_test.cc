@@ -4,6 +4,7 @@
 // independently from the same prior, and the lock-in itself on seeded ARX data with innovation outliers.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -300,6 +301,8 @@ TEST(SafeStudentRegression, PassesApproachTheBatchCauchyMaximumLikelihood) {
     triple += (est.parameters() - ml).norm();
     EXPECT_EQ(est.nu(), 2 * n);  // the pass prior carries the previous pass's n updates
   }
+  std::printf("[ measured ] mean distance to batch Cauchy ML: %.4f (one pass), %.4f (three passes)\n", single / 30,
+              triple / 30);
   EXPECT_LT(triple, 0.6 * single) << single / 30 << " " << triple / 30;
   SafeStudentOptions exact;
   exact.base.exact = true;
