@@ -34,12 +34,11 @@ int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
 //   V_z(0) = M_w = Σ w_i z_i z_i' / Σ w_i,  V_zy(0) = M_w Θ_r,  V_y(0) = σ0² + Θ_r'M_w Θ_r  (D_y(0) = σ0²),
 // σ0 = G^{(k+1)/(2k)}·s_e with s_e = RobustScale of the residuals (spec §8's safe side), or s_y without
 // `refine_scale`. So the first replayed samples are weighed against Θ_r, not against a vague prior that the
-// first few of them would decide. A window whose regressors are rank-deficient (a constant input, a record
-// that starts in steady state) has no such fit: nullopt.
+// first few of them would decide. A window that does not determine every coefficient from its inliers
+// has no such start: nullopt (see the checks below and the header comment).
 std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::MatrixXd>& window,
                                                  const SafeStudentOptions& options, double nu0, double growth) {
   const Eigen::Index rho = window.cols() - 1;
-  const StudentRegressionOptions& o = options.base;
   // Rows with a regressor coordinate beyond kLeverage robust scales of its column are left out of the fit
   // and of M_w (a gross output outlier entering later ARX regressors is such a row), as long as at least
   // 2ρ+1 rows remain.

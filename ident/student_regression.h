@@ -320,7 +320,7 @@ class BasicStudentRegression {
   const StudentStepDetails& last_step() const { return details_; }
   // The noise scale σ (D_y → σ² for large ν [spec §2]).
   double noise_std() const { return std::sqrt(stats_.Dy()); }
-  // The sampling covariance of Θ̂: the sandwich c·(νV_z)⁻¹ of M-estimation (see SandwichFactor), which
+  // The sampling covariance of Θ̂: the sandwich c·V_z⁻¹/n of M-estimation (see SandwichFactor), which
   // holds whatever the noise law; +inf entries until more than ρ+1 updates. posterior_covariance() is the
   // one-sided posterior's own D_y V_z⁻¹/(ν−δ−ρ), too small by (k+3)/(k+1) even under the model.
   Eigen::MatrixXd covariance() const {
@@ -331,12 +331,7 @@ class BasicStudentRegression {
   // The same covariance into a caller-owned ρ x ρ matrix, without allocating, at any time. ~(5/6)ρ³
   // flops. Throws InvalidArgument only if `out` has the wrong size.
   void CovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
-    CheckCovarianceSize(out);
-    const double c = sandwich_.Factor(num_parameters());
-    if (!(c > 0))
-      out.setConstant(std::numeric_limits<double>::infinity());
-    else
-      stats_.ScaledVzInverse(c / sandwich_.n, out);
+    ScaledVzInverseOrInfinity(sandwich_.Factor(num_parameters()) / sandwich_.n, out);
   }
   // Cov(Θ) of the one-sided posterior: D_y V_z⁻¹/(ν−δ−ρ) (multivariate t, ν−δ−ρ+2 d.o.f.) [spec §2];
   // +inf entries while ν ≤ δ+ρ.
@@ -346,12 +341,7 @@ class BasicStudentRegression {
     return out;
   }
   void PosteriorCovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
-    CheckCovarianceSize(out);
-    const double dof = stats_.nu() - options_.delta - num_parameters();
-    if (!(dof > 0))
-      out.setConstant(std::numeric_limits<double>::infinity());
-    else
-      stats_.ScaledVzInverse(stats_.Dy() / dof, out);
+    ScaledVzInverseOrInfinity(stats_.Dy() / (stats_.nu() - options_.delta - num_parameters()), out);
   }
   // Degrees of freedom of the multivariate-t marginal of Θ: ν−δ−ρ+2 [spec §2].
   double parameter_dof() const { return stats_.nu() - options_.delta - num_parameters() + 2; }
@@ -369,10 +359,15 @@ class BasicStudentRegression {
   const RegressionPrior& prior() const { return prior_; }
 
  private:
-  void CheckCovarianceSize(const Eigen::Ref<Eigen::MatrixXd>& out) const {
+  // out = s·V_z⁻¹, or +inf entries unless s is positive and finite. Throws only for a wrong size.
+  void ScaledVzInverseOrInfinity(double s, Eigen::Ref<Eigen::MatrixXd> out) const {
     IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
                   "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(),
                   num_parameters());
+    if (!(s > 0 && std::isfinite(s)))
+      out.setConstant(std::numeric_limits<double>::infinity());
+    else
+      stats_.ScaledVzInverse(s, out);
   }
   static const StudentRegressionOptions& Checked(int num_parameters, const StudentRegressionOptions& options) {
     const std::string error = options.Validate(num_parameters);
