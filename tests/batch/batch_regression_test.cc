@@ -9,7 +9,6 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -24,6 +23,7 @@
 #include "ident/batch_regression.h"
 #include "ident/common/error.h"
 #include "ident/regression_estimator.h"
+#include "tests/support/sanitizer.h"
 #include "tests/support/test_data.h"
 
 namespace ident {
@@ -280,7 +280,8 @@ TEST(CauchyMlRegression, NoneOfTwoThousandRandomStartsBeatsIt) {
     std::uniform_int_distribution<Eigen::Index> row(0, n - 1);
     std::uniform_real_distribution<double> log_scale(-3, 3);
     double best = std::numeric_limits<double>::infinity();
-    for (int start = 0; start < 2000; ++start) {
+    const int starts = testing::kUnderSanitizer ? 100 : 2000;  // the sanitizer build checks the mechanism
+    for (int start = 0; start < starts; ++start) {
       Eigen::MatrixXd Zs(p, p);
       Eigen::VectorXd ys(p);
       for (Eigen::Index j = 0; j < p; ++j) {
@@ -293,8 +294,8 @@ TEST(CauchyMlRegression, NoneOfTwoThousandRandomStartsBeatsIt) {
       const double gamma = m.scale * std::exp(log_scale(rng));
       best = std::min(best, IndependentEmNll(d, lu.solve(ys), gamma, 200));
     }
-    std::printf("[ measured ] cauchy %s: best of 2000 random EM starts NLL = %.10g (reported %.10g)\n", c.name, best,
-                m.objective);
+    std::printf("[ measured ] cauchy %s: best of %d random EM starts NLL = %.10g (reported %.10g)\n", c.name, starts,
+                best, m.objective);
     EXPECT_GE(best, m.objective - 1e-9) << c.name;
   }
 }
@@ -430,8 +431,9 @@ TEST(BatchRegressionEstimator, RankDeficientStoreReadsAsUnsolved) {
   EXPECT_FALSE(est.parameters().isZero());
 }
 
-// n = 500, ρ = 4, 20% gross outliers on Cauchy noise: the run time of the default multi-start search.
-TEST(CauchyMlRegression, Runtime) {
+// n = 500, ρ = 4, 20 % gross outliers on Cauchy noise: the default multi-start search converges near the
+// truth (its run time is measured in bench/batch_regression_benchmark.cc).
+TEST(CauchyMlRegression, RecoversTheTruthThroughTwentyPercentGrossOutliers) {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal;
   std::cauchy_distribution<double> cauchy(0, 0.5);
@@ -444,21 +446,11 @@ TEST(CauchyMlRegression, Runtime) {
     Z.row(i) << 1, normal(rng), normal(rng), normal(rng);
     y(i) = Z.row(i).dot(theta) + cauchy(rng) + (unit(rng) < 0.2 ? 50 : 0);
   }
-  BatchRegressionResult m = CauchyMlRegression(Z, y);  // warm-up
-  const int repeats = 10;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (int k = 0; k < repeats; ++k) m = CauchyMlRegression(Z, y);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / repeats;
-  const auto h0 = std::chrono::steady_clock::now();
-  const BatchRegressionResult h = HuberRegression(Z, y);
-  const double huber_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - h0).count();
-  std::printf("[ measured ] n = 500, rho = 4: cauchy ML %.2f ms (%d starts, theta %s, gamma %.4f); huber %.2f ms "
-              "(%d iterations)\n",
-              ms, m.starts, Join(m.theta).c_str(),
-              m.scale, huber_ms, h.iterations);
+  const BatchRegressionResult m = CauchyMlRegression(Z, y);
+  std::printf("[ measured ] n = 500, rho = 4: cauchy ML %d starts, theta %s, gamma %.4f\n", m.starts,
+              Join(m.theta).c_str(), m.scale);
   EXPECT_TRUE(m.converged);
   EXPECT_LE((m.theta - theta).cwiseAbs().maxCoeff(), 0.2);
-  EXPECT_LT(ms, 250);  // about 10 ms here; loose for loaded CI machines
 }
 
 }  // namespace
