@@ -131,6 +131,14 @@ TYPED_TEST(StudentRealtime, ResetEqualsAFreshlyBuiltEstimator) {
   }
 }
 
+// The dense reference of one step: V ← (1−β)V + βhh', h = [y; z], with the reported β [spec §3].
+template <class Z>
+void DenseStep(Eigen::MatrixXd& V, const StepReport& r, double y, const Z& z) {
+  Eigen::VectorXd h(z.size() + 1);
+  h << y, z;
+  V = (1 - r.weight) * V + r.weight * h * h.transpose();
+}
+
 // The posterior's Cov(Θ) = D_y V_z⁻¹/(ν−δ−ρ) [spec §2]. Reference: V recomputed densely from the reported
 // weights, V(t) = (1−β_t)V(t−1) + β_t h h' (exponential forgetting leaves V unchanged [spec §7b]),
 // ν(t) = λν + 1, D_y = V_y − V_zy'V_z⁻¹V_zy, the inverse by Cholesky.
@@ -144,9 +152,7 @@ TYPED_TEST(StudentRealtime, PosteriorCovarianceAtAnyTimeEqualsTheDenseMultivaria
   for (int t = 0; t < 400; ++t) {
     const StepReport r = est.Update(data[t].y, data[t].z);
     ASSERT_TRUE(r.updated());
-    Eigen::Matrix<double, 5, 1> h;
-    h << data[t].y, data[t].z;
-    V = (1 - r.weight) * V + r.weight * h * h.transpose();
+    DenseStep(V, r, data[t].y, data[t].z);
     nu = 0.99 * nu + 1;
     if (t != 0 && t != 30 && t != 399) continue;
     const Eigen::LLT<Eigen::MatrixXd> Vz(V.bottomRightCorner(4, 4));
@@ -175,9 +181,7 @@ TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
   for (int t = 0; t < 400; ++t) {
     const StepReport r = est.Update(data[t].y, data[t].z);
     ASSERT_TRUE(r.updated());
-    Eigen::Matrix<double, 5, 1> h;
-    h << data[t].y, data[t].z;
-    V = (1 - r.weight) * V + r.weight * h * h.transpose();
+    DenseStep(V, r, data[t].y, data[t].z);
     const double u = est.last_step().xi_z - est.last_step().xi, w = 2 / (1 + u);
     psi2 = 0.99 * psi2 + w * w * r.prediction_error * r.prediction_error;
     const double d = 2 * (1 - u) / ((1 + u) * (1 + u));
