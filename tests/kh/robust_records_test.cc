@@ -124,6 +124,8 @@ TEST(StaticRecords, CauchyLandsNearTheCauchyMaximumLikelihoodEstimate) {
   const StaticRecord& telef = StaticRecords()[2];
   EXPECT_LT((Theta(Json(FitArgs(telef, "cauchy"))) - telef.cauchy_ml).norm(), 0.05 * (telef.ols - telef.cauchy_ml).norm());
   EXPECT_EQ(Json(FitArgs(telef, "rls --passes 3"))["passes"], 1);  // least squares needs one pass
+  testing::ExpectCliError(FitArgs(telef, "cauchy --passes 0"), "--passes 0; need 1 <= passes <= 100");
+  testing::ExpectCliError("compare dryer --passes 101", "--passes 101; need 1 <= passes <= 100");
 }
 
 // With --split 1 the validation rows are the estimation rows; `compare` scores them uncorrupted: the fit %
