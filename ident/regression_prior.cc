@@ -76,9 +76,9 @@ RegressionPrior RegressionPrior::FromWindow(const Eigen::Ref<const Eigen::Matrix
   return prior;
 }
 
-double RobustScale(const Eigen::Ref<const Eigen::VectorXd>& x) {
+double MadScale(const Eigen::Ref<const Eigen::VectorXd>& x) {
   const std::size_t n = static_cast<std::size_t>(x.size());
-  if (n == 0) return 1.0;
+  if (n == 0) return 0.0;
   std::vector<double> v(x.data(), x.data() + n);
   auto median = [&] {
     std::nth_element(v.begin(), v.begin() + n / 2, v.end());
@@ -86,8 +86,12 @@ double RobustScale(const Eigen::Ref<const Eigen::VectorXd>& x) {
   };
   const double med = median();
   for (std::size_t i = 0; i < n; ++i) v[i] = std::abs(x(i) - med);
-  double s = 1.4826 * median();
-  if (!(s > 0)) s = std::sqrt(x.squaredNorm() / n);
+  return 1.4826 * median();
+}
+
+double RobustScale(const Eigen::Ref<const Eigen::VectorXd>& x) {
+  double s = MadScale(x);
+  if (!(s > 0) && x.size() > 0) s = std::sqrt(x.squaredNorm() / static_cast<double>(x.size()));
   return s > 0 && std::isfinite(s) ? s : 1.0;
 }
 

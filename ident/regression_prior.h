@@ -55,5 +55,7 @@ struct RegressionPrior {
 // data, ignores up to half the sample being outliers); the RMS if the MAD is 0; 1 if that is 0 too
 // (or the sample is empty).
 double RobustScale(const Eigen::Ref<const Eigen::VectorXd>& x);
+// 1.4826·MAD alone: 0 when more than half of the sample is one value (or the sample is empty).
+double MadScale(const Eigen::Ref<const Eigen::VectorXd>& x);
 
 }  // namespace ident

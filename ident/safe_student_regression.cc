@@ -42,7 +42,7 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
   // Rows with a regressor coordinate beyond kLeverage robust scales of its column are left out of the fit
   // and of M_w (a gross output outlier entering later ARX regressors is such a row), as long as at least
   // 2ρ+1 rows remain.
-  constexpr double kLeverage = 5, kInlierShare = 0.1, kMaxLeverage = 0.8;
+  constexpr double kLeverage = SafeStudentRegression::kLeverage, kInlierShare = 0.1, kMaxLeverage = 0.8;
   const Eigen::Index n = window.rows();
   Eigen::Array<bool, Eigen::Dynamic, 1> keep = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(n, true);
   for (Eigen::Index j = 1; j <= rho; ++j) {
@@ -67,11 +67,7 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
     IDENT_REQUIRE(gamma2 > 0, "the window is fitted exactly");
     // The residuals' robust scale; zero when more than half of the rows are fitted exactly (a window in
     // steady state), which says nothing of the noise: no start from such a window.
-    Eigen::VectorXd centred = r;
-    std::nth_element(centred.data(), centred.data() + r.size() / 2, centred.data() + r.size());
-    Eigen::VectorXd deviation = (r.array() - centred(r.size() / 2)).abs();
-    std::nth_element(deviation.data(), deviation.data() + r.size() / 2, deviation.data() + r.size());
-    const double se = 1.4826 * deviation(r.size() / 2);
+    const double se = MadScale(r);
     IDENT_REQUIRE(se > 0, "more than half of the window is fitted exactly");
     const Eigen::VectorXd w = 2 / (1 + r.array().square() / gamma2);
     Eigen::MatrixXd M = Z.transpose() * w.asDiagonal() * Z / w.sum();

@@ -70,6 +70,8 @@ struct SafeStudentOptions {
 class SafeStudentRegression {
  public:
   using ParamVector = StudentRegression::ParamVector;
+  // Robust scales beyond which a regressor coordinate is outlying (the leverage guard and the start-up fit).
+  static constexpr double kLeverage = 5;
 
   // Throws InvalidArgument naming the option if `options` is invalid or inadmissible.
   SafeStudentRegression(int num_parameters, const SafeStudentOptions& options = {});
@@ -153,7 +155,6 @@ class SafeStudentRegression {
       if (std::abs(z(i) - centre_(i)) > kLeverage * spread_(i)) return true;
     return false;
   }
-  static constexpr double kLeverage = 5;
   long RecentWindow() const;
   // Column i (0 = oldest) of the kept samples.
   Eigen::Index Column(long i) const { return (ring_start_ + i) % stored_; }
