@@ -144,20 +144,22 @@ class CauchyProblem {
 
   // Gradient g and Hessian H of the NLL in (β, η = log γ) at `point`.
   void Derivatives(const CauchyPoint& point, Eigen::VectorXd& g, Eigen::MatrixXd& H) const {
+    // In the standardised residuals u = r/γ (d = 1 + u²): the same sums as in r and γ², without the
+    // under/overflow of (r² + γ²)² on data in very small or large units.
     const Eigen::Index np = p();
-    const double g2 = point.gamma * point.gamma;
-    const Eigen::ArrayXd r = (y_ - Q_ * point.beta).array();
-    const Eigen::ArrayXd d = r.square() + g2;
+    const double inv_gamma = 1 / point.gamma;
+    const Eigen::ArrayXd u = (y_ - Q_ * point.beta).array() * inv_gamma;
+    const Eigen::ArrayXd d = 1 + u.square();
     const Eigen::ArrayXd d2 = d.square();
     g.resize(np + 1);
     H.resize(np + 1, np + 1);
-    g.head(np) = -Q_.transpose() * (2 * r / d).matrix();
-    g(np) = (2 * g2 / d).sum() - static_cast<double>(n());
-    const Eigen::MatrixXd Qa = Q_.array().colwise() * (2 * (g2 - r.square()) / d2);
-    H.topLeftCorner(np, np) = Qa.transpose() * Q_;
-    H.col(np).head(np) = Q_.transpose() * (4 * g2 * r / d2).matrix();
+    g.head(np) = -inv_gamma * (Q_.transpose() * (2 * u / d).matrix());
+    g(np) = (2 / d).sum() - static_cast<double>(n());
+    const Eigen::MatrixXd Qa = Q_.array().colwise() * (2 * (1 - u.square()) / d2);
+    H.topLeftCorner(np, np) = (inv_gamma * inv_gamma) * (Qa.transpose() * Q_);
+    H.col(np).head(np) = inv_gamma * (Q_.transpose() * (4 * u / d2).matrix());
     H.row(np).head(np) = H.col(np).head(np).transpose();
-    H(np, np) = (4 * g2 * r.square() / d2).sum();
+    H(np, np) = (4 * u.square() / d2).sum();
   }
 
   // ‖(γ ∂/∂β, ∂/∂η)‖: scale free (each term of the sums is O(1)).
@@ -230,9 +232,8 @@ class CauchyProblem {
     const Eigen::MatrixXd A = H.topLeftCorner(np, np);
     const Eigen::LLT<Eigen::MatrixXd> llt(A);
     if (llt.info() == Eigen::Success) {
-      const double g2 = point.gamma * point.gamma;
-      const Eigen::ArrayXd r = (y_ - Q_ * point.beta).array();
-      const Eigen::MatrixXd Qpsi = Q_.array().colwise() * (2 * r / (r.square() + g2));
+      const Eigen::ArrayXd u = (y_ - Q_ * point.beta).array() / point.gamma;  // ψ(r) = 2r/(r² + γ²)
+      const Eigen::MatrixXd Qpsi = Q_.array().colwise() * (2 * u / (1 + u.square()) / point.gamma);
       const Eigen::MatrixXd Ainv = llt.solve(Eigen::MatrixXd::Identity(np, np));
       return Ainv * (Qpsi.transpose() * Qpsi) * Ainv;
     }
@@ -386,7 +387,9 @@ BatchRegressionResult HuberRegression(const Eigen::Ref<const Eigen::MatrixXd>& Z
     if (!WeightedFit(f.Q, y, w, beta)) break;
     Eigen::VectorXd next = y - f.Q * beta;
     ++result.iterations;
-    const double delta = std::sqrt((next - r).squaredNorm() / std::max(1e-20, r.squaredNorm()));
+    // rlm's relative change of the residuals, without its absolute floor max(1e-20, ‖r‖²), which stops the
+    // iteration at once on data in small units (‖r‖² > 0 here: the MAD scale s is positive).
+    const double delta = std::sqrt((next - r).squaredNorm() / r.squaredNorm());
     r = std::move(next);
     if (delta <= options.tolerance) {
       result.converged = true;

@@ -61,6 +61,7 @@
 
 #include <Eigen/Core>
 
+#include "ident/common/error.h"
 #include "ident/common/step_report.h"
 
 namespace ident {
@@ -148,8 +149,11 @@ class BatchRegressionEstimator {
   int num_parameters() const { return num_parameters_; }
   const Eigen::VectorXd& parameters() const { return Solved().theta; }
   Eigen::MatrixXd covariance() const { return Solved().covariance; }
+  // θ̂'z; throws InvalidArgument if z does not have one entry per parameter.
   template <class Derived>
   double Predict(const Eigen::MatrixBase<Derived>& z) const {
+    IDENT_REQUIRE(z.size() == num_parameters_, "Predict: z has {} entries; the model has {} parameters", z.size(),
+                  num_parameters_);
     return parameters().dot(z.derived().template cast<double>());
   }
   double nu() const { return static_cast<double>(y_.size()); }

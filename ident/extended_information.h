@@ -169,9 +169,12 @@ class ExtendedInformation {
     return theta_;
   }
 
-  // Θ̂'z without touching the cache's validity rules.
+  // Θ̂'z without touching the cache's validity rules. Throws InvalidArgument if z does not have one entry
+  // per parameter.
   template <class Derived>
   double Predict(const Eigen::MatrixBase<Derived>& z) const {
+    IDENT_REQUIRE(z.size() == theta_.size(), "Predict: z has {} entries; the model has {} parameters", z.size(),
+                  theta_.size());
     return parameters().dot(z);
   }
 

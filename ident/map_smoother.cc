@@ -1,5 +1,6 @@
 #include "ident/map_smoother.h"
 
+#include <cstdlib>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -343,12 +344,16 @@ class Solver {
       if (has_lo_[c]) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
       if (has_hi_[c]) bound_scale = std::max(bound_scale, std::abs(hi_(c)));
     }
+    BalanceBoxMultipliers();
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
-    double mu = 0;
+    // mu_scale: the complementarity at the start (at least 1). Multipliers × slacks carry the units of the
+    // residuals (a domain bound 1000 away starts them 1000-fold), and so does the precision limit below.
+    double mu = 0, mu_scale = 1;
     for (;; ++iter) {
       const double v_scale = Residuals();
       mu = num_constraints_ ? Complementarity(0) / num_constraints_ : 0.0;
+      if (iter == 0) mu_scale = std::max(1.0, mu);
       const double r3max = r3_.size() ? r3_.cwiseAbs().maxCoeff() : 0.0;
       const double r4max = R4_.cwiseAbs().maxCoeff();
       // KKT residual relative to its scale (R4 sums products of H_t, F_t with p + B'u).
@@ -367,7 +372,8 @@ class Solver {
       if (!FactorizeBlockTridiagonal(n_, T_ + 1, D_.data(), E_.data(), C_.data(), G_.data(), chol_work_)) {
         // Near the solution K = M + D spans many orders of magnitude; if the Newton matrix breaks down
         // there, the iterate is accepted when its KKT residual is within 1e3 tolerance (precision limit).
-        res.status = kkt <= 1e3 * o_.tolerance ? MapSmootherStatus::kConverged : MapSmootherStatus::kNumericalFailure;
+        res.status = kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged
+                                                          : MapSmootherStatus::kNumericalFailure;
         break;
       }
       if (num_constraints_ == 0) {  // all penalties quadratic: one Newton step solves (P) exactly
@@ -492,6 +498,25 @@ class Solver {
       for (int i = 0; i < k; ++i) r3[i] -= qhi_(term.offset + i) - qlo_(term.offset + i);
     }
     return v_scale;
+  }
+
+  // The box multipliers of the starting point, chosen so that the stationarity residual in u vanishes at the
+  // start: q_lo − q_hi = −e with e = B r − b − M u at the initial states, each multiplier ≥ 1. With unit
+  // multipliers a constraint far from active (a domain bound 1000 away from the residual) starts with
+  // |R3| ≈ 1000 ≫ the complementarity, and the iteration pushes the multipliers away instead of the residual.
+  void BalanceBoxMultipliers() {
+    Residuals();
+    for (int c : bounded_) {
+      const double e = r3_(c) + (qhi_(c) - qlo_(c));  // the stationarity residual without the multipliers
+      if (has_lo_[c] && has_hi_[c]) {
+        qlo_(c) = 1 + std::max(0.0, -e);
+        qhi_(c) = 1 + std::max(0.0, e);
+      } else if (has_lo_[c]) {
+        qlo_(c) = std::max(1.0, -e);
+      } else {
+        qhi_(c) = std::max(1.0, e);
+      }
+    }
   }
 
   // sum (s + a ds) .* (q + a dq) over finite bounds.
@@ -788,6 +813,21 @@ MapSmootherResult Solve(const MapSmootherProblem& problem, const MapSmootherOpti
 namespace internal {
 
 void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {
+  if (!res->x.allFinite() || !res->u.allFinite()) {  // overflow or NaN in the iteration: nothing to evaluate
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    res->status = MapSmootherStatus::kNumericalFailure;
+    res->message = fmt::format("the iterate is not finite after {} iterations (values too large or too far apart "
+                               "in scale: rescale the data or the model)",
+                               res->iterations);
+    res->primal = res->dual = res->gap = res->relative_gap = res->dual_infeasibility = nan;
+    res->max_abs_x_difference = nan;
+    res->w.setConstant(res->x.rows(), res->x.cols(), nan);
+    res->y.setConstant(res->x.rows(), res->x.cols(), nan);
+    res->x_from_dual.setConstant(res->x.rows(), res->x.cols(), nan);
+    res->nonunique_steps.clear();
+    res->reconstruction_unique = false;
+    return;
+  }
   switch (p.state_dim()) {
     case 1: return FinishResult<1>(p, z_scale, mu, res);
     case 2: return FinishResult<2>(p, z_scale, mu, res);

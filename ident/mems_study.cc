@@ -34,6 +34,12 @@ std::string MemsStudyOptions::Validate() const {
   if (grid_points < 16 || grid_points > 1024) return fmt::format("grid_points = {}; need 16..1024", grid_points);
   if (ep_window < 1 || ep_window > 4096) return fmt::format("ep_window = {}; need 1..4096", ep_window);
   if (!(sigma_m2 >= 0)) return fmt::format("sigma_m2 = {}; need >= 0", sigma_m2);
+  // At least one expected event in the scored part of the run (its mean spacing is t_target).
+  const double scored_time = (steps - burn_in) * h;
+  if (!(scored_time >= t_target))
+    return fmt::format("(steps - burn_in)·h = {:.3g} simulated seconds after the burn-in is shorter than t_target = "
+                       "{}, the mean time between events; need at least one expected event",
+                       scored_time, t_target);
   return "";
 }
 
@@ -294,6 +300,16 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   MemsObserverResult b{"bound", std::sqrt(acc_bound.var / acc_bound.n),
                        (acc_bound.var / acc_bound.n) / (acc_grid.se / acc_grid.n), 0.0};
   result.observers.push_back(b);
+  // A run without an event, or with a figure that is not finite, has nothing to report.
+  IDENT_REQUIRE(events_counted > 0,
+                "MEMS study at t_target = {}: no event in the {:.3g} simulated seconds after the burn-in; raise the "
+                "number of steps",
+                o.t_target, (o.steps - o.burn_in) * o.h);
+  for (const MemsObserverResult& r : result.observers)
+    IDENT_REQUIRE(std::isfinite(r.rms) && std::isfinite(r.calibration),
+                  "MEMS study at t_target = {}: observer '{}' has RMS {} and calibration {}, not finite numbers "
+                  "(h = {} too small for double precision?)",
+                  o.t_target, r.name, r.rms, r.calibration, o.h);
   return result;
 }
 

@@ -142,7 +142,10 @@ std::vector<int> InjectOutliers(Eigen::Ref<Eigen::VectorXd> y, Segment segment, 
 
 Spread Spread::Of(std::vector<double> v) {
   Spread s;
-  if (v.empty()) return s;
+  if (v.empty()) {  // no value (every trial failed): NaN throughout
+    s.mean = s.std = s.min = s.median = s.p90 = s.max = std::numeric_limits<double>::quiet_NaN();
+    return s;
+  }
   std::sort(v.begin(), v.end());
   const double n = static_cast<double>(v.size());
   s.mean = std::accumulate(v.begin(), v.end(), 0.0) / n;
@@ -208,6 +211,10 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   std::vector<Eigen::VectorXd> theta_sum(estimators.size(), Eigen::VectorXd::Zero(rho));
   std::vector<std::string> kinds(estimators.size());
   std::vector<int> passes(estimators.size(), 1);
+  std::vector<int> failed(estimators.size(), 0);
+  std::vector<std::vector<double>> one_step_per_trial(
+      estimators.size(), std::vector<double>(static_cast<std::size_t>(options.trials), std::nan("")));
+  std::vector<std::string> failures(estimators.size());
   const int y_col = source.output_column();
   int done = 0;
   for (int trial = 0; trial < options.trials; ++trial) {
@@ -218,9 +225,23 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
     result.outliers_per_trial = static_cast<int>(rows.size());
     for (std::size_t e = 0; e < estimators.size(); ++e) {
       auto estimator = MakeRegressionEstimator(settings[e], rho);
-      RecordingEstimator recorder(*estimator, result.estimation.count);
-      Estimate(corrupted, result.estimation, source, recorder, fit, &passes[e]);
       kinds[e] = estimator->kind();
+      RecordingEstimator recorder(*estimator, result.estimation.count);
+      // One estimator's failure on one trial is that estimator's result, reported beside the others.
+      std::string failure;
+      try {
+        const int updates = Estimate(corrupted, result.estimation, source, recorder, fit, &passes[e]).first;
+        failure = UnusableResult(*estimator, result.parameter_names, updates);
+      } catch (const DataError& error) {
+        failure = error.what();
+      } catch (const InvalidArgument& error) {
+        failure = error.what();
+      }
+      if (!failure.empty()) {
+        if (failed[e]++ == 0) failures[e] = fmt::format("trial {}: {}", trial + 1, failure);
+        if (options.progress) options.progress(++done, total);
+        continue;
+      }
       cleaned[e].push_back(static_cast<double>(source.cleaned()));
       const Eigen::VectorXd theta = estimator->parameters();
       theta_sum[e] += theta;
@@ -228,6 +249,7 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
       // whose corrupted outputs would reward the estimator that fits the outliers.
       const FitScores s = Score(data, result.validation, source, theta);
       one_step[e].push_back(s.one_step);
+      one_step_per_trial[e][static_cast<std::size_t>(trial)] = s.one_step;
       if (s.simulation) simulation[e].push_back(*s.simulation);
       distance[e].push_back((theta - result.theta_ls).norm() / result.theta_ls.norm());
       if (trial < kTimedTrials) {
@@ -242,16 +264,25 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
     score.estimator = labels[e];
     score.kind = kinds[e];
     score.passes = passes[e];
-    score.theta = theta_sum[e] / options.trials;
+    const int succeeded = options.trials - failed[e];
+    score.theta = succeeded > 0 ? Eigen::VectorXd(theta_sum[e] / succeeded)
+                                : Eigen::VectorXd::Constant(rho, std::numeric_limits<double>::quiet_NaN());
+    score.failed_trials = failed[e];
+    score.failure = failures[e];
     score.one_step = Spread::Of(one_step[e]);
-    score.one_step_per_trial = one_step[e];
+    score.one_step_per_trial = one_step_per_trial[e];
     score.has_simulation = !simulation[e].empty();
     score.simulation = Spread::Of(simulation[e]);
     score.theta_distance = Spread::Of(distance[e]);
-    score.ns_per_update = Spread::Of(ns[e]).min;  // the least disturbed by other processes
+    score.ns_per_update = ns[e].empty() ? std::numeric_limits<double>::quiet_NaN() : Spread::Of(ns[e]).min;  // the least disturbed by other processes
     score.cleaned = Spread::Of(cleaned[e]).mean;
     result.scores.push_back(std::move(score));
   }
+  bool any = false;
+  for (std::size_t e = 0; e < estimators.size(); ++e) any = any || failed[e] < options.trials;
+  if (!any)
+    throw DataError(fmt::format("{}: every estimator failed on every trial ({}, {})", data.source, labels[0],
+                                failures[0]));
   auto key = [](const EstimatorScore& s) { return std::isnan(s.one_step.mean) ? -HUGE_VAL : s.one_step.mean; };
   std::stable_sort(result.scores.begin(), result.scores.end(),
                    [&key](const EstimatorScore& a, const EstimatorScore& b) { return key(a) > key(b); });

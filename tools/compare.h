@@ -68,6 +68,8 @@ struct EstimatorScore {
   bool has_simulation = false;
   double ns_per_update = 0;        // fastest timed replay (first 5 trials)
   double cleaned = 0;              // mean number of outputs cleaned in the regressors
+  int failed_trials = 0;           // trials whose estimate failed or was unusable (left out of the spreads)
+  std::string failure;             // the first such trial's reason, "" if none
 };
 
 struct CompareResult {

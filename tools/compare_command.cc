@@ -93,7 +93,9 @@ nlohmann::ordered_json ToJson(const CompareResult& r, const std::string& path, c
     e["spread"] = {{"fit_one_step", SpreadJson(s.one_step)},
                    {"fit_simulation", s.has_simulation ? SpreadJson(s.simulation) : nullptr},
                    {"theta_distance", SpreadJson(s.theta_distance)}};
-    e["cleaned_per_trial"] = s.cleaned;
+    e["cleaned_per_trial"] = Number(s.cleaned);
+    e["failed_trials"] = s.failed_trials;
+    e["failure"] = s.failure.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(s.failure);
     list.push_back(std::move(e));
   }
   return j;
@@ -115,7 +117,7 @@ void PrintCsv(const CompareResult& r) {
 }
 
 std::string Cell(const Spread& s, int trials, const char* format) {
-  if (std::isnan(s.mean)) return "diverged";
+  if (std::isnan(s.mean)) return "failed";
   const std::string mean = fmt::format(fmt::runtime(format), s.mean);
   return trials > 1 ? mean + " ± " + fmt::format(fmt::runtime(format), s.std) : mean;
 }
@@ -143,6 +145,10 @@ void PrintTable(const CompareResult& r, const std::string& name, const OutlierSp
                Cell(s.one_step, trials, "{:.2f}"), w, s.has_simulation ? Cell(s.simulation, trials, "{:.2f}") : "-", w,
                Cell(s.theta_distance, trials, "{:.3f}"), w, s.ns_per_update);
   }
+  for (const EstimatorScore& s : r.scores)
+    if (s.failed_trials > 0)
+      fmt::print("\n  {} failed in {} of {} trials (left out of its figures); first, {}\n", s.estimator,
+                 s.failed_trials, trials, s.failure);
   fmt::print("\n  fit % = 100·(1 − ‖y − ŷ‖/‖y − mean y‖) on the clean validation rows (100 = perfect; one-step uses\n"
              "  measured past outputs, simulation the model's own); θ distance = ‖θ̂ − θ_LS‖/‖θ_LS‖ to the clean-data\n"
              "  least-squares θ (0 = identical). Sorted by one-step fit.\n");

@@ -289,7 +289,46 @@ FitResult Summarise(const DataSource& source, const AnyRegressionEstimator& esti
   return result;
 }
 
+// Throws DataError if the result of the estimation part cannot be reported (see UnusableResult).
+void RequireUsable(const FitResult& result, const AnyRegressionEstimator& estimator, const std::string& name) {
+  const std::string why = UnusableResult(estimator, result.parameter_names, result.updates);
+  if (!why.empty()) throw DataError(fmt::format("{}: the result is unusable: {}", name, why));
+}
+
 }  // namespace
+
+std::string UnusableResult(const AnyRegressionEstimator& estimator, const std::vector<std::string>& parameter_names,
+                           int updates) {
+  const int rho = estimator.num_parameters();
+  auto name = [&](int i) {
+    return i < static_cast<int>(parameter_names.size()) ? parameter_names[static_cast<std::size_t>(i)]
+                                                        : fmt::format("theta{}", i + 1);
+  };
+  if (updates < rho + 1)
+    return fmt::format("only {} updates were accepted, fewer than the {} parameters + 1; the estimate rests on the "
+                       "prior, not on the data",
+                       updates, rho);
+  const Eigen::VectorXd theta = estimator.parameters();
+  for (int i = 0; i < rho; ++i)
+    if (!std::isfinite(theta(i))) return fmt::format("parameter '{}' is {}", name(i), theta(i));
+  const double noise = estimator.noise_std();
+  if (!std::isfinite(noise)) {
+    if (estimator.nu() <= rho + 1)
+      return fmt::format("the noise std is {}: the estimate rests on the information of nu = {:.3g} samples, not "
+                         "more than the {} parameters + 1 (a forgetting factor f keeps about 1/(1 - f) samples; "
+                         "raise --forgetting)",
+                         noise, estimator.nu(), rho);
+    return fmt::format("the noise std is {} (values too large: rescale the data)", noise);
+  }
+  const Eigen::VectorXd variance = estimator.covariance().diagonal();
+  for (int i = 0; i < rho; ++i)
+    if (!std::isfinite(variance(i)) || variance(i) < 0)
+      return fmt::format("the standard error of parameter '{}' (estimate {:.3g}) is {}: its variance {}; the "
+                         "columns' scales are too far apart: rescale the data",
+                         name(i), theta(i), std::sqrt(variance(i)),
+                         std::isnan(variance(i)) ? "is undefined" : variance(i) < 0 ? "is negative" : "overflows");
+  return "";
+}
 
 std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options) {
   const auto [estimation, validation] = Split(data.num_rows(), source, options, data.source);
@@ -344,6 +383,7 @@ FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& es
   result.passes = passes;
   result.updates = updates;
   result.rejected = rejected;
+  RequireUsable(result, estimator, data.source);
   result.validation = Score(data, validation, source, result.theta);
   return result;
 }
@@ -504,6 +544,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
     result.passes = passes;
     result.updates = updates;
     result.rejected = rejected;
+    RequireUsable(result, estimator, path);
     scoring = std::make_unique<Scoring>(source, result.theta);
   };
   while (reader.Next(row)) {

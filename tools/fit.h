@@ -101,6 +101,12 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, const FitOptions& options, int* passes_run = nullptr);
 
+// Why the estimator's result after `updates` accepted updates cannot be reported, or "" if it can: θ, its
+// standard errors and the noise scale must be finite, and at least ρ + 1 updates must have been accepted
+// (the parameters and a noise scale determined by the data, not by the prior).
+std::string UnusableResult(const AnyRegressionEstimator& estimator, const std::vector<std::string>& parameter_names,
+                           int updates);
+
 // One-step and (for dynamic sources) simulation scores of parameters θ on the segment.
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta);
 
