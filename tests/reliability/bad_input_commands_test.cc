@@ -194,7 +194,7 @@ TEST(BadInputDatasets, UnknownOptionIsAUsageError) { ExpectCliError("datasets --
 
 // ---- ident mems ---------------------------------------------------------------------------------------
 
-TEST(BadInputMems, TooFewSteps) { ExpectCliError("mems --steps 10", "steps = 10; need >= 100"); }
+TEST(BadInputMems, TooFewSteps) { ExpectCliError("mems --steps 10", "steps = 10; need 100..1000000"); }
 
 TEST(BadInputMems, TMeanNotPositive) { ExpectCliError("mems --t-mean 1,-1", "--t-mean value -1 must be > 0"); }
 
