@@ -65,7 +65,7 @@ std::string Shown(std::string_view s) {
 }  // namespace
 
 std::string ShowCell(std::string_view cell) {
-  if (cell.size() <= kShownBytes) return "'" + Shown(cell) + "'";
+  if (cell.size() <= kShownBytes) return fmt::format("'{}'", Shown(cell));
   return fmt::format("'{}' ({} bytes)", Shown(cell), cell.size());
 }
 
