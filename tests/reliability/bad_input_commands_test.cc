@@ -221,6 +221,10 @@ TEST(BadInputDatasets, UnknownOptionIsAUsageError) { ExpectCliError("datasets --
 
 TEST(BadInputMems, TooFewSteps) { ExpectCliError("mems --steps 10", "steps = 10; need 100..1000000"); }
 
+TEST(BadInputMems, StepsBeyondTheLimit) {
+  ExpectCliError("mems --steps 2147483647", "steps = 2147483647; need 100..1000000");
+}
+
 TEST(BadInputMems, TMeanNotPositive) { ExpectCliError("mems --t-mean 1,-1", "--t-mean value -1 must be > 0"); }
 
 TEST(BadInputMems, TMeanNan) { ExpectCliError("mems --t-mean nan", "--t-mean value nan must be > 0"); }
