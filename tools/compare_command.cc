@@ -183,9 +183,13 @@ void RunCompare(CompareCommandOptions& o) {
       start = comma + 1;
     }
   }
+  // The estimation part's rows as tools::Fit splits (0 = unknown for a split that Fit refuses).
+  const int n = table.num_rows();
+  const bool valid_split = std::isfinite(split) && split > 0 && split <= 1;
+  const long estimation_rows = !valid_split ? 0 : split == 1 ? n : static_cast<long>(std::floor(split * n));
   std::vector<EstimatorSettings> settings;
   for (const std::string& name : names) {
-    settings.push_back(o.estimator.Resolve(source->num_parameters(), name));
+    settings.push_back(o.estimator.Resolve(source->num_parameters(), name, estimation_rows));
     // The lock-in options and delta are for the Kárný–Hangos estimators of the comparison (cauchy,
     // student); the others have no such safeguard or convention.
     if (settings.back().name == "rls") settings.back().lock_in = {};

@@ -47,7 +47,8 @@ void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
                "cauchy/student: report lock-ins but do not restart the estimator");
 }
 
-EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::string& spec) const {
+EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::string& spec,
+                                               long estimation_rows) const {
   const std::string& name = spec.empty() ? estimator : spec;
   EstimatorSettings s = ParseEstimatorSpec(name);
   if (dof) {
@@ -59,6 +60,10 @@ EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::st
   s.forgetting.factor = forgetting;
   s.forgetting.stabilised = stabilised;
   s.exact = exact;
+  IDENT_REQUIRE(!lock_in_window || estimation_rows <= 0 || *lock_in_window <= estimation_rows,
+                "--lock-in-window {} exceeds the estimation part's {} rows: the monitor could never fill; need at "
+                "most {}",
+                lock_in_window.value_or(0), estimation_rows, estimation_rows);
   s.lock_in = {lock_in_window, lock_in_threshold, !no_lock_in_restart};
   if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
   if (!prior_file.empty()) s.prior = ReadPriorJson(prior_file, num_parameters);

@@ -27,9 +27,10 @@ struct EstimatorCliOptions {
 
   // Adds the options to `app` (`with_estimator`: also --estimator).
   void AddTo(CLI::App& app, bool with_estimator = true);
-  // Settings for `spec` (e.g. "student:3"; empty: this->estimator) and ρ parameters.
-  // Throws InvalidArgument / DataError (prior file) with one line naming the option.
-  EstimatorSettings Resolve(int num_parameters, const std::string& spec = "") const;
+  // Settings for `spec` (e.g. "student:3"; empty: this->estimator) and ρ parameters. With
+  // `estimation_rows` > 0, a --lock-in-window longer than the estimation part (which the monitor could
+  // never fill) is refused. Throws InvalidArgument / DataError (prior file) with one line naming the option.
+  EstimatorSettings Resolve(int num_parameters, const std::string& spec = "", long estimation_rows = 0) const;
 };
 
 // Reads {"nu0": N, "V0": [[...], ...]} ((ρ+1)x(ρ+1), y first; no other keys). Throws DataError naming

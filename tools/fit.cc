@@ -573,9 +573,9 @@ FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSou
   return DataErrorsFirst(path, csv, [&] { return StreamCsvFile(path, csv, source, estimator, options); });
 }
 
-void CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                          const FitOptions& options) {
-  DataErrorsFirst(path, csv, [&] { LayOut(path, csv, source, options); });
+int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options) {
+  return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options).estimation.count; });
 }
 
 }  // namespace ident::tools

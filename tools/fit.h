@@ -130,8 +130,9 @@ long CountCsvDataRows(const std::string& path);
 // size allocated) that the split record is long enough for `source`: throws the InvalidArgument
 // "the estimation part has N rows; ... needs at least M" of Fit and FitCsvFile, or the DataError of
 // the first bad row if the file has one. Cost O(file size), memory O(1).
-void CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                          const FitOptions& options);
+// Returns the number of rows of the estimation part.
+int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options);
 
 // Writes the trace header: t,nu,beta,pred_err,theta1..thetaρ,Dy
 void WriteTraceHeader(std::FILE* trace, int num_parameters);

@@ -167,9 +167,9 @@ void RunFit(const FitCommandOptions& o) {
   // The record's length first: building an estimator costs O(rho^3) for large orders.
   FitOptions length_check;
   length_check.split = o.split;
-  CheckCsvRecordLength(path, csv, *source, length_check);
+  const int estimation_rows = CheckCsvRecordLength(path, csv, *source, length_check);
   const int rho = source->num_parameters();
-  EstimatorSettings settings = o.estimator.Resolve(rho);
+  EstimatorSettings settings = o.estimator.Resolve(rho, "", estimation_rows);
   std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, rho);  // checks the options
   FitOptions options;
   options.split = o.split;

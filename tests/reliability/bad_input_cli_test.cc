@@ -273,7 +273,16 @@ TEST(BadInput, DeltaForAnEstimatorWithoutOne) {
 
 TEST(BadInput, LockInWindowBeyondTheLimit) {
   ExpectCliError("fit dryer" + kArx + " --estimator cauchy --lock-in-window 2147483647",
-                 "lock_in_window = 2147483647; need 0 (automatic) or 2..1000000");
+                 "--lock-in-window 2147483647 exceeds the estimation part's 500 rows: the monitor could never fill; "
+                 "need at most 500");
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy --split 1 --lock-in-window 1001",
+                 "--lock-in-window 1001 exceeds the estimation part's 1000 rows");
+  // The whole estimation part is the longest window.
+  const CliResult r = RunCli("fit dryer" + kArx + " --estimator cauchy --lock-in-window 500 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["lock_in"]["window"].get<int>(), 500);
+  EXPECT_EQ(j["lock_in"]["flagged"].get<int>(), 0);
 }
 
 TEST(BadInput, PlusMinusIsNotANumber) {

@@ -134,7 +134,8 @@ TEST(BadInputCompare, EmptyNameInsideTheEstimatorList) {
 
 TEST(BadInputCompare, LockInWindowBeyondTheLimit) {
   ExpectCliError("compare dryer --estimators rls,cauchy --lock-in-window 1000001",
-                 "lock_in_window = 1000001; need 0 (automatic) or 2..1000000");
+                 "--lock-in-window 1000001 exceeds the estimation part's 500 rows: the monitor could never fill; "
+                 "need at most 500");
 }
 
 TEST(BadInputCompare, UnknownEstimator) {
