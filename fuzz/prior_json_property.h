@@ -1,8 +1,9 @@
 // Property of the prior-file reader tools::ReadPriorJson (the tool layer's JSON reader; the
 // MODEL.json reader gets the same treatment once it lands) on arbitrary bytes.
 // Input: 1 byte ρ (1..4), then the file's bytes (written to a temporary file).
-// Holds if: nothing but ident::DataError is thrown, and a returned prior has ν0 > 0 finite and a
-// (ρ+1)x(ρ+1) V0 that factorises as symmetric positive definite.
+// Holds if: nothing but ident::DataError is thrown, its message is one line, and a returned prior
+// comes from an object with the keys nu0 and V0 only and has ν0 > 0 finite and a (ρ+1)x(ρ+1) V0 that
+// factorises as symmetric positive definite.
 #pragma once
 
 #include <unistd.h>
@@ -11,6 +12,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "ident/common/error.h"
 #include "ident/ld_factor.h"
@@ -30,6 +33,8 @@ inline std::string PriorJsonProperty(const std::uint8_t* data, std::size_t size)
   }
   try {
     const RegressionPrior prior = tools::ReadPriorJson(path, rho);
+    const auto j = nlohmann::json::parse(data + 1, data + size, nullptr, /*allow_exceptions=*/false);
+    if (!j.is_object() || j.size() != 2) return "a prior file holds the keys nu0 and V0 only";
     if (!(std::isfinite(prior.nu0) && prior.nu0 > 0)) return "nu0 is positive and finite";
     if (prior.V0.rows() != rho + 1 || prior.V0.cols() != rho + 1) return "V0 has the model's size";
     try {
@@ -37,8 +42,9 @@ inline std::string PriorJsonProperty(const std::uint8_t* data, std::size_t size)
     } catch (const InvalidArgument&) {
       return "V0 is symmetric positive definite";
     }
-  } catch (const DataError&) {
+  } catch (const DataError& e) {
     // the expected answer to a bad file: one line naming it
+    if (std::string(e.what()).find_first_of("\r\n") != std::string::npos) return "a message is one line";
   }
   return {};
 }

@@ -20,6 +20,8 @@ using Factory = std::function<std::unique_ptr<AnyRegressionEstimator>(const Esti
 
 std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int rho) {
   IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator 'rls'", *s.dof);
+  IDENT_REQUIRE(!s.delta, "delta = {} does not apply to estimator 'rls' (it is a Kárný–Hangos convention: cauchy, "
+                "student)", s.delta.value_or(1));
   IDENT_REQUIRE(!s.lock_in.any(),
                 "the lock-in options apply to the robust estimators (cauchy, student), not to 'rls'");
   RlsOptions options;
@@ -33,7 +35,7 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, 
                                                     double dof) {
   SafeStudentOptions options;  // start-up prior and lock-in safeguards unless exact (docs/kh.md)
   options.base.dof = dof;
-  options.base.delta = s.delta;
+  options.base.delta = s.delta.value_or(1);
   options.base.forgetting = s.forgetting;
   options.base.prior = s.prior;
   options.base.exact = s.exact;
@@ -54,6 +56,16 @@ std::unique_ptr<AnyRegressionEstimator> MakeCauchy(const EstimatorSettings& s, i
 std::unique_ptr<AnyRegressionEstimator> MakeStudentT(const EstimatorSettings& s, int rho) {
   IDENT_REQUIRE(s.dof.has_value(), "estimator 'student' needs dof (degrees of freedom k > 0: --dof 3 or student:3)");
   IDENT_REQUIRE(std::isfinite(*s.dof) && *s.dof > 0, "dof = {}; estimator 'student' needs a finite k > 0", *s.dof);
+  // nu_hard >= (k+3-delta)/k grows without bound as k -> 0: a small k leaves the first step no valid
+  // weight unless nu(1) exceeds it. Name k, not the prior, when this term alone decides.
+  const double k = *s.dof;
+  const int delta = s.delta.value_or(1);
+  const double nu0 = s.prior ? s.prior->nu0 : rho + k + delta;
+  const double nu1 = s.forgetting.stabilised ? nu0 + 1 : s.forgetting.factor * nu0 + 1;
+  IDENT_REQUIRE(!(std::isfinite(nu1) && nu1 > 1 && nu1 <= (k + 3 - delta) / k),
+                "dof = {} is too small: nu_hard >= (k+3-delta)/k = {:.6g} exceeds the first step's nu(1) = {:.6g} "
+                "(nu0 = {:.6g}, delta = {}); need k > {:.6g}",
+                k, (k + 3 - delta) / k, nu1, nu0, delta, (3 - delta) / (nu1 - 1));
   return MakeStudent(s, rho, fmt::format("student:{}", *s.dof), *s.dof);
 }
 
@@ -62,6 +74,7 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudentT(const EstimatorSettings& s,
 std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, int rho, const std::string& name,
                                                   BatchMethod method) {
   IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator '{}'", *s.dof, name);
+  IDENT_REQUIRE(!s.delta, "delta = {} does not apply to estimator '{}'", s.delta.value_or(1), name);
   IDENT_REQUIRE(s.forgetting.factor == 1 && !s.forgetting.stabilised,
                 "forgetting does not apply to the batch estimator '{}' (it weighs every sample of the record)", name);
   IDENT_REQUIRE(!s.prior, "a prior does not apply to the batch estimator '{}'", name);

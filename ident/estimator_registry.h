@@ -29,7 +29,7 @@ namespace ident {
 // The lock-in safeguard of the robust estimators (ident/safe_student_regression.h); unset = its defaults
 // (window max(100, 20ρ), threshold 0.3, restart on).
 struct LockInSettings {
-  std::optional<int> window;        // M ≥ 2 (0 = automatic)
+  std::optional<int> window;        // M in 2..1000000 (kMaxLockInWindow; 0 = automatic)
   std::optional<double> threshold;  // 0 < threshold < (k+1)/k
   bool restart = true;              // false: flag lock-ins only, never restart
   bool any() const { return window || threshold || !restart; }
@@ -42,7 +42,7 @@ struct EstimatorSettings {
   ForgettingOptions forgetting;
   std::optional<RegressionPrior> prior;  // explicit (ν(0), V(0)); otherwise the estimator's default
   std::optional<double> dof;             // Student-t degrees of freedom k
-  int delta = 1;                         // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos)
+  std::optional<int> delta;              // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos; unset: 1)
   bool exact = false;                    // switch off every safeguard beyond the spec's recursion
   LockInSettings lock_in;                // refused (if any() is set) for "rls" and together with `exact`
 };

@@ -28,7 +28,7 @@ std::string MemsStudyOptions::Validate() const {
   if (!(noise_intensity > 0)) return fmt::format("noise_intensity = {}; need > 0", noise_intensity);
   if (!(threshold > 0)) return fmt::format("threshold = {}; need > 0", threshold);
   if (!(t_target >= 10 * h)) return fmt::format("t_target = {}; need >= 10 h = {}", t_target, 10 * h);
-  if (steps < 100) return fmt::format("steps = {}; need >= 100", steps);
+  if (steps < 100 || steps > 1'000'000) return fmt::format("steps = {}; need 100..1000000", steps);
   if (burn_in < 0 || burn_in > steps - 10)  // at least one step per block of the calibration's jackknife
     return fmt::format("burn_in = {}; need 0 <= burn_in <= steps - 10", burn_in);
   if (grid_points < 16 || grid_points > 1024) return fmt::format("grid_points = {}; need 16..1024", grid_points);

@@ -22,8 +22,8 @@ StudentRegressionOptions Provisional(StudentRegressionOptions o) {
 }
 
 int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
-  IDENT_REQUIRE(o.lock_in_window == 0 || o.lock_in_window >= 2, "lock_in_window = {}; need 0 (automatic) or >= 2",
-                o.lock_in_window);
+  IDENT_REQUIRE(o.lock_in_window == 0 || (o.lock_in_window >= 2 && o.lock_in_window <= kMaxLockInWindow),
+                "lock_in_window = {}; need 0 (automatic) or 2..{}", o.lock_in_window, kMaxLockInWindow);
   return o.lock_in_window > 0 ? o.lock_in_window : std::max(100, 20 * std::max(rho, 1));
 }
 

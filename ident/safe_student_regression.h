@@ -53,6 +53,9 @@
 
 namespace ident {
 
+// The largest lock-in window M (the monitor keeps one flag per sample of the window).
+inline constexpr int kMaxLockInWindow = 1'000'000;
+
 struct SafeStudentOptions {
   StudentRegressionOptions base;  // dof, delta, forgetting, explicit prior, exact
   int startup_window = 0;         // W; 0 = max(20, 4ρ)
@@ -61,7 +64,7 @@ struct SafeStudentOptions {
   // amount that the recursion's D_y(t) ∝ ν^{−(k+1)/k} decay removes while ν grows G-fold.
   double scale_growth = 4;
   bool restart_on_lock_in = true;
-  int lock_in_window = 0;          // M; 0 = max(100, 20ρ)
+  int lock_in_window = 0;          // M in 2..kMaxLockInWindow; 0 = max(100, 20ρ)
   double lock_in_threshold = 0.3;  // νβ below this counts as a low weight
   long history_limit = 0;          // samples kept for replay; 0 = all
   long history_reserve = 0;        // samples the history is sized for at construction

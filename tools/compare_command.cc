@@ -27,7 +27,7 @@ struct CompareCommandOptions {
   std::string data;
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
-  std::vector<std::string> estimators{"rls", "cauchy", "student:3"};
+  std::vector<std::string> estimators{"rls,cauchy,student:3"};  // comma-separated lists, split by RunCompare
   std::string outliers = "0.05:20:1";
   int trials = 1;
   int passes = 1;
@@ -177,12 +177,29 @@ void RunCompare(CompareCommandOptions& o) {
 
   io::DataTable table = io::ReadCsv(path);
   std::unique_ptr<DataSource> source = structure.MakeSource(table.names, path);
+  // Each --estimators value is a comma-separated list; an empty name (as in "rls,,cauchy") is refused.
+  std::vector<std::string> names;
+  for (const std::string& list : o.estimators) {
+    for (std::size_t start = 0;;) {
+      const std::size_t comma = list.find(',', start);
+      const std::string name = list.substr(start, comma == std::string::npos ? comma : comma - start);
+      IDENT_REQUIRE(!name.empty(), "--estimators: an empty estimator name in '{}'", list);
+      names.push_back(name);
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+  }
+  // The estimation part's rows as tools::Fit splits (0 = unknown for a split that Fit refuses).
+  const int n = table.num_rows();
+  const bool valid_split = std::isfinite(split) && split > 0 && split <= 1;
+  const long estimation_rows = !valid_split ? 0 : split == 1 ? n : static_cast<long>(std::floor(split * n));
   std::vector<EstimatorSettings> settings;
-  for (const std::string& name : o.estimators) IDENT_REQUIRE(!name.empty(), "--estimators: an empty estimator name");
-  for (const std::string& name : o.estimators) {
-    settings.push_back(o.estimator.Resolve(source->num_parameters(), name));
-    // The lock-in options are for the robust estimators of the comparison; RLS has no such safeguard.
+  for (const std::string& name : names) {
+    settings.push_back(o.estimator.Resolve(source->num_parameters(), name, estimation_rows));
+    // The lock-in options and delta are for the Kárný–Hangos estimators of the comparison (cauchy,
+    // student); the others have no such safeguard or convention.
     if (settings.back().name == "rls") settings.back().lock_in = {};
+    if (settings.back().name != "cauchy" && settings.back().name != "student") settings.back().delta.reset();
   }
 
   CompareOptions options;
@@ -193,7 +210,7 @@ void RunCompare(CompareCommandOptions& o) {
   options.outliers = spec;
   options.trials = o.trials;
   if (isatty(STDERR_FILENO)) options.progress = ProgressBar;
-  const CompareResult result = Compare(std::move(table), *source, settings, o.estimators, options);
+  const CompareResult result = Compare(std::move(table), *source, settings, names, options);
   const std::string name = dataset ? dataset->name : path;
   if (!o.plot.empty()) PlotCompare(o.plot, result, spec);
   if (o.json)
@@ -214,7 +231,6 @@ void AddCompareCommand(CLI::App& app) {
   cmd->add_option("--estimators", o->estimators,
                   fmt::format("Comma-separated estimators ({}; dof as 'student:3')",
                               fmt::join(RegressionEstimatorNames(), ", ")))
-      ->delimiter(',')
       ->capture_default_str();
   cmd->add_option("--outliers", o->outliers,
                   "RATE:SIZE[:SEED]: fraction of estimation samples, size in clean LS residual stds, seed; or none")

@@ -22,7 +22,7 @@ void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
                    fmt::format("Estimator: {} (dof as 'student:3')", fmt::join(RegressionEstimatorNames(), ", ")))
         ->capture_default_str();
   app.add_option("--dof", dof, "Student-t degrees of freedom k (estimator student)");
-  app.add_option("--delta", delta, "Kárný–Hangos ω-exponent convention δ (0 or 1)")->capture_default_str();
+  app.add_option("--delta", delta, "cauchy/student: Kárný–Hangos ω-exponent convention δ (0 or 1; default 1)");
   auto* forgetting_option =
       app.add_option("--forgetting", forgetting, "Forgetting factor λ in (0, 1]; 1 = none")->capture_default_str();
   app.add_flag("--stabilised", stabilised, "Stabilised forgetting towards the prior instead of exponential")
@@ -47,18 +47,23 @@ void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
                "cauchy/student: report lock-ins but do not restart the estimator");
 }
 
-EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::string& spec) const {
+EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::string& spec,
+                                               long estimation_rows) const {
   const std::string& name = spec.empty() ? estimator : spec;
   EstimatorSettings s = ParseEstimatorSpec(name);
   if (dof) {
     IDENT_REQUIRE(!s.dof || *s.dof == *dof, "--dof {} contradicts estimator '{}'", *dof, name);
     s.dof = dof;
   }
-  IDENT_REQUIRE(delta == 0 || delta == 1, "delta = {}; need 0 or 1", delta);
+  IDENT_REQUIRE(!delta || *delta == 0 || *delta == 1, "delta = {}; need 0 or 1", delta.value_or(1));
   s.delta = delta;
   s.forgetting.factor = forgetting;
   s.forgetting.stabilised = stabilised;
   s.exact = exact;
+  IDENT_REQUIRE(!lock_in_window || estimation_rows <= 0 || *lock_in_window <= estimation_rows,
+                "--lock-in-window {} exceeds the estimation part's {} rows: the monitor could never fill; need at "
+                "most {}",
+                lock_in_window.value_or(0), estimation_rows, estimation_rows);
   s.lock_in = {lock_in_window, lock_in_threshold, !no_lock_in_restart};
   if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
   if (!prior_file.empty()) s.prior = ReadPriorJson(prior_file, num_parameters);
@@ -68,6 +73,8 @@ EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::st
 }
 
 RegressionPrior ReadPriorJson(const std::string& path, int num_parameters) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw DataError(fmt::format("cannot read '{}': it is a directory", path));
   std::ifstream in(path);
   if (!in) throw DataError(fmt::format("cannot open prior file '{}'", path));
   nlohmann::json j;
@@ -75,9 +82,18 @@ RegressionPrior ReadPriorJson(const std::string& path, int num_parameters) {
     j = nlohmann::json::parse(in);
   } catch (const nlohmann::json::exception& e) {
     throw DataError(fmt::format("{}: not valid JSON ({})", path, e.what()));
+  } catch (const std::exception& e) {  // the stream failed (e.g. a device that cannot be read)
+    throw DataError(fmt::format("cannot read '{}': {}", path, e.what()));
   }
   if (!j.is_object() || !j.contains("nu0") || !j["nu0"].is_number() || !j.contains("V0") || !j["V0"].is_array())
     throw DataError(fmt::format("{}: need an object {{\"nu0\": N, \"V0\": [[...], ...]}}", path));
+  for (const auto& item : j.items()) {
+    if (item.key() == "nu0" || item.key() == "V0") continue;
+    const std::string& key = item.key();
+    const std::string shown = key.size() > 32 ? key.substr(0, 32) + "..." : key;  // JSON-escaped below
+    throw DataError(fmt::format("{}: unknown key {} (known: nu0, V0)", path,
+                                nlohmann::json(shown).dump(-1, ' ', true, nlohmann::json::error_handler_t::replace)));
+  }
   const int n = num_parameters + 1;
   const auto& rows = j["V0"];
   if (static_cast<int>(rows.size()) != n)

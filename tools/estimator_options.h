@@ -15,7 +15,7 @@ namespace ident::tools {
 struct EstimatorCliOptions {
   std::string estimator = "rls";
   std::optional<double> dof;
-  int delta = 1;
+  std::optional<int> delta;  // unset: 1 (refused by the estimators without the convention)
   double forgetting = 1.0;
   bool stabilised = false;
   std::optional<double> nu0, vy0, vz0;
@@ -27,12 +27,14 @@ struct EstimatorCliOptions {
 
   // Adds the options to `app` (`with_estimator`: also --estimator).
   void AddTo(CLI::App& app, bool with_estimator = true);
-  // Settings for `spec` (e.g. "student:3"; empty: this->estimator) and ρ parameters.
-  // Throws InvalidArgument / DataError (prior file) with one line naming the option.
-  EstimatorSettings Resolve(int num_parameters, const std::string& spec = "") const;
+  // Settings for `spec` (e.g. "student:3"; empty: this->estimator) and ρ parameters. With
+  // `estimation_rows` > 0, a --lock-in-window longer than the estimation part (which the monitor could
+  // never fill) is refused. Throws InvalidArgument / DataError (prior file) with one line naming the option.
+  EstimatorSettings Resolve(int num_parameters, const std::string& spec = "", long estimation_rows = 0) const;
 };
 
-// Reads {"nu0": N, "V0": [[...], ...]} ((ρ+1)x(ρ+1), y first). Throws DataError naming the file.
+// Reads {"nu0": N, "V0": [[...], ...]} ((ρ+1)x(ρ+1), y first; no other keys). Throws DataError naming
+// the file: "cannot read 'p.json': it is a directory", "p.json: unknown key "x" (known: nu0, V0)", ...
 RegressionPrior ReadPriorJson(const std::string& path, int num_parameters);
 
 // A data argument is a path, or the bare name of a bundled dataset ("dryer" → datasets/dryer.csv).

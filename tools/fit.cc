@@ -69,6 +69,7 @@ class Estimation {
         z_(source.num_parameters()),
         z_measured_(source.num_parameters()),
         ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())),
+        max_abs_(Eigen::VectorXd::Zero(source.num_parameters())),
         judged_(estimator.judges_outliers()) {
     source_.Reset();
   }
@@ -94,6 +95,7 @@ class Estimation {
       if (report.updated()) {
         ++updates_;
         ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);
+        max_abs_ = max_abs_.cwiseMax(z_.cwiseAbs());
         if (on_update_) on_update_(r, estimator_);
         if (trace_) {
           const Eigen::VectorXd theta = estimator_.parameters();
@@ -125,6 +127,11 @@ class Estimation {
     const Eigen::MatrixXd G = ZtZ_.selfadjointView<Eigen::Lower>();
     const Eigen::VectorXd scale = G.diagonal().cwiseSqrt();
     for (int i = 0; i < rho; ++i)
+      IDENT_REQUIRE(scale(i) > 0 || max_abs_(i) == 0,
+                    "{}: regressor '{}' has sum of squares 0 over the estimation part: its values (largest {:.3g}) "
+                    "are too small to square in double precision (values near 1e-200?); rescale the data",
+                    name, names[i], max_abs_(i));
+    for (int i = 0; i < rho; ++i)
       IDENT_REQUIRE(scale(i) > 0,
                     "{}: regressor '{}' is identically zero over the estimation part (a constant column "
                     "after detrending?); the model is not identifiable",
@@ -155,6 +162,7 @@ class Estimation {
   std::function<void(int row, const AnyRegressionEstimator&)> on_update_;
   Eigen::VectorXd z_, z_measured_;
   Eigen::MatrixXd ZtZ_;
+  Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)
   bool judged_;  // the estimator gives outlier verdicts (cleaning applies)
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
 };
@@ -391,22 +399,22 @@ FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& es
 long CountCsvDataRows(const std::string& path) {
   std::ifstream in(path, std::ios::in | std::ios::binary);
   if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
-  // A line counts if it has a character other than ' ', '\t', '\r' (the reader skips the others).
+  // A line ends at LF or CR (CRLF: an empty line between them, not counted) and counts if it has a
+  // character other than ' ' and '\t' (the reader skips the others).
   std::vector<char> block(1 << 16);
   long lines = 0;
   bool content = false;
   while (in) {
     in.read(block.data(), static_cast<std::streamsize>(block.size()));
-    const char* p = block.data();
-    const char* const end = p + in.gcount();
-    while (p < end) {
-      const char* newline = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
-      const char* stop = newline ? newline : end;
-      for (; !content && p < stop; ++p) content = *p != ' ' && *p != '\t' && *p != '\r';
-      if (!newline) break;
-      lines += content;
-      content = false;
-      p = newline + 1;
+    const char* const end = block.data() + in.gcount();
+    for (const char* p = block.data(); p < end; ++p) {
+      const char c = *p;
+      if (c == '\n' || c == '\r') {
+        lines += content;
+        content = false;
+      } else if (c != ' ' && c != '\t') {
+        content = true;
+      }
     }
   }
   if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
@@ -604,6 +612,11 @@ Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvO
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                      AnyRegressionEstimator& estimator, const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] { return StreamCsvFile(path, csv, source, estimator, options); });
+}
+
+int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options) {
+  return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options).estimation.count; });
 }
 
 }  // namespace ident::tools

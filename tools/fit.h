@@ -132,6 +132,14 @@ FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSou
 // Reads the file in blocks without parsing numbers. Throws DataError if it cannot be read.
 long CountCsvDataRows(const std::string& path);
 
+// Checks from the header and the number of data rows alone (no number parsing, nothing of the model's
+// size allocated) that the split record is long enough for `source`: throws the InvalidArgument
+// "the estimation part has N rows; ... needs at least M" of Fit and FitCsvFile, or the DataError of
+// the first bad row if the file has one. Cost O(file size), memory O(1).
+// Returns the number of rows of the estimation part.
+int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options);
+
 // Writes the trace header: t,nu,beta,pred_err,theta1..thetaρ,Dy
 void WriteTraceHeader(std::FILE* trace, int num_parameters);
 

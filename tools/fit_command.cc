@@ -164,8 +164,12 @@ void RunFit(const FitCommandOptions& o) {
   const std::string path = ResolveDataPath(o.data);
   const io::CsvOptions csv{.missing_as_nan = o.missing};
   std::unique_ptr<DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
+  // The record's length first: building an estimator costs O(rho^3) for large orders.
+  FitOptions length_check;
+  length_check.split = o.split;
+  const int estimation_rows = CheckCsvRecordLength(path, csv, *source, length_check);
   const int rho = source->num_parameters();
-  EstimatorSettings settings = o.estimator.Resolve(rho);
+  EstimatorSettings settings = o.estimator.Resolve(rho, "", estimation_rows);
   std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, rho);  // checks the options
   FitOptions options;
   options.split = o.split;

@@ -1,5 +1,6 @@
 #include "ident/io/csv.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 #include <limits>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -37,11 +39,42 @@ void Split(std::string_view line, std::vector<std::string_view>& fields) {
 
 bool IsBlank(std::string_view line) { return Trim(line).empty(); }
 
+constexpr std::size_t kShownBytes = 32;     // of a cell or name echoed in a message
+constexpr std::size_t kListedColumns = 20;  // names listed by ThrowUnknownColumn
+constexpr std::size_t kChunkBytes = 1 << 16;
+
+// The bytes of `s` as a message shows them (no quotes): control bytes as \xNN, at most kShownBytes of
+// them (cut at a UTF-8 character boundary) and "..." if there are more.
+std::string Shown(std::string_view s) {
+  std::size_t n = std::min(s.size(), kShownBytes);
+  if (n < s.size())
+    while (n > 0 && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n;  // not inside a character
+  std::string out;
+  out.reserve(n + 8);
+  for (const char c : s.substr(0, n)) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7F)
+      out += fmt::format("\\x{:02x}", u);
+    else
+      out += c;
+  }
+  if (n < s.size()) out += "...";
+  return out;
+}
+
 }  // namespace
+
+std::string ShowCell(std::string_view cell) {
+  if (cell.size() <= kShownBytes) return fmt::format("'{}'", Shown(cell));
+  return fmt::format("'{}' ({} bytes)", Shown(cell), cell.size());
+}
 
 [[noreturn]] void ThrowUnknownColumn(const std::string& source, std::string_view name,
                                      const std::vector<std::string>& names) {
-  throw DataError(fmt::format("{}: no column '{}' (columns: {})", source, name, fmt::join(names, ", ")));
+  std::string listed;
+  for (std::size_t i = 0; i < names.size() && i < kListedColumns; ++i) listed += (i ? ", " : "") + Shown(names[i]);
+  if (names.size() > kListedColumns) listed += fmt::format(", ... ({} columns)", names.size());
+  throw DataError(fmt::format("{}: no column '{}' (columns: {})", source, Shown(name), listed));
 }
 
 CsvReader::CsvReader(const std::string& path, const CsvOptions& options) : path_(path), options_(options) {
@@ -58,32 +91,82 @@ CsvReader::CsvReader(std::unique_ptr<std::istream> in, const std::string& source
   ReadHeader();
 }
 
+bool CsvReader::Fill() {
+  if (chunk_.empty()) chunk_.resize(kChunkBytes);
+  chunk_pos_ = chunk_end_ = 0;
+  if (!*in_) return false;
+  try {
+    in_->read(chunk_.data(), static_cast<std::streamsize>(chunk_.size()));
+  } catch (const std::exception& e) {
+    throw DataError(fmt::format("cannot read '{}': {}", path_, e.what()));
+  }
+  if (in_->bad()) throw DataError(fmt::format("{}:{}: read error", path_, line_ + 1));
+  chunk_end_ = static_cast<std::size_t>(in_->gcount());
+  return chunk_end_ > 0;
+}
+
+bool CsvReader::ReadLine() {
+  buffer_.clear();
+  bool started = false;  // a byte of the line (or its end) was read
+  while (chunk_pos_ < chunk_end_ || Fill()) {
+    if (skip_lf_) {
+      skip_lf_ = false;
+      if (chunk_[chunk_pos_] == '\n') {
+        ++chunk_pos_;
+        continue;
+      }
+    }
+    started = true;
+    const char* const begin = chunk_.data() + chunk_pos_;
+    const char* const end = chunk_.data() + chunk_end_;
+    const char* const stop = std::find_if(begin, end, [](char c) { return c == '\n' || c == '\r'; });
+    const auto take = static_cast<std::size_t>(stop - begin);
+    if (buffer_.size() + take > kMaxCsvLineBytes)
+      throw DataError(fmt::format("{}:{}: line longer than {} bytes", path_, line_ + 1, kMaxCsvLineBytes));
+    buffer_.append(begin, take);
+    chunk_pos_ += take;
+    if (stop != end) {
+      skip_lf_ = *stop == '\r';
+      ++chunk_pos_;
+      ++line_;
+      return true;
+    }
+  }
+  if (!started) return false;
+  ++line_;  // the last line, without a line end
+  return true;
+}
+
 void CsvReader::ReadHeader() {
   const std::string& path = path_;
   // Header: the first non-blank line.
   bool got_header = false;
-  while (std::getline(*in_, buffer_)) {
-    ++line_;
+  while (ReadLine()) {
     if (line_ == 1 && buffer_.starts_with("\xEF\xBB\xBF")) buffer_.erase(0, 3);
     if (!IsBlank(buffer_)) {
       got_header = true;
       break;
     }
   }
-  if (!got_header) {
-    if (in_->bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
-    throw DataError(fmt::format("{}: the file is empty", path));
-  }
+  if (!got_header) throw DataError(fmt::format("{}: the file is empty", path));
   std::vector<std::string_view> fields;
   Split(buffer_, fields);
+  if (fields.size() > static_cast<std::size_t>(kMaxCsvColumns))
+    throw DataError(fmt::format("{}:{}: the header has {} columns; at most {} are supported", path, line_,
+                                fields.size(), kMaxCsvColumns));
+  std::unordered_map<std::string_view, std::size_t> seen;  // name (a view into buffer_) -> 0-based column
+  seen.reserve(fields.size());
+  names_.reserve(fields.size());
   for (std::size_t j = 0; j < fields.size(); ++j) {
     std::string_view name = fields[j];
     if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
     if (name.empty()) throw DataError(fmt::format("{}:{}: column {} has an empty name", path, line_, j + 1));
-    for (std::size_t i = 0; i < names_.size(); ++i)
-      if (names_[i] == name)
-        throw DataError(fmt::format("{}:{}: duplicate column name '{}' (columns {} and {})", path, line_, name,
-                                    i + 1, j + 1));
+    if (name.find('\0') != std::string_view::npos)
+      throw DataError(fmt::format("{}:{}: column {} name contains a NUL byte", path, line_, j + 1));
+    const auto [it, inserted] = seen.emplace(name, j);
+    if (!inserted)
+      throw DataError(fmt::format("{}:{}: duplicate column name {} (columns {} and {})", path, line_,
+                                  ShowCell(name), it->second + 1, j + 1));
     names_.emplace_back(name);
   }
 }
@@ -97,9 +180,13 @@ int CsvReader::ColumnIndex(std::string_view name) const {
 bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
   IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(),
                 num_columns());
-  while (std::getline(*in_, buffer_)) {
-    ++line_;
-    if (IsBlank(buffer_)) continue;
+  while (ReadLine()) {
+    if (IsBlank(buffer_)) {
+      if (rows_ > 0 && blank_line_ == 0) blank_line_ = line_;
+      continue;
+    }
+    if (blank_line_ != 0)
+      throw DataError(fmt::format("{}:{}: blank line inside the data (a gap in the record?)", path_, blank_line_));
     // Parse in place without allocating: walk the fields.
     std::string_view rest(buffer_);
     int column = 0;
@@ -115,24 +202,28 @@ bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
       double value = std::numeric_limits<double>::quiet_NaN();
       if (cell.empty()) {
         if (!options_.missing_as_nan)
-          throw DataError(fmt::format("{}:{}: column {} ('{}') is empty (pass --missing to treat empty cells as "
+          throw DataError(fmt::format("{}:{}: column {} ({}) is empty (pass --missing to treat empty cells as "
                                       "missing samples)",
-                                      path_, line_, column + 1, names_[column]));
+                                      path_, line_, column + 1, ShowCell(names_[column])));
       } else {
+        if (cell.find('\0') != std::string_view::npos)
+          throw DataError(fmt::format("{}:{}: column {} ({}): contains a NUL byte", path_, line_, column + 1,
+                                      ShowCell(names_[column])));
         std::string_view digits = cell;
         if (digits.front() == '+') digits.remove_prefix(1);
+        const bool second_sign = digits.size() < cell.size() && !digits.empty() && digits.front() == '-';
         const auto [ptr, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
         if (ec == std::errc::result_out_of_range)
-          throw DataError(fmt::format("{}:{}: column {} ('{}'): '{}' is out of the range of double", path_, line_,
-                                      column + 1, names_[column], cell));
-        if (ec != std::errc() || ptr != digits.data() + digits.size())
-          throw DataError(fmt::format("{}:{}: column {} ('{}'): '{}' is not a number", path_, line_, column + 1,
-                                      names_[column], cell));
+          throw DataError(fmt::format("{}:{}: column {} ({}): {} is out of the range of double", path_, line_,
+                                      column + 1, ShowCell(names_[column]), ShowCell(cell)));
+        if (ec != std::errc() || ptr != digits.data() + digits.size() || second_sign)
+          throw DataError(fmt::format("{}:{}: column {} ({}): {} is not a number", path_, line_, column + 1,
+                                      ShowCell(names_[column]), ShowCell(cell)));
         if (!std::isfinite(value)) {
           if (!options_.missing_as_nan)
-            throw DataError(fmt::format("{}:{}: column {} ('{}'): '{}' is not a finite number (pass --missing to "
+            throw DataError(fmt::format("{}:{}: column {} ({}): {} is not a finite number (pass --missing to "
                                         "treat NaN/Inf/empty cells as missing samples)",
-                                        path_, line_, column + 1, names_[column], cell));
+                                        path_, line_, column + 1, ShowCell(names_[column]), ShowCell(cell)));
           value = std::numeric_limits<double>::quiet_NaN();
         }
       }
@@ -146,7 +237,6 @@ bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
     ++rows_;
     return true;
   }
-  if (in_->bad()) throw DataError(fmt::format("{}:{}: read error", path_, line_));
   if (rows_ == 0) throw DataError(fmt::format("{}: no data rows after the header", path_));
   return false;
 }

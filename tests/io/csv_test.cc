@@ -1,5 +1,6 @@
 #include "ident/io/csv.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "ident/common/error.h"
@@ -32,7 +33,7 @@ TEST(CsvReader, ReadsTheBundledDryerRecord) {
 }
 
 TEST(CsvReader, AcceptsCrlfBlankLinesBomSpacesAndPlusSigns) {
-  const auto path = WriteFile("ok.csv", "\xEF\xBB\xBFt, u ,y\r\n0,+1.5, 2e3\r\n\r\n1,-2,3\r\n\n");
+  const auto path = WriteFile("ok.csv", "\xEF\xBB\xBFt, u ,y\r\n\r\n0,+1.5, 2e3\r\n1,-2,3\r\n\r\n \t\n\n");
   const DataTable t = ReadCsv(path);
   EXPECT_EQ(t.names, (std::vector<std::string>{"t", "u", "y"}));
   ASSERT_EQ(t.num_rows(), 2);
@@ -86,15 +87,128 @@ TEST(CsvReader, UnknownColumnListsTheColumns) {
   }
 }
 TEST(CsvReader, StreamsRowByRowWithLineNumbers) {
-  CsvReader reader(WriteFile("s.csv", "a,b\n1,2\n\n3,4\n"));
+  CsvReader reader(WriteFile("s.csv", "a,b\n\n1,2\n3,4\n\n"));
   Eigen::VectorXd row(2);
   ASSERT_TRUE(reader.Next(row));
-  EXPECT_EQ(reader.line(), 2);
+  EXPECT_EQ(reader.line(), 3);
   ASSERT_TRUE(reader.Next(row));
   EXPECT_EQ(reader.line(), 4);
   EXPECT_EQ(row(1), 4);
   EXPECT_FALSE(reader.Next(row));
   EXPECT_EQ(reader.rows_read(), 2);
+}
+
+// Old Mac files end lines with CR alone: read as line ends, mixed with LF and CRLF, lines counted once.
+TEST(CsvReader, ReadsCrOnlyLineEnds) {
+  const DataTable t = ReadCsv(WriteFile("cr.csv", "t,u\r0,1.5\r1,-2\r\n2,7\n3,9\r"));
+  EXPECT_EQ(t.names, (std::vector<std::string>{"t", "u"}));
+  ASSERT_EQ(t.num_rows(), 4);
+  EXPECT_EQ(t.values(0, 1), 1.5);
+  EXPECT_EQ(t.values(1, 1), -2);
+  EXPECT_EQ(t.values(2, 1), 7);
+  EXPECT_EQ(t.values(3, 1), 9);
+  ExpectDataError(WriteFile("cr_bad.csv", "t,u\r0,1\r\n1,x\r2,3\r"), "cr_bad.csv:3: column 2 ('u'): 'x' is not a number");
+}
+
+// A CRLF split across the reader's 64 KiB blocks is one line end.
+TEST(CsvReader, CrlfAcrossBlockBoundariesIsOneLineEnd) {
+  std::string text = "t,u\r\n";
+  int rows = 0;
+  while (text.size() < 3 * 65536) text += fmt::format("{},{}\r\n", rows, rows % 7), ++rows;
+  CsvReader reader(WriteFile("crlf_blocks.csv", text));
+  Eigen::VectorXd row(2);
+  long n = 0;
+  while (reader.Next(row)) {
+    ASSERT_EQ(row(0), static_cast<double>(n)) << "line " << reader.line();
+    ASSERT_EQ(reader.line(), n + 2);
+    ++n;
+  }
+  EXPECT_EQ(n, rows);
+}
+
+TEST(CsvReader, BlankLineBetweenDataRowsIsAGap) {
+  ExpectDataError(WriteFile("gap.csv", "t,u\n0,1\n1,2\n\n2,3\n"), "gap.csv:4: blank line inside the data (a gap in the record?)");
+  ExpectDataError(WriteFile("gap2.csv", "t,u\r\n0,1\r\n \t\r\n\r\n2,3\r\n"), "gap2.csv:3: blank line inside the data");
+  // Blank lines before the header, between it and the first row, and at the end stay allowed.
+  EXPECT_EQ(ReadCsv(WriteFile("ends.csv", "\n\nt,u\n\n0,1\n1,2\n\n \n")).num_rows(), 2);
+}
+
+TEST(CsvReader, PlusFollowedByASignIsNotANumber) {
+  ExpectDataError(WriteFile("pm.csv", "t,u\n0,+-5\n"), "pm.csv:2: column 2 ('u'): '+-5' is not a number");
+  ExpectDataError(WriteFile("pp.csv", "t,u\n0,++5\n"), "pp.csv:2: column 2 ('u'): '++5' is not a number");
+  EXPECT_EQ(ReadCsv(WriteFile("p.csv", "t,u\n0,+5\n")).values(0, 1), 5);
+}
+
+// The line limit bounds the memory of a line: a line of exactly kMaxCsvLineBytes bytes is read, one
+// byte more is refused with the line's number (a 1 MiB run of zeros, as /dev/zero gives, included).
+TEST(CsvReader, LinesAreLimitedTo1MiB) {
+  ASSERT_EQ(kMaxCsvLineBytes, 1048576u);
+  const std::string at_limit = "1," + std::string(kMaxCsvLineBytes - 3, '0') + "5";
+  ASSERT_EQ(at_limit.size(), kMaxCsvLineBytes);
+  const DataTable t = ReadCsv(WriteFile("at_limit.csv", "t,u\n" + at_limit + "\n"));
+  EXPECT_EQ(t.values(0, 1), 5);
+  ExpectDataError(WriteFile("over.csv", "t,u\n0,1\n" + at_limit + "0\n"), "over.csv:3: line longer than 1048576 bytes");
+  ExpectDataError(WriteFile("zeros.csv", std::string(kMaxCsvLineBytes + 1, '\0')), "zeros.csv:1: line longer than 1048576 bytes");
+}
+
+// A long cell is shown by its first 32 bytes and its length: the message stays short.
+TEST(CsvReader, LongCellIsEchoedTruncatedWithItsLength) {
+  const std::string cell(100000, 'x');
+  try {
+    ReadCsv(WriteFile("long_cell.csv", "t,u\n0," + cell + "\n"));
+    FAIL() << "no error";
+  } catch (const DataError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("long_cell.csv:2: column 2 ('u'): '" + std::string(32, 'x') + "...' (100000 bytes) is not a number"),
+              std::string::npos) << message;
+    EXPECT_LT(message.size(), 200u) << message;
+  }
+  EXPECT_EQ(ShowCell(std::string(32, 'a')), "'" + std::string(32, 'a') + "'");
+  EXPECT_EQ(ShowCell("1\x1b[2J"), "'1\\x1b[2J'");  // control bytes escaped
+  // The cut falls before a multi-byte character, not inside it: 31 ASCII bytes, then "é" (2 bytes).
+  EXPECT_EQ(ShowCell(std::string(31, 'a') + "\xC3\xA9zz"), "'" + std::string(31, 'a') + "...' (35 bytes)");
+}
+
+TEST(CsvReader, NulBytesAreReportedNotCutTheMessage) {
+  const std::string cell_nul("t,u,y\n0,1\0" "2,3\n", 14);
+  try {
+    ReadCsv(WriteFile("nul.csv", cell_nul));
+    FAIL() << "no error";
+  } catch (const DataError& e) {
+    const std::string message(e.what());
+    EXPECT_EQ(message.substr(message.find("nul.csv")), "nul.csv:2: column 2 ('u'): contains a NUL byte");
+  }
+  ExpectDataError(WriteFile("nul_name.csv", std::string("t,u\0v,y\n0,1,2\n", 14)),
+                  "nul_name.csv:1: column 2 name contains a NUL byte");
+}
+
+// Duplicate names are found through a hash map, so a wide header is read in linear time; the column
+// limit is 100000: the widest header is read, one more column is refused.
+TEST(CsvReader, WideHeadersUpToTheColumnLimit) {
+  ASSERT_EQ(kMaxCsvColumns, 100000);
+  std::string header, row;
+  for (int j = 0; j < kMaxCsvColumns; ++j) {
+    header += fmt::format("{}c{}", j ? "," : "", j);
+    row += fmt::format("{}{}", j ? "," : "", j);
+  }
+  const DataTable t = ReadCsv(WriteFile("widest.csv", header + "\n" + row + "\n"));
+  ASSERT_EQ(t.names.size(), 100000u);
+  EXPECT_EQ(t.values(0, 99999), 99999);
+  EXPECT_EQ(t.ColumnIndex("c77777"), 77777);
+  std::string dup = header;
+  dup.replace(dup.rfind(','), std::string::npos, ",c0");  // the last column repeats the first
+  ExpectDataError(WriteFile("wide_dup.csv", dup + "\n" + row + "\n"), "wide_dup.csv:1: duplicate column name 'c0' (columns 1 and 100000)");
+  ExpectDataError(WriteFile("too_wide.csv", header + ",extra\n" + row + ",1\n"),
+                  "too_wide.csv:1: the header has 100001 columns; at most 100000 are supported");
+  // An unknown column lists the first 20 names and the number of columns.
+  try {
+    t.ColumnIndex("q");
+    FAIL();
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("no column 'q' (columns: c0, c1, c2,"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(", c19, ... (100000 columns)"), std::string::npos) << e.what();
+    EXPECT_LT(std::string(e.what()).size(), 300u);
+  }
 }
 
 }  // namespace

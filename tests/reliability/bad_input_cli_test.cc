@@ -229,5 +229,118 @@ TEST(BadInput, PriorJsonNotPositiveDefinite) {
 
 TEST(BadInput, UnknownOptionIsAUsageError) { ExpectCliError("fit dryer" + kArx + " --bogus", "--bogus", 2); }
 
+// The record's length is checked before the estimator (whose prior costs O(rho^3)) is built: the
+// length error comes even where the estimator name is bad, which is checked only when it is built.
+TEST(BadInput, OrdersTooLargeForTheRecordAreRefusedBeforeTheEstimatorIsBuilt) {
+  ExpectCliError("fit dryer --output y --input u --na 2000",
+                 "the estimation part has 500 rows; ARX(2000,2,1) with 2002 parameters needs at least 4003");
+  ExpectCliError("fit dryer --output y --input u --na 5000 --estimator nonesuch",
+                 "the estimation part has 500 rows; ARX(5000,2,1) with 5002 parameters needs at least 10003");
+  ExpectCliError("fit dryer --output y --input u --na 2000 --prior " + TempDir(), "the estimation part has 500 rows");
+}
+
+TEST(BadInput, ValuesNear1em200AreTooSmallNotAConstantColumn) {
+  const std::string path = ScaledDryer("dryer_1em200.csv", 1e-200);
+  ExpectCliError("fit " + path + kArx,
+                 "dryer_1em200.csv: regressor 'a1' has sum of squares 0 over the estimation part: its values "
+                 "(largest 1.64e-200) are too small");
+  ExpectCliError("fit " + path + kArx,
+                 "are too small to square in double precision (values near 1e-200?); rescale the data");
+}
+
+TEST(BadInput, TinyDofIsBlamedOnTheDof) {
+  ExpectCliError("fit dryer" + kArx + " --estimator student --dof 1e-300",
+                 "dof = 1e-300 is too small: nu_hard >= (k+3-delta)/k = 2e+300 exceeds the first step's nu(1) = 6");
+}
+
+TEST(BadInput, PriorFileIsADirectory) {
+  const std::string dir = TempDir() + "/prior_dir";
+  std::filesystem::create_directories(dir);
+  ExpectCliError("fit dryer" + kArx + " --prior " + dir, "cannot read '" + dir + "': it is a directory");
+}
+
+TEST(BadInput, UnknownKeyInThePriorJsonIsNamed) {
+  ExpectCliError("fit dryer --output y --regressors u --prior " +
+                     WriteFile("unknown_key.json", R"({"nu0": 5, "V0": [[1, 0], [0, 1]], "Vo": 1})"),
+                 R"(unknown_key.json: unknown key "Vo" (known: nu0, V0))");
+}
+
+TEST(BadInput, DeltaForAnEstimatorWithoutOne) {
+  ExpectCliError("fit dryer" + kArx + " --delta 0", "delta = 0 does not apply to estimator 'rls'");
+  ExpectCliError("fit dryer" + kArx + " --estimator huber --delta 1", "delta = 1 does not apply to estimator 'huber'");
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy --delta 2", "delta = 2; need 0 or 1");
+}
+
+TEST(BadInput, LockInWindowBeyondTheLimit) {
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy --lock-in-window 2147483647",
+                 "--lock-in-window 2147483647 exceeds the estimation part's 500 rows: the monitor could never fill; "
+                 "need at most 500");
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy --split 1 --lock-in-window 1001",
+                 "--lock-in-window 1001 exceeds the estimation part's 1000 rows");
+  // The whole estimation part is the longest window.
+  const CliResult r = RunCli("fit dryer" + kArx + " --estimator cauchy --lock-in-window 500 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["lock_in"]["window"].get<int>(), 500);
+  EXPECT_EQ(j["lock_in"]["flagged"].get<int>(), 0);
+}
+
+TEST(BadInput, PlusMinusIsNotANumber) {
+  ExpectCliError("fit " + WriteFile("plus_minus.csv", "t,u,y\n0,+-5,1\n") + kArx, "plus_minus.csv:2: column 2 ('u'): '+-5' is not a number");
+}
+
+TEST(BadInput, NulByteInACellIsReported) {
+  ExpectCliError("fit " + WriteFile("nul.csv", std::string("t,u,y\n0,1\0" "2,3\n", 14)) + kArx,
+                 "nul.csv:2: column 2 ('u'): contains a NUL byte");
+}
+
+TEST(BadInput, BlankLineInsideTheData) {
+  std::string csv = ReadFile(DatasetPath("dryer.csv"));
+  const std::size_t at = csv.find("\n", csv.size() / 2) + 1;
+  const long line = std::count(csv.begin(), csv.begin() + static_cast<long>(at), '\n') + 1;
+  ASSERT_GT(line, 400);
+  csv.insert(at, "\n");
+  ExpectCliError("fit " + WriteFile("gap.csv", csv) + kArx,
+                 fmt::format("gap.csv:{}: blank line inside the data (a gap in the record?)", line));
+}
+
+TEST(BadInput, LineLongerThanTheLimit) {
+  if (std::filesystem::exists("/dev/zero"))
+    ExpectCliError("fit /dev/zero" + kArx, "/dev/zero:1: line longer than 1048576 bytes");
+  ExpectCliError("fit " + WriteFile("long_line.csv", "t,u,y\n0," + std::string(2 << 20, '1') + ",3\n") + kArx,
+                 "long_line.csv:2: line longer than 1048576 bytes");
+}
+
+TEST(BadInput, LongCellIsEchoedTruncated) {
+  const std::string path = WriteFile("long_cell.csv", "t,u,y\n0," + std::string(100000, 'x') + ",3\n");
+  const CliResult r = RunCli("fit " + path + kArx);
+  ExpectCliError("fit " + path + kArx,
+                 "long_cell.csv:2: column 2 ('u'): '" + std::string(32, 'x') + "...' (100000 bytes) is not a number");
+  EXPECT_LT(r.err.size(), 300u) << r.err.size();
+}
+
+TEST(BadInput, TooManyColumns) {
+  std::string header = "y";
+  for (int j = 1; j <= 100000; ++j) header += fmt::format(",c{}", j);
+  ExpectCliError("fit " + WriteFile("too_wide.csv", header + "\n") + kArx,
+                 "too_wide.csv:1: the header has 100001 columns; at most 100000 are supported");
+}
+
+// Old Mac files (CR line ends) are read as they are meant: the same model as the LF file.
+TEST(BadInput, CrOnlyLineEndsGiveTheSameModelAsLf) {
+  std::string cr = ReadFile(DatasetPath("dryer.csv"));
+  cr.erase(std::remove(cr.begin(), cr.end(), '\r'), cr.end());
+  std::replace(cr.begin(), cr.end(), '\n', '\r');
+  const CliResult a = RunCli("fit dryer" + kArx + " --json");
+  const CliResult b = RunCli("fit " + WriteFile("dryer_cr.csv", cr) + kArx + " --json");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const auto ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
+  EXPECT_EQ(jb["samples_estimation"].get<int>(), 500);
+  for (int i = 0; i < 4; ++i)
+    EXPECT_NEAR(jb["theta"][i].get<double>(), ja["theta"][i].get<double>(), 1e-12) << i;
+  EXPECT_NEAR(jb["fit_percent"]["one_step"].get<double>(), ja["fit_percent"]["one_step"].get<double>(), 1e-9);
+}
+
 }  // namespace
 }  // namespace ident::testing

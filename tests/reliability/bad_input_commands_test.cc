@@ -77,6 +77,21 @@ TEST(BadInputCommands, InfCell) {
   ExpectEveryReaderRejects(WriteFile("inf.csv", "u,x,y,z\n1,2,3,-inf\n"), "inf.csv:2: column 4 ('z'): '-inf' is not a finite number");
 }
 
+TEST(BadInputCommands, BlankLineInsideTheData) {
+  ExpectEveryReaderRejects(WriteFile("gap.csv", "u,x,y,z\n1,1,2,3\n2,2,3,4\n\n3,3,4,5\n4,4,5,6\n"),
+                           "gap.csv:4: blank line inside the data (a gap in the record?)");
+}
+
+TEST(BadInputCommands, NulByteInACell) {
+  ExpectEveryReaderRejects(WriteFile("nul.csv", std::string("u,x,y,z\n1,1\0" "5,2,3\n", 18)),
+                           "nul.csv:2: column 2 ('x'): contains a NUL byte");
+}
+
+TEST(BadInputCommands, LineLongerThanTheLimit) {
+  ExpectEveryReaderRejects(WriteFile("long_line.csv", "u,x,y,z\n1," + std::string(1 << 20, '2') + ",3,4\n"),
+                           "long_line.csv:2: line longer than 1048576 bytes");
+}
+
 TEST(BadInputCommands, CellBeyondDoubleRange) {
   ExpectEveryReaderRejects(WriteFile("e309.csv", "u,x,y,z\n1,1e309,3,4\n"), "e309.csv:2: column 2 ('x'): '1e309' is out of the range of double");
 }
@@ -110,6 +125,17 @@ TEST(BadInputCompare, OrdersTooLargeForTheRecord) {
 
 TEST(BadInputCompare, EmptyEstimatorName) {
   ExpectCliError("compare dryer --estimators ''", "--estimators: an empty estimator name");
+}
+
+TEST(BadInputCompare, EmptyNameInsideTheEstimatorList) {
+  ExpectCliError("compare dryer --estimators rls,,cauchy", "--estimators: an empty estimator name in 'rls,,cauchy'");
+  ExpectCliError("compare dryer --estimators rls, --estimators cauchy", "--estimators: an empty estimator name in 'rls,'");
+}
+
+TEST(BadInputCompare, LockInWindowBeyondTheLimit) {
+  ExpectCliError("compare dryer --estimators rls,cauchy --lock-in-window 1000001",
+                 "--lock-in-window 1000001 exceeds the estimation part's 500 rows: the monitor could never fill; "
+                 "need at most 500");
 }
 
 TEST(BadInputCompare, UnknownEstimator) {
@@ -194,7 +220,11 @@ TEST(BadInputDatasets, UnknownOptionIsAUsageError) { ExpectCliError("datasets --
 
 // ---- ident mems ---------------------------------------------------------------------------------------
 
-TEST(BadInputMems, TooFewSteps) { ExpectCliError("mems --steps 10", "steps = 10; need >= 100"); }
+TEST(BadInputMems, TooFewSteps) { ExpectCliError("mems --steps 10", "steps = 10; need 100..1000000"); }
+
+TEST(BadInputMems, StepsBeyondTheLimit) {
+  ExpectCliError("mems --steps 2147483647", "steps = 2147483647; need 100..1000000");
+}
 
 TEST(BadInputMems, TMeanNotPositive) { ExpectCliError("mems --t-mean 1,-1", "--t-mean value -1 must be > 0"); }
 

@@ -20,6 +20,7 @@
 #include "ident/ld_factor.h"
 #include "ident/regression_prior.h"
 #include "ident/rls.h"
+#include "ident/safe_student_regression.h"
 #include "models/arx.h"
 #include "models/measurement.h"
 #include "models/penalties.h"
@@ -158,12 +159,90 @@ TEST(StreamingFit, CountsDataRowsLikeTheReader) {
   const std::string path = dir + "/count.csv";
   {
     std::FILE* f = std::fopen(path.c_str(), "w");
-    std::fputs("\n  \n\xEF\xBB\xBFu,y\r\n1,2\r\n\n \t\r\n3,4\n5,6", f);  // blank lines, CRLF, no final newline
+    std::fputs("\n  \n\xEF\xBB\xBFu,y\r\n\n \t\r\n1,2\r\n3,4\r5,6\n7,8\r\n9,10", f);  // blank lines, CRLF, CR, no final newline
     std::fclose(f);
   }
-  EXPECT_EQ(tools::CountCsvDataRows(path), 3);
-  EXPECT_EQ(io::ReadCsv(path).num_rows(), 3);
+  EXPECT_EQ(tools::CountCsvDataRows(path), 5);
+  const io::DataTable table = io::ReadCsv(path);
+  ASSERT_EQ(table.num_rows(), 5);
+  EXPECT_EQ(table.values(4, 1), 10);
 }
+
+// The record's length is checked from the row count before anything of the model's size is built;
+// a bad row is still reported first.
+TEST(BadInputLibrary, RecordLengthIsCheckedFromTheRowCountAlone) {
+  const std::string dir = ::testing::TempDir();
+  auto write = [&](const std::string& name, const std::string& text) {
+    const std::string path = dir + "/" + name;
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+    return path;
+  };
+  const std::string path = write("short.csv", "u,y\n1,2\n2,3\n3,5\n4,4\n5,1\n6,0\n");
+  auto source = tools::MakeArxSource({"u", "y"}, "y", {"u"}, models::ArxStructure(2000, {2}, {1}), path);
+  tools::FitOptions options;
+  EXPECT_INVALID(tools::CheckCsvRecordLength(path, {}, *source, options),
+                 "the estimation part has 3 rows; ARX(2000,2,1) with 2002 parameters needs at least 4003");
+  auto small = tools::MakeArxSource({"u", "y"}, "y", {"u"}, models::ArxStructure(1, {1}, {1}), path);
+  EXPECT_INVALID(tools::CheckCsvRecordLength(path, {}, *small, options),
+                 "the estimation part has 3 rows; ARX(1,1,1) with 2 parameters needs at least 4");
+  options.split = 1;  // 6 rows
+  EXPECT_NO_THROW(tools::CheckCsvRecordLength(path, {}, *small, options));
+  options.split = 0.1;  // 0 estimation rows
+  EXPECT_INVALID(tools::CheckCsvRecordLength(path, {}, *small, options), "the estimation part has 0 rows");
+  const std::string ragged = write("short_ragged.csv", "u,y\n1,2\n2,3,4\n");
+  try {
+    tools::CheckCsvRecordLength(ragged, {}, *source, {});
+    ADD_FAILURE() << "no error";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("short_ragged.csv:3: row has 3 fields; the header has 2"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(BadInputLibrary, LockInWindowIsBounded) {
+  EstimatorSettings s;
+  s.name = "cauchy";
+  s.lock_in.window = std::numeric_limits<int>::max();
+  EXPECT_INVALID(MakeRegressionEstimator(s, 4), "lock_in_window = 2147483647; need 0 (automatic) or 2..1000000");
+  s.lock_in.window = kMaxLockInWindow + 1;
+  EXPECT_INVALID(MakeRegressionEstimator(s, 4), "lock_in_window = 1000001");
+  s.lock_in.window = 1;
+  EXPECT_INVALID(MakeRegressionEstimator(s, 4), "lock_in_window = 1;");
+  s.lock_in.window = kMaxLockInWindow;
+  const auto estimator = MakeRegressionEstimator(s, 4);
+  ASSERT_TRUE(estimator->lock_in().has_value());
+  EXPECT_EQ(estimator->lock_in()->window, 1000000);
+}
+
+TEST(BadInputLibrary, DeltaIsRefusedByTheEstimatorsWithoutTheConvention) {
+  EstimatorSettings s;
+  s.delta = 0;
+  EXPECT_INVALID(MakeRegressionEstimator(s, 3), "delta = 0 does not apply to estimator 'rls'");
+  s.name = "huber";
+  EXPECT_INVALID(MakeRegressionEstimator(s, 3), "delta = 0 does not apply to estimator 'huber'");
+  s.name = "cauchy";
+  EXPECT_NO_THROW(MakeRegressionEstimator(s, 3));
+  s.name = "student";
+  s.dof = 3.0;
+  EXPECT_NO_THROW(MakeRegressionEstimator(s, 3));
+}
+
+// nu_hard >= (k+3-delta)/k: a tiny k is blamed on k, with the bound it must exceed.
+TEST(BadInputLibrary, TooSmallDofIsNamed) {
+  EstimatorSettings s;
+  s.name = "student";
+  s.dof = 1e-300;
+  EXPECT_INVALID(MakeRegressionEstimator(s, 4),
+                 "dof = 1e-300 is too small: nu_hard >= (k+3-delta)/k = 2e+300 exceeds the first step's nu(1) = 6 "
+                 "(nu0 = 5, delta = 1); need k > 0.4");
+  s.dof = 0.3;  // nu0 = 5.3, nu(1) = 6.3 <= (0.3 + 2)/0.3 = 7.67
+  EXPECT_INVALID(MakeRegressionEstimator(s, 4), "dof = 0.3 is too small");
+  s.dof = 0.5;  // nu(1) = 6.5 > (0.5 + 2)/0.5 = 5
+  EXPECT_NO_THROW(MakeRegressionEstimator(s, 4));
+}
+
 
 // ---- the libraries behind smooth, logcondens, mems and the Student/Cauchy estimators --------------
 
