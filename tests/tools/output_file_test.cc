@@ -4,6 +4,7 @@
 
 #include <signal.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -123,9 +124,14 @@ TEST(OutputFile, SymbolicLinkIsWrittenThroughAndStaysALink) {
 
 TEST(OutputFile, RefusesDevicesDirectoriesAndMissingDirectoriesNamingTheFile) {
   const fs::path dir = FreshDir("refuse");
-  EXPECT_EQ(ErrorOf([] { OutputFile("/dev/full", "--csv file"); }),
-            "cannot write --csv file '/dev/full': not a regular file (a device, fifo or directory)");
-  EXPECT_TRUE(fs::is_character_file("/dev/full"));
+  // A private /dev/full node (root only), so that a regression cannot remove the system's.
+  const fs::path full = dir / "full";
+  if (mknod(full.c_str(), S_IFCHR | 0666, makedev(1, 7)) == 0) {
+    EXPECT_EQ(ErrorOf([&] { OutputFile(full.string(), "--csv file"); }),
+              fmt::format("cannot write --csv file '{}': not a regular file (a device, fifo or directory)", full.string()));
+    EXPECT_TRUE(fs::is_character_file(full));
+    fs::remove(full);
+  }
   EXPECT_EQ(ErrorOf([&] { OutputFile(dir.string(), "--trace file"); }),
             fmt::format("cannot write --trace file '{}': not a regular file (a device, fifo or directory)",
                         dir.string()));
@@ -185,7 +191,7 @@ TEST(CheckOutputPaths, RefusesAnInputTwoEqualOutputsStdoutAndDevices) {
             fmt::format("--csv and --trace name the same file ('{}', '{}'); give two names", x, x2));
   EXPECT_NE(ErrorOf([] { CheckOutputPaths({{"--trace", "-"}}, {}); }).find("writing to standard output"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([] { CheckOutputPaths({{"--csv", "/dev/full"}}, {}); }).find("not a regular file"),
+  EXPECT_NE(ErrorOf([&] { CheckOutputPaths({{"--csv", dir.string()}}, {}); }).find("not a regular file"),
             std::string::npos);
   EXPECT_EQ(ErrorOf([&] { CheckOutputPaths({{"--csv", x}, {"--trace", ""}, {"--plot", (dir / "p.svg").string()}},
                                            {{"input data file", data}, {"--prior file", ""}}); }),
