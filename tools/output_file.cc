@@ -28,7 +28,7 @@ struct Slot {
 };
 std::array<Slot, kSlots> g_slots;
 
-constexpr std::array<int, 3> kSignals = {SIGTERM, SIGINT, SIGHUP};
+constexpr std::array<int, 4> kSignals = {SIGTERM, SIGINT, SIGHUP, SIGPIPE};
 std::array<struct sigaction, kSignals.size()> g_previous;
 
 extern "C" void RemoveTemporaryFilesAndReraise(int signal_number) {
@@ -131,6 +131,7 @@ OutputFile::OutputFile(std::string path, std::string what) : path_(std::move(pat
   struct stat st{};
   if (stat(final_path_.c_str(), &st) == 0) {
     if (!S_ISREG(st.st_mode)) Fail("not a regular file (a device, fifo or directory)");
+    if (access(final_path_.c_str(), W_OK) != 0) Fail(std::strerror(errno));  // a read-only file stays so
     mode = st.st_mode & 07777;
   } else {
     const mode_t mask = umask(0);

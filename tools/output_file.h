@@ -7,7 +7,7 @@
 // temporary file. A symbolic link as target is followed: the temporary file goes next to the file the
 // link resolves to and is renamed onto that file, so the link itself stays a link.
 //
-// On SIGTERM, SIGINT or SIGHUP an async-signal-safe handler unlinks every temporary file still open
+// On SIGTERM, SIGINT, SIGHUP or SIGPIPE an async-signal-safe handler unlinks every temporary file still open
 // (a fixed table of paths), restores the signal's previous action and raises it again; the targets
 // are untouched. The handler is installed when the first OutputFile is created.
 //
@@ -16,7 +16,9 @@
 //   ...
 //   out.Commit();                                    // throws InvalidArgument on a write error
 //
-// A new file gets mode 0666 & ~umask, a replaced one keeps its mode. Which targets a command refuses
+// A new file gets mode 0666 & ~umask, a replaced one keeps its mode; an existing file the process may
+// not write (access(2) W_OK) is refused, as opening it for writing would be. The rename gives the target
+// a new inode: other hard links to the old file keep the old content. Which targets a command refuses
 // (an input file, two equal outputs, a device or fifo) is decided by tools/output_paths.h, which the
 // commands call before any work; the constructor also refuses an existing target that is not a regular
 // file.

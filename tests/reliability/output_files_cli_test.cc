@@ -112,6 +112,8 @@ TEST(OutputFilesCli, DevicesDirectoriesAndStdoutAreRefusedAsOutputFiles) {
   }
   ExpectCliError("fit " + Q(dir / "d.csv") + kDryerArx + " --trace " + Q(dir), "not a regular file");
   ExpectCliError("fit " + Q(dir / "d.csv") + kDryerArx + " --trace -", "--trace '-': writing to standard output");
+  ExpectCliError("fit " + Q(dir / "d.csv") + kDryerArx + " --trace /nonexistent-dir/t.csv",
+                 "cannot write --trace file '/nonexistent-dir/t.csv': No such file or directory");
   EXPECT_FALSE(fs::exists("-"));
   EXPECT_EQ(TemporaryFiles(dir), 0);
 }
@@ -124,6 +126,10 @@ TEST(OutputFilesCli, TwoOutputsNamingOneFileAreRefused) {
   ExpectCliError("fit " + Q(dir / "d.csv") + kDryerArx + " --trace " + Q(dir / "f.svg") + " --plot " + Q(dir / "f.svg"),
                  "--trace and --plot name the same file");
   ExpectCliError("compare " + Q(dir / "d.csv") + kDryerArx + " --plot " + Q(dir / "d.csv"), "is the input data file");
+  const std::string prior = WriteFile("outputs_two/p.json", R"({"nu0": 5, "V0": [[1]]})");
+  ExpectCliError("fit " + Q(dir / "d.csv") + kDryerArx + " --prior " + Q(prior) + " --trace " + Q(prior),
+                 "--trace file '" + prior + "' is the --prior file '" + prior + "'; give another name");
+  EXPECT_EQ(ReadFile(prior), R"({"nu0": 5, "V0": [[1]]})");
   EXPECT_FALSE(fs::exists(dir / "f.svg"));
 }
 
