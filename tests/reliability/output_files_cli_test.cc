@@ -6,6 +6,10 @@
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdio>
 
 #include <cstdlib>
 #include <filesystem>
@@ -145,6 +149,39 @@ TEST(OutputFilesCli, MemsWritesCompleteFilesAndPrintsAfterThem) {
   const io::DataTable trace = io::ReadCsv((dir / "fig8.csv").string());
   EXPECT_EQ(trace.num_rows(), 400);
   EXPECT_NEAR(trace.values(1, 0) - trace.values(0, 0), 0.01, 1e-12);  // t steps by h
+  EXPECT_EQ(TemporaryFiles(dir), 0);
+}
+
+// A study of 10^8 steps is stopped by SIGTERM once its --csv temporary file exists (created before the
+// study starts): the process dies by the signal, the existing --csv file keeps its bytes, and the
+// temporary file is gone. No timing is asserted: the test waits for the file, then signals.
+TEST(OutputFilesCli, SigtermDuringARunKeepsTheOutputAndRemovesTheTemporaryFile) {
+  const fs::path dir = DirWithDryer("sigterm");
+  const std::string csv = WriteFile("outputs_sigterm/fig9.csv", "old fig9\n");
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    if (!std::freopen("/dev/null", "w", stdout) || !std::freopen("/dev/null", "w", stderr)) _exit(126);
+    execl(IDENT_CLI_PATH, "ident", "mems", "--steps", "100000000", "--grid-points", "16", "--t-mean", "1", "--csv",
+          csv.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  bool started = false;  // the temporary file exists
+  int status = 0;
+  bool exited = false;
+  for (int i = 0; i < 12000 && !started && !exited; ++i) {
+    started = TemporaryFiles(dir) == 1;
+    exited = waitpid(child, &status, WNOHANG) == child;
+    if (!started && !exited) usleep(5000);
+  }
+  if (!exited) {
+    kill(child, SIGTERM);
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+  }
+  EXPECT_TRUE(started);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "status " << status;
+  EXPECT_EQ(WTERMSIG(status), SIGTERM);
+  EXPECT_EQ(ReadFile(csv), "old fig9\n");
   EXPECT_EQ(TemporaryFiles(dir), 0);
 }
 
