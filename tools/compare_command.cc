@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -18,6 +19,8 @@
 #include "tools/dataset_index.h"
 #include "tools/estimator_options.h"
 #include "tools/gnuplot.h"
+#include "tools/output_file.h"
+#include "tools/output_paths.h"
 #include "tools/structure_options.h"
 
 namespace ident::tools {
@@ -38,7 +41,7 @@ struct CompareCommandOptions {
 };
 
 // One-step validation fit per trial seed, one line per estimator, and the clean LS level.
-void PlotCompare(const std::string& path, const CompareResult& r, const OutlierSpec& spec) {
+void PlotCompare(OutputFile& out, const CompareResult& r, const OutlierSpec& spec) {
   PlotPanel panel{fmt::format("{}: one-step validation fit per outlier seed", r.structure), "seed", "fit %", {}};
   std::vector<double> seeds;
   const std::size_t trials = r.scores.empty() ? 0 : r.scores[0].one_step_per_trial.size();
@@ -50,7 +53,7 @@ void PlotCompare(const std::string& path, const CompareResult& r, const OutlierS
     if (trials == 1) fit.push_back(fit[0]);
     panel.series.push_back({s.estimator, seeds, fit});
   }
-  RenderPlot(path, {panel});
+  RenderPlot(out, {panel});
 }
 
 nlohmann::ordered_json Number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); }
@@ -174,6 +177,12 @@ void RunCompare(CompareCommandOptions& o) {
   IDENT_REQUIRE(!structure.output.empty(), "give --output (the output column)");
   const std::string detrend = !o.detrend.empty() ? o.detrend : structure.intercept ? "none" : "mean";
   const OutlierSpec spec = OutlierSpec::Parse(o.outliers);
+  CheckOutputPaths({{"--plot", o.plot}}, {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
+  std::optional<OutputFile> plot;  // renamed onto --plot only when the comparison and the plot succeed
+  if (!o.plot.empty()) {
+    CheckPlotFileName(o.plot);
+    plot.emplace(o.plot, "--plot file");
+  }
 
   io::DataTable table = io::ReadCsv(path);
   std::unique_ptr<DataSource> source = structure.MakeSource(table.names, path);
@@ -212,7 +221,10 @@ void RunCompare(CompareCommandOptions& o) {
   if (isatty(STDERR_FILENO)) options.progress = ProgressBar;
   const CompareResult result = Compare(std::move(table), *source, settings, names, options);
   const std::string name = dataset ? dataset->name : path;
-  if (!o.plot.empty()) PlotCompare(o.plot, result, spec);
+  if (plot) {
+    PlotCompare(*plot, result, spec);
+    plot->Commit();
+  }
   if (o.json)
     std::cout << ToJson(result, path, spec, o.trials, structure.clean_regressors).dump(2) << "\n";
   else if (o.csv)

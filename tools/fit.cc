@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <memory>
 
 #include <Eigen/Eigenvalues>
@@ -99,9 +100,8 @@ class Estimation {
         if (on_update_) on_update_(r, estimator_);
         if (trace_) {
           const Eigen::VectorXd theta = estimator_.parameters();
-          fmt::print(trace_, "{},{:.17g},{:.17g},{:.17g}", r + 1, report.nu, report.weight, report.prediction_error);
-          for (int i = 0; i < theta.size(); ++i) fmt::print(trace_, ",{:.17g}", theta(i));
-          fmt::print(trace_, ",{:.17g}\n", estimator_.Dy());
+          WriteTraceRow(trace_, {.t = r + 1, .nu = report.nu, .beta = report.weight,
+                                 .pred_err = report.prediction_error, .theta = &theta, .Dy = estimator_.Dy()});
         }
       } else {
         ++rejected_;
@@ -351,9 +351,21 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
 }
 
 void WriteTraceHeader(std::FILE* trace, int num_parameters) {
-  fmt::print(trace, "t,nu,beta,pred_err");
-  for (int i = 1; i <= num_parameters; ++i) fmt::print(trace, ",theta{}", i);
-  fmt::print(trace, ",Dy\n");
+  fmt::memory_buffer line;
+  fmt::format_to(std::back_inserter(line), "t,nu,beta,pred_err");
+  for (int i = 1; i <= num_parameters; ++i) fmt::format_to(std::back_inserter(line), ",theta{}", i);
+  fmt::format_to(std::back_inserter(line), ",Dy\n");
+  std::fwrite(line.data(), 1, line.size(), trace);
+}
+
+void WriteTraceRow(std::FILE* trace, const TraceRow& row) {
+  fmt::memory_buffer line;
+  auto out = std::back_inserter(line);
+  fmt::format_to(out, "{},{:.17g},{:.17g},{:.17g}", row.t, row.nu, row.beta, row.pred_err);
+  if (row.theta)
+    for (int i = 0; i < row.theta->size(); ++i) fmt::format_to(out, ",{:.17g}", (*row.theta)(i));
+  fmt::format_to(out, ",{:.17g}\n", row.Dy);
+  std::fwrite(line.data(), 1, line.size(), trace);
 }
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,

@@ -143,4 +143,15 @@ int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, con
 // Writes the trace header: t,nu,beta,pred_err,theta1..thetaρ,Dy
 void WriteTraceHeader(std::FILE* trace, int num_parameters);
 
+// One trace row per update, every number with 17 significant digits (reads back bit for bit; NaN and
+// ±Inf as nan, inf, -inf). Neither writer throws: a write error stays in the stream's error flag, which
+// the owner checks when it closes the file (OutputFile::Close).
+struct TraceRow {
+  long t = 0;  // 1-based row of the record
+  double nu = 0, beta = 0, pred_err = 0;
+  const Eigen::VectorXd* theta = nullptr;
+  double Dy = 0;
+};
+void WriteTraceRow(std::FILE* trace, const TraceRow& row);
+
 }  // namespace ident::tools

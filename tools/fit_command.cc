@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -15,6 +16,9 @@
 #include "tools/estimator_options.h"
 #include "tools/fit.h"
 #include "tools/fit_plot.h"
+#include "tools/gnuplot.h"
+#include "tools/output_file.h"
+#include "tools/output_paths.h"
 #include "tools/residual_analysis.h"
 #include "tools/structure_options.h"
 
@@ -162,6 +166,9 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
 
 void RunFit(const FitCommandOptions& o) {
   const std::string path = ResolveDataPath(o.data);
+  CheckOutputPaths({{"--trace", o.trace}, {"--plot", o.plot}},
+                   {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
+  if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing};
   std::unique_ptr<DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
   // The record's length first: building an estimator costs O(rho^3) for large orders.
@@ -191,26 +198,28 @@ void RunFit(const FitCommandOptions& o) {
     estimator = MakeRegressionEstimator(settings, rho);
     options.min_regressor_information = 0;
   };
-  // A fit that fails (e.g. a bad row late in a streamed record) leaves no partial trace file behind.
-  struct RemoveUnlessDone {
-    std::string path;
-    bool armed = false;
-    ~RemoveUnlessDone() {
-      if (armed) std::remove(path.c_str());
-    }
-  } partial_trace{o.trace};  // declared before `trace`, so it runs after the file is closed
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> trace(nullptr, &std::fclose);
+  // The trace and the plot go to temporary files, renamed onto their names only after the whole fit has
+  // succeeded (tools/output_file.h): a fit that fails, e.g. on a bad row late in a streamed record, leaves
+  // every existing file as it is. The report is printed after the renames, so a failed write leaves
+  // stdout empty.
+  std::optional<OutputFile> trace, plot;
   if (!o.trace.empty()) {
-    trace.reset(std::fopen(o.trace.c_str(), "w"));
-    if (!trace) throw DataError(fmt::format("cannot write trace file '{}'", o.trace));
-    partial_trace.armed = true;
-    options.trace = trace.get();
+    trace.emplace(o.trace, "--trace file");
+    options.trace = trace->stream();
   }
+  if (!o.plot.empty()) plot.emplace(o.plot, "--plot file");
+  auto commit_outputs = [&] {
+    for (std::optional<OutputFile>* f : {&trace, &plot})
+      if (*f) (*f)->Close();
+    for (std::optional<OutputFile>* f : {&trace, &plot})
+      if (*f) (*f)->Commit();
+  };
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
   if (o.plot.empty() && CountCsvDataRows(path) > kInMemoryRows) {
     if (scaled_rls) use_scaled_flat_prior(CsvEstimationMeanSquares(path, csv, *source, options));
     const FitResult result = FitCsvFile(path, csv, *source, *estimator, options);
+    commit_outputs();
     if (o.json) {
       nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
       j["residual_analysis"] = nlohmann::ordered_json();
@@ -219,7 +228,6 @@ void RunFit(const FitCommandOptions& o) {
       PrintReport(result, path, o);
       fmt::print("\n  residual analysis: skipped (record of more than {} rows, streamed)\n", kInMemoryRows);
     }
-    partial_trace.armed = false;
     return;
   }
   io::DataTable table = io::ReadCsv(path, csv);
@@ -240,7 +248,8 @@ void RunFit(const FitCommandOptions& o) {
   std::optional<ResidualAnalysis> residuals;
   if (validation.count - source->first_regression_index() > kResidualLags + 1)
     residuals = AnalyseResiduals(prepared, validation, *source, result.theta, kResidualLags);
-  if (!o.plot.empty()) PlotFit(o.plot, prepared, validation, *source, result.theta, history);
+  if (plot) PlotFit(*plot, prepared, validation, *source, result.theta, history);
+  commit_outputs();
   if (o.json) {
     nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
     j["residual_analysis"] = residuals ? ResidualJson(*residuals) : nlohmann::ordered_json();
@@ -249,7 +258,6 @@ void RunFit(const FitCommandOptions& o) {
     PrintReport(result, path, o);
     if (residuals) PrintResiduals(*residuals);
   }
-  partial_trace.armed = false;
 }
 
 }  // namespace

@@ -6,7 +6,7 @@
 
 namespace ident::tools {
 
-void PlotFit(const std::string& path, const io::DataTable& data, Segment validation, DataSource& source,
+void PlotFit(OutputFile& out, const io::DataTable& data, Segment validation, DataSource& source,
              const Eigen::VectorXd& theta, const ParameterHistory& history) {
   const int rho = source.num_parameters();
   Eigen::VectorXd z(rho);
@@ -51,7 +51,7 @@ void PlotFit(const std::string& path, const io::DataTable& data, Segment validat
   for (int i = 0; i < rho && i < static_cast<int>(history.theta.size()); ++i)
     parameters.series.push_back({names[static_cast<std::size_t>(i)], history.t, history.theta[static_cast<std::size_t>(i)]});
   if (!history.t.empty()) panels.push_back(parameters);
-  RenderPlot(path, panels);
+  RenderPlot(out, panels);
 }
 
 }  // namespace ident::tools

@@ -3,7 +3,9 @@
 //
 // Example:
 //   ParameterHistory history;        // filled from FitOptions::on_update
-//   PlotFit("fit.png", prepared_table, validation, *source, theta, history);
+//   OutputFile out("fit.png", "--plot file");
+//   PlotFit(out, prepared_table, validation, *source, theta, history);
+//   out.Commit();
 #pragma once
 
 #include <string>
@@ -14,6 +16,7 @@
 #include "ident/io/csv.h"
 #include "tools/data_source.h"
 #include "tools/fit.h"
+#include "tools/output_file.h"
 
 namespace ident::tools {
 
@@ -22,8 +25,9 @@ struct ParameterHistory {
   std::vector<std::vector<double>> theta;  // theta[i][k]: entry i after update k
 };
 
-// Throws InvalidArgument (bad extension, gnuplot failing) naming the file.
-void PlotFit(const std::string& path, const io::DataTable& data, Segment validation, DataSource& source,
+// Renders into `out`'s temporary file (the caller commits it). Throws InvalidArgument (bad extension,
+// gnuplot failing) naming the file.
+void PlotFit(OutputFile& out, const io::DataTable& data, Segment validation, DataSource& source,
              const Eigen::VectorXd& theta, const ParameterHistory& history);
 
 }  // namespace ident::tools

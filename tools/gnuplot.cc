@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "ident/common/error.h"
+#include "tools/output_file.h"
 
 namespace ident::tools {
 namespace {
@@ -75,7 +76,17 @@ void WriteSeries(const fs::path& file, const PlotSeries& s) {
 
 bool GnuplotAvailable() { return std::system("command -v gnuplot > /dev/null 2>&1") == 0; }
 
+void CheckPlotFileName(const std::string& path) { Terminal(path, 1, 1); }
+
 void RenderPlot(const std::string& path, const std::vector<PlotPanel>& panels, PlotSize size) {
+  CheckPlotFileName(path);
+  OutputFile out(path, "plot");
+  RenderPlot(out, panels, size);
+  out.Commit();
+}
+
+void RenderPlot(OutputFile& out, const std::vector<PlotPanel>& panels, PlotSize size) {
+  const std::string& path = out.path();
   IDENT_REQUIRE(!panels.empty(), "plot '{}': nothing to draw", path);
   const int height = size.height_per_panel * static_cast<int>(panels.size());
   const std::string terminal = Terminal(path, size.width, height);
@@ -86,7 +97,7 @@ void RenderPlot(const std::string& path, const std::vector<PlotPanel>& panels, P
 
   ScratchDirectory scratch;
   std::string script = fmt::format("set terminal {}\nset output {}\nset multiplot layout {},1\n", terminal,
-                                   Quoted(fs::absolute(path).string()), panels.size());
+                                   Quoted(fs::absolute(out.temp_path()).string()), panels.size());
   script += "set grid\nset key outside right top\nset style data lines\n";
   for (std::size_t p = 0; p < panels.size(); ++p) {
     const PlotPanel& panel = panels[p];
@@ -109,14 +120,15 @@ void RenderPlot(const std::string& path, const std::vector<PlotPanel>& panels, P
   const fs::path script_file = scratch.path() / "plot.gp";
   const fs::path log_file = scratch.path() / "gnuplot.log";
   {
-    std::ofstream out(script_file);
-    out << script;
+    std::ofstream script_out(script_file);
+    script_out << script;
+    if (!script_out.flush()) throw InvalidArgument(fmt::format("cannot write the gnuplot script for plot '{}'", path));
   }
   const std::string command =
       fmt::format("gnuplot {} > {} 2>&1", ShellQuoted(script_file.string()), ShellQuoted(log_file.string()));
   const int status = std::system(command.c_str());
   std::error_code ec;
-  const auto written = fs::file_size(path, ec);
+  const auto written = fs::file_size(out.temp_path(), ec);
   if (status != 0 || ec || written == 0) {
     std::ifstream log(log_file);
     std::string first_line;

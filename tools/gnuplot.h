@@ -2,7 +2,8 @@
 //
 // ident does not draw pictures itself: a figure is a list of panels stacked vertically, each a list of
 // (x, y) series; RenderPlot writes the data and a gnuplot script to a private temporary directory, runs
-// gnuplot, and checks that the image was written. The format follows the file extension.
+// gnuplot, and checks that the image was written. The format follows the file extension. gnuplot writes
+// the image into an OutputFile's temporary file (tools/output_file.h), renamed onto the target on success.
 //
 //   PlotPanel panel{.title = "validation", .xlabel = "t", .ylabel = "y"};
 //   panel.series.push_back({"measured", t, y});
@@ -17,6 +18,8 @@
 #include <vector>
 
 namespace ident::tools {
+
+class OutputFile;
 
 struct PlotSeries {
   std::string title;
@@ -36,8 +39,16 @@ struct PlotSize {
   int height_per_panel = 320;   // pixels
 };
 
-// Renders `panels` (at least one, each with at least one non-empty series) into `path` (*.svg or *.png).
+// Renders `panels` (at least one, each with at least one non-empty series) into `path` (*.svg or *.png),
+// through an OutputFile: `path` gets the complete image or keeps its old content.
 void RenderPlot(const std::string& path, const std::vector<PlotPanel>& panels, PlotSize size = {});
+
+// The same into `out`'s temporary file (the format follows out.path()); the caller commits `out`, so a
+// command with several outputs replaces them all only when every one is complete.
+void RenderPlot(OutputFile& out, const std::vector<PlotPanel>& panels, PlotSize size = {});
+
+// Throws InvalidArgument unless `path` ends in .svg or .png (checked before a command's work).
+void CheckPlotFileName(const std::string& path);
 
 // True when a gnuplot executable is on PATH.
 bool GnuplotAvailable();

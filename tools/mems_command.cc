@@ -5,8 +5,9 @@
 // Fig. 8 variance traces (--trace CSV, and the second panel of --plot). See ident/mems_study.h.
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,8 @@
 #include "ident/mems_study.h"
 #include "tools/commands.h"
 #include "tools/gnuplot.h"
+#include "tools/output_file.h"
+#include "tools/output_paths.h"
 
 namespace ident::tools {
 namespace {
@@ -58,47 +61,46 @@ void RunMems(const MemsCommandOptions& o) {
     return s;
   };
   for (size_t i = 0; i < o.t_targets.size(); ++i) study_options(i);
-  std::ofstream csv_file, trace_file;
-  if (!o.csv.empty()) {
-    csv_file.open(o.csv);
-    IDENT_REQUIRE(csv_file.good(), "cannot write --csv file '{}'", o.csv);
-  }
-  if (!o.trace.empty()) {
-    trace_file.open(o.trace);
-    IDENT_REQUIRE(trace_file.good(), "cannot write --trace file '{}'", o.trace);
-  }
+  CheckOutputPaths({{"--csv", o.csv}, {"--trace", o.trace}, {"--plot", o.plot}}, {});
   if (!o.plot.empty()) {
     const std::string ext = std::filesystem::path(o.plot).extension().string();
     IDENT_REQUIRE(ext == ".svg" || ext == ".png", "--plot file '{}': need a .svg or .png name", o.plot);
   }
+  // Each output goes to a temporary file, renamed onto its name once all of them are complete
+  // (tools/output_file.h); the tables are printed after that, so a failed write leaves stdout empty.
+  std::optional<OutputFile> csv_file, trace_file, plot_file;
+  if (!o.csv.empty()) csv_file.emplace(o.csv, "--csv file");
+  if (!o.trace.empty()) trace_file.emplace(o.trace, "--trace file");
+  if (!o.plot.empty()) plot_file.emplace(o.plot, "--plot file");
   std::vector<MemsStudyResult> results;
   for (size_t i = 0; i < o.t_targets.size(); ++i) results.push_back(RunMemsStudy(study_options(i)));
   // Fig. 9 analogue.
-  std::cout << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {}x{} grid)\n", o.h,
+  std::ostringstream report;
+  report << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {}x{} grid)\n", o.h,
                            o.steps, o.grid_points, o.grid_points);
-  std::cout << "RMS velocity error (calibration = predicted variance / mean squared error)\n";
-  std::cout << fmt::format("{:>8} {:>7}", "t_mean", "events");
-  for (const auto& [col, name] : kColumns) std::cout << fmt::format(" {:>17}", col);
-  std::cout << "\n";
+  report << "RMS velocity error (calibration = predicted variance / mean squared error)\n";
+  report << fmt::format("{:>8} {:>7}", "t_mean", "events");
+  for (const auto& [col, name] : kColumns) report << fmt::format(" {:>17}", col);
+  report << "\n";
   for (const auto& r : results) {
-    std::cout << fmt::format("{:8.3f} {:7d}", r.t_mean, r.events);
+    report << fmt::format("{:8.3f} {:7d}", r.t_mean, r.events);
     for (const auto& [col, name] : kColumns) {
       const auto& ob = r.Get(name);
-      std::cout << fmt::format(" {:8.4f} ({:5.2f})", ob.rms, ob.calibration);
+      report << fmt::format(" {:8.4f} ({:5.2f})", ob.rms, ob.calibration);
     }
-    std::cout << "\n";
+    report << "\n";
   }
   // The calibration is a ratio of two averages over a few events: its sampling error, beside the figure.
-  std::cout << "calibration +- jackknife standard error (10 contiguous blocks of each run)\n";
-  std::cout << fmt::format("{:>8} {:>15} {:>15} {:>15}\n", "t_mean", "grid", "tuned_kalman", "lc_gaussian");
+  report << "calibration +- jackknife standard error (10 contiguous blocks of each run)\n";
+  report << fmt::format("{:>8} {:>15} {:>15} {:>15}\n", "t_mean", "grid", "tuned_kalman", "lc_gaussian");
   for (const auto& r : results) {
-    std::cout << fmt::format("{:8.3f}", r.t_mean);
+    report << fmt::format("{:8.3f}", r.t_mean);
     for (const char* name : {"grid", "tuned_kalman", "lc_truncated"})
-      std::cout << fmt::format(" {:>15}", fmt::format("{:.2f} +- {:.2f}", r.Get(name).calibration,
+      report << fmt::format(" {:>15}", fmt::format("{:.2f} +- {:.2f}", r.Get(name).calibration,
                                                        r.Get(name).calibration_se));
-    std::cout << "\n";
+    report << "\n";
   }
-  std::cout << fmt::format("sigma_o = {:.4f} (p11 = 1/sqrt 3), bound: sigma_M^2 = (2 h v_ref)^2/3; lc_gaussian = "
+  report << fmt::format("sigma_o = {:.4f} (p11 = 1/sqrt 3), bound: sigma_M^2 = (2 h v_ref)^2/3; lc_gaussian = "
                            "lc_truncated: every reading exact, Gaussian restricted to the current reading's interval, "
                            "no sigma_o\n",
                            results.front().sigma_o);
@@ -107,35 +109,33 @@ void RunMems(const MemsCommandOptions& o) {
     truncated_failures += r.truncated_failures;
     truncated_projection_failures += r.truncated_projection_failures;
   }
-  std::cout << fmt::format("lc_truncated: Gaussian restricted to the current reading's interval (assumed-density "
+  report << fmt::format("lc_truncated: Gaussian restricted to the current reading's interval (assumed-density "
                            "filter); rectangles without mass {}, projections without a parent {}\n",
                            truncated_failures, truncated_projection_failures);
-  if (!o.csv.empty()) {
-    std::ofstream& f = csv_file;
-    f << "t_mean,t_target,events";
-    for (const auto& [col, name] : kColumns) f << ",rms_" << col;
-    for (const auto& [col, name] : kColumns) f << ",calibration_" << col;
-    for (const auto& [col, name] : kColumns) f << ",calibration_se_" << col;
-    f << "\n";
+  if (csv_file) {
+    std::string f = "t_mean,t_target,events";
+    for (const auto& [col, name] : kColumns) f += ",rms_" + col;
+    for (const auto& [col, name] : kColumns) f += ",calibration_" + col;
+    for (const auto& [col, name] : kColumns) f += ",calibration_se_" + col;
+    f += "\n";
     for (size_t i = 0; i < results.size(); ++i) {
       const auto& r = results[i];
-      f << fmt::format("{:.6g},{:.6g},{}", r.t_mean, o.t_targets[i], r.events);
-      for (const auto& [col, name] : kColumns) f << fmt::format(",{:.6g}", r.Get(name).rms);
-      for (const auto& [col, name] : kColumns) f << fmt::format(",{:.6g}", r.Get(name).calibration);
-      for (const auto& [col, name] : kColumns) f << fmt::format(",{:.6g}", r.Get(name).calibration_se);
-      f << "\n";
+      f += fmt::format("{:.6g},{:.6g},{}", r.t_mean, o.t_targets[i], r.events);
+      for (const auto& [col, name] : kColumns) f += fmt::format(",{:.6g}", r.Get(name).rms);
+      for (const auto& [col, name] : kColumns) f += fmt::format(",{:.6g}", r.Get(name).calibration);
+      for (const auto& [col, name] : kColumns) f += fmt::format(",{:.6g}", r.Get(name).calibration_se);
+      f += "\n";
     }
-    IDENT_REQUIRE(f.good(), "error writing --csv file '{}'", o.csv);
+    csv_file->Write(f);
   }
   const MemsTrace& tr = results.front().trace;
-  if (!o.trace.empty()) {
-    std::ofstream& f = trace_file;
-    f << "t,x1,y,var_grid,var_tuned_kalman,var_lc_gaussian,var_bound\n";
+  if (trace_file) {
+    trace_file->Write("t,x1,y,var_grid,var_tuned_kalman,var_lc_gaussian,var_bound\n");
     for (size_t k = 0; k < tr.t.size(); ++k)
-      f << fmt::format("{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", tr.t[k], tr.x1[k], tr.y[k], tr.var_grid[k],
-                       tr.var_tuned_kalman[k], tr.var_lc_gaussian[k], tr.var_bound[k]);
+      trace_file->Write(fmt::format("{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", tr.t[k], tr.x1[k], tr.y[k], tr.var_grid[k],
+                       tr.var_tuned_kalman[k], tr.var_lc_gaussian[k], tr.var_bound[k]));
   }
-  if (!o.plot.empty()) {
+  if (plot_file) {
     PlotPanel fig9{.title = "Fig. 9: RMS velocity error vs mean time between events", .xlabel = "t_mean",
                    .ylabel = "RMS x2 error", .series = {}};
     for (const auto& [col, name] : {std::pair<std::string, std::string>{"grid", "grid"},
@@ -157,8 +157,13 @@ void RunMems(const MemsCommandOptions& o) {
     fig8.series.push_back(window("tuned Kalman", tr.var_tuned_kalman));
     fig8.series.push_back(window("LC Gaussian", tr.var_lc_gaussian));
     fig8.series.push_back(window("approximate bound", tr.var_bound));
-    RenderPlot(o.plot, {fig9, fig8});
+    RenderPlot(*plot_file, {fig9, fig8});
   }
+  for (std::optional<OutputFile>* f : {&csv_file, &trace_file, &plot_file})
+    if (*f) (*f)->Close();
+  for (std::optional<OutputFile>* f : {&csv_file, &trace_file, &plot_file})
+    if (*f) (*f)->Commit();
+  std::cout << report.str();
 }
 
 }  // namespace

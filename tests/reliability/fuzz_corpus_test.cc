@@ -13,6 +13,7 @@
 #include "fuzz/grid_observer_property.h"
 #include "fuzz/logcondens_property.h"
 #include "fuzz/observer_property.h"
+#include "fuzz/output_file_property.h"
 #include "fuzz/prior_json_property.h"
 #include "fuzz/rls_property.h"
 #include "fuzz/student_property.h"
@@ -82,6 +83,10 @@ TEST(FuzzCorpus, SmoothModelReaderPropertiesHoldOnEveryCommittedInput) {
 
 TEST(FuzzCorpus, LogConcaveMlePropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("logcondens_fuzzer", &fuzz::LogcondensProperty), 14);
+}
+
+TEST(FuzzCorpus, OutputFilePropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("output_file_fuzzer", &fuzz::OutputFileProperty), 12);
 }
 
 // The replay is only as strong as its checks: a corpus input that breaks each property on purpose.
