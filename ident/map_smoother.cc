@@ -1,6 +1,5 @@
 #include "ident/map_smoother.h"
 
-#include <cstdlib>
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -331,10 +331,11 @@ std::string UnusableResult(const AnyRegressionEstimator& estimator, const std::v
   const Eigen::VectorXd variance = estimator.covariance().diagonal();
   for (int i = 0; i < rho; ++i)
     if (!std::isfinite(variance(i)) || variance(i) < 0)
-      return fmt::format("the standard error of parameter '{}' (estimate {:.3g}) is {}: its variance {}; the "
-                         "columns' scales are too far apart: rescale the data",
+      return fmt::format("the standard error of parameter '{}' (estimate {:.3g}) is {}: its variance {} (columns "
+                         "whose scales are too far apart: rescale the data; or, for a robust estimator, most samples "
+                         "weighted as outliers: a prior noise scale far below the residuals?)",
                          name(i), theta(i), std::sqrt(variance(i)),
-                         std::isnan(variance(i)) ? "is undefined" : variance(i) < 0 ? "is negative" : "overflows");
+                         std::isnan(variance(i)) ? "is undefined" : variance(i) < 0 ? "is negative" : "is infinite");
   return "";
 }
 

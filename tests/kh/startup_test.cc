@@ -63,19 +63,27 @@ TEST(StartupPrior, DefaultIsCloseToTheBestFixedPriorScaleOnRealRecords) {
                                  "gas_furnace --output y --input u --na 2 --nb 2 --nk 3",
                                  "exchanger --output y --input u --na 2 --nb 2 --nk 1"})
     for (const std::string clean : {"on", "off"}) {
-      auto fit = [&](const std::string& prior) {
+      // A fixed scale far below the noise can leave the plain recursion with every sample weighted as an
+      // outlier: its standard errors are not defined and ident refuses the result; such a scale is left out.
+      auto fit = [&](const std::string& prior, bool may_be_unusable) {
         const testing::CliResult r =
             testing::RunCli("fit " + data + " --estimator cauchy --clean-regressors " + clean + " --json " + prior);
+        if (may_be_unusable && r.exit_code == 1 && r.err.find("the result is unusable") != std::string::npos)
+          return std::nan("");
         EXPECT_EQ(r.exit_code, 0) << r.err;
-        return nlohmann::json::parse(r.out)["fit_percent"]["one_step"].get<double>();
+        return r.exit_code == 0 ? nlohmann::json::parse(r.out)["fit_percent"]["one_step"].get<double>() : std::nan("");
       };
       double best = -1e9, worst = 1e9;
+      int usable = 0;
       for (const char* vy0 : {"1e-6", "1e-2", "1", "100"}) {
-        const double f = fit(fmt::format("--nu0 6 --vy0 {} --vz0 1e-3 --exact", vy0));
+        const double f = fit(fmt::format("--nu0 6 --vy0 {} --vz0 1e-3 --exact", vy0), true);
+        if (std::isnan(f)) continue;
+        ++usable;
         best = std::max(best, f);
         worst = std::min(worst, f);
       }
-      const double ours = fit("");
+      EXPECT_GE(usable, 3) << data << " cleaning " << clean;
+      const double ours = fit("", false);
       EXPECT_GT(ours, best - 2.5) << data << " cleaning " << clean;
       EXPECT_GT(ours, worst - 0.5) << data << " cleaning " << clean;
     }
