@@ -5,14 +5,9 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <exception>
 #include <iostream>
-#include <string>
-#include <system_error>
 
-#include <CLI/CLI.hpp>
-
-#include "ident/common/error.h"
+#include "tools/command_line.h"
 #include "tools/commands.h"
 
 namespace {
@@ -34,11 +29,6 @@ void OccupyStandardDescriptors() {
   }
 }
 
-int StandardOutputError(int error) {
-  std::cerr << "ident: error: cannot write to standard output: " << std::strerror(error ? error : EIO) << "\n";
-  return kExitBadInput;
-}
-
 // Flushes stdout (C stdio, which fmt::print uses and std::cout is synchronised with) and reports a write
 // that failed at any point: a full disk, a closed or read-only descriptor.
 int FinishStandardOutput() {
@@ -52,60 +42,10 @@ int FinishStandardOutput() {
   return StandardOutputError(error);
 }
 
-int Run(int argc, char** argv) {
-  CLI::App app{"ident: recursive, outlier-robust system identification", "ident"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", "ident 0.1.0");
-  AddFitCommand(app);
-  AddDatasetsCommand(app);
-  AddCompareCommand(app);
-  AddMemsCommand(app);
-  AddLogcondensCommand(app);
-  AddSmoothCommand(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    // One line, like every other error. A first argument that is no option and no subcommand is named.
-    std::string message = e.what();
-    if (argc >= 2 && argv[1][0] != '-') {
-      const std::string first = argv[1];
-      bool known = false;
-      for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->check_name(first);
-      if (!known) {
-        message = "unknown subcommand '" + first + "' (known:";
-        for (const CLI::App* sub : app.get_subcommands({})) message += " " + sub->get_name();
-        message += ")";
-      }
-    }
-    std::cerr << "ident: error: " << message << " (ident --help, ident SUBCOMMAND --help for usage)\n";
-    return kExitUsage;
-  } catch (const ident::InvalidArgument& e) {
-    std::cerr << "ident: error: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const ident::DataError& e) {
-    std::cerr << "ident: error: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const std::system_error& e) {  // fmt::print to stdout failing
-    if (std::ferror(stdout)) return StandardOutputError(e.code().value());
-    std::cerr << "ident: error: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const std::exception& e) {
-    std::cerr << "ident: error: " << e.what() << "\n";
-    return kExitBadInput;
-  }
-  return kExitOk;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   OccupyStandardDescriptors();
-  const int code = Run(argc, argv);
+  const int code = RunCommandLine(argc, argv);
   return code == kExitOk ? FinishStandardOutput() : code;
 }

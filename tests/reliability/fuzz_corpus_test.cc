@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "fuzz/cli_property.h"
 #include "fuzz/csv_property.h"
 #include "fuzz/grid_observer_property.h"
 #include "fuzz/logcondens_property.h"
@@ -83,6 +84,10 @@ TEST(FuzzCorpus, SmoothModelReaderPropertiesHoldOnEveryCommittedInput) {
 
 TEST(FuzzCorpus, LogConcaveMlePropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("logcondens_fuzzer", &fuzz::LogcondensProperty), 14);
+}
+
+TEST(FuzzCorpus, CommandLinePropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("cli_fuzzer", &fuzz::CliProperty), 12);
 }
 
 TEST(FuzzCorpus, OutputFilePropertiesHoldOnEveryCommittedInput) {
