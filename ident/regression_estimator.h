@@ -90,6 +90,8 @@ class AnyRegressionEstimator {
   // True if the estimator weighs samples by their fit (its steps' weights can flag outliers), false if
   // every sample counts alike (least squares) or it reports no per-sample weights (batch).
   virtual bool judges_outliers() const { return false; }
+  // True while a data-driven start-up is still collecting its window: the estimate is the prior's.
+  virtual bool in_startup() const { return false; }
   // "recursive" (one O(ρ²) update per sample) or "batch" (solves on all samples at read-out).
   virtual std::string kind() const { return "recursive"; }
   // Prepares another pass over the same samples, which the caller then feeds again from the first:
@@ -122,6 +124,12 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
       return std::nullopt;
   }
   bool judges_outliers() const override { return requires { e_.lock_in(); }; }
+  bool in_startup() const override {
+    if constexpr (requires { e_.in_startup(); })
+      return e_.in_startup();
+    else
+      return false;
+  }
   std::string kind() const override {
     if constexpr (requires { e_.kind(); })
       return e_.kind();

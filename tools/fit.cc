@@ -316,6 +316,11 @@ std::string UnusableResult(const AnyRegressionEstimator& estimator, const std::v
     return fmt::format("only {} updates were accepted, fewer than the {} parameters + 1; the estimate rests on the "
                        "prior, not on the data",
                        updates, rho);
+  if (estimator.in_startup())
+    return fmt::format("the estimator's start-up did not complete: its robust start needs a window of samples "
+                       "(at least 20, and 4 per parameter) with identifiable regressors, and the {} updates did not "
+                       "give one; the estimate is its prior's (fit a longer record, or use rls or huber)",
+                       updates);
   const Eigen::VectorXd theta = estimator.parameters();
   for (int i = 0; i < rho; ++i)
     if (!std::isfinite(theta(i))) return fmt::format("parameter '{}' is {}", name(i), theta(i));

@@ -102,8 +102,9 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
                              AnyRegressionEstimator& estimator, const FitOptions& options, int* passes_run = nullptr);
 
 // Why the estimator's result after `updates` accepted updates cannot be reported, or "" if it can: θ, its
-// standard errors and the noise scale must be finite, and at least ρ + 1 updates must have been accepted
-// (the parameters and a noise scale determined by the data, not by the prior).
+// standard errors and the noise scale must be finite, at least ρ + 1 updates must have been accepted and a
+// data-driven start-up must have completed (the parameters and a noise scale determined by the data, not
+// by the prior).
 std::string UnusableResult(const AnyRegressionEstimator& estimator, const std::vector<std::string>& parameter_names,
                            int updates);
 

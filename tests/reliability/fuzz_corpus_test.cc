@@ -11,6 +11,7 @@
 
 #include "fuzz/cli_property.h"
 #include "fuzz/csv_property.h"
+#include "fuzz/fit_differential_property.h"
 #include "fuzz/grid_observer_property.h"
 #include "fuzz/logcondens_property.h"
 #include "fuzz/observer_property.h"
@@ -88,6 +89,10 @@ TEST(FuzzCorpus, LogConcaveMlePropertiesHoldOnEveryCommittedInput) {
 
 TEST(FuzzCorpus, CommandLinePropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("cli_fuzzer", &fuzz::CliProperty), 12);
+}
+
+TEST(FuzzCorpus, FitDifferentialPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("fit_differential_fuzzer", &fuzz::FitDifferentialProperty), 10);
 }
 
 TEST(FuzzCorpus, OutputFilePropertiesHoldOnEveryCommittedInput) {

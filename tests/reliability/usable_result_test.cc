@@ -117,6 +117,18 @@ TEST(UsableResult, CompareReportsOneEstimatorsFailureBesideTheOthers) {
   ExpectCliError("compare " + big + kUsableArx + " --estimators cauchy,student:3", "every estimator failed on every trial");
 }
 
+// A record shorter than the robust start-up window: the Kárný–Hangos estimate would be its prior's
+// (found by fuzz/fit_differential_fuzzer: θ ≈ 0 on the record × 2^-16, θ = (−2.8, −1.4) on the record).
+TEST(UsableResult, RobustStartUpThatNeverCompletedIsRefused) {
+  std::string text = "u,y\n";
+  for (int t = 0; t < 12; ++t) text += fmt::format("{},{}\n", std::sin(0.37 * t), std::cos(0.2 * t));
+  const std::string path = WriteFile("short12.csv", text);
+  ExpectCliError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 2 --estimator cauchy",
+                 "the result is unusable: the estimator's start-up did not complete");
+  const CliResult rls = RunCli("fit " + path + " --output y --input u --na 1 --nb 1 --nk 2 --estimator rls");
+  EXPECT_EQ(rls.exit_code, 0) << rls.err;
+}
+
 // Predict(z) with a z of the wrong size is refused (it read past the parameter vector).
 TEST(UsableResult, PredictChecksTheRegressorSize) {
   const Eigen::VectorXd short_z = Eigen::VectorXd::Ones(3), z = Eigen::VectorXd::Ones(4);
