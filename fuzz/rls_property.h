@@ -5,6 +5,10 @@
 //   updated  -> ν > 0, every d_i a finite normal number > 0, L and Θ̂ finite;
 //   rejected -> the state (ν, L, d) is bit-for-bit unchanged.
 // Update() is noexcept: a throw would terminate the process, which libFuzzer reports.
+// With flags bit 2 (and forgetting 1, 0.999 or 0.99, not stabilised, the informative prior) the samples
+// are tame instead (each number a signed byte / 16, at most 300 samples) and the LD form is checked
+// against the plain covariance-form oracle (ident/dense_rls.h) after every step:
+//   |θ_LD − θ_dense| ≤ 1e-6·(1 + |θ|) and ν equal to 1e-12 relative.
 #pragma once
 
 #include <cmath>
@@ -16,6 +20,7 @@
 #include <Eigen/Core>
 
 #include "fuzz/fuzz_util.h"
+#include "ident/dense_rls.h"
 #include "ident/rls.h"
 
 namespace ident::fuzz {
@@ -30,6 +35,22 @@ inline std::string RlsProperty(const std::uint8_t* data, std::size_t size) {
   options.forgetting.stabilised = (flags & 1) != 0;
   if (flags & 2) options.prior = RegressionPrior::Diagonal(rho, 1.0 + rho, 1.0, 1e-3);
   RecursiveLeastSquares rls(rho, options);
+  if ((flags & 4) && options.forgetting.factor >= 0.99 && !options.forgetting.stabilised && options.prior) {
+    DenseRls dense(*options.prior, options.forgetting.factor);
+    Eigen::VectorXd z(rho);
+    for (int step = 0; step < 300 && in.remaining() >= static_cast<std::size_t>(rho + 1); ++step) {
+      const double y = static_cast<std::int8_t>(in.Byte()) / 16.0;
+      for (int i = 0; i < rho; ++i) z(i) = static_cast<std::int8_t>(in.Byte()) / 16.0;
+      if (!rls.Update(y, z).updated()) return "a tame sample is accepted";
+      dense.Update(y, z);
+      const Eigen::VectorXd& a = rls.parameters();
+      const Eigen::VectorXd& b = dense.parameters();
+      for (int i = 0; i < rho; ++i)
+        if (!(std::abs(a(i) - b(i)) <= 1e-6 * (1 + std::abs(b(i))))) return "the LD form equals the dense oracle";
+      if (!(std::abs(rls.nu() - dense.nu()) <= 1e-12 * dense.nu())) return "nu equals the dense oracle's";
+    }
+    return {};
+  }
   Eigen::VectorXd z(rho), d0;
   Eigen::MatrixXd L0;
   while (in.remaining() >= 8 * static_cast<std::size_t>(rho + 1)) {
