@@ -343,7 +343,7 @@ class Solver {
       if (has_lo_[c]) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
       if (has_hi_[c]) bound_scale = std::max(bound_scale, std::abs(hi_(c)));
     }
-    BalanceBoxMultipliers();
+    BalanceOneSidedMultipliers();
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
     // mu_scale: the complementarity at the start (at least 1). Multipliers × slacks carry the units of the
@@ -499,22 +499,20 @@ class Solver {
     return v_scale;
   }
 
-  // The box multipliers of the starting point, chosen so that the stationarity residual in u vanishes at the
-  // start: q_lo − q_hi = −e with e = B r − b − M u at the initial states, each multiplier ≥ 1. With unit
-  // multipliers a constraint far from active (a domain bound 1000 away from the residual) starts with
-  // |R3| ≈ 1000 ≫ the complementarity, and the iteration pushes the multipliers away instead of the residual.
-  void BalanceBoxMultipliers() {
+  // The multipliers of the one-sided bounds (the domain indicators of a piecewise-linear penalty, u ≥ 0)
+  // at the start, chosen so that their stationarity residual vanishes: q = max(1, ∓e) with
+  // e = B r − b − M u at the initial states. With a unit multiplier a domain bound far from the residual
+  // (1000 away) starts with |R3| ≈ 1000 ≫ the complementarity, and the iteration drives the multiplier to
+  // infinity instead of the residual to its value ("infeasible"). Two-sided boxes keep the unit start.
+  void BalanceOneSidedMultipliers() {
     Residuals();
     for (int c : bounded_) {
+      if (has_lo_[c] == has_hi_[c]) continue;
       const double e = r3_(c) + (qhi_(c) - qlo_(c));  // the stationarity residual without the multipliers
-      if (has_lo_[c] && has_hi_[c]) {
-        qlo_(c) = 1 + std::max(0.0, -e);
-        qhi_(c) = 1 + std::max(0.0, e);
-      } else if (has_lo_[c]) {
+      if (has_lo_[c])
         qlo_(c) = std::max(1.0, -e);
-      } else {
+      else
         qhi_(c) = std::max(1.0, e);
-      }
     }
   }
 

@@ -138,15 +138,6 @@ class FastSolver {
     MapSmootherResult res;
     const double z_scale = 1 + p_.z.cwiseAbs().maxCoeff();
     const double num_constraints = 2.0 * (T_ + 1);
-    // The box multipliers of the start balance the stationarity residual in u, as the general path's
-    // BalanceBoxMultipliers: q_lo − q_hi = −e, e = z_t − h'x_t − m u_t, each multiplier ≥ 1.
-    StepAndResiduals(0.0);
-    for (int t = 0; t <= T_; ++t) {
-      StepState<kN>& s = steps_[t];
-      const double e = s.r3 + (s.qhi - s.qlo);
-      s.qlo = 1 + std::max(0.0, -e);
-      s.qhi = 1 + std::max(0.0, e);
-    }
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
     double mu = 0, alpha = 0, mu_scale = 1;  // mu_scale: the general path's
