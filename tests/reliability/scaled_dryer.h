@@ -11,8 +11,9 @@
 
 namespace ident::testing {
 
-// Writes dryer.csv scaled by `scale` (printed with 17 digits) as `name`; returns its path.
-inline std::string ScaledDryer(const std::string& name, double scale) {
+// Writes dryer.csv with u multiplied by `u_scale` and y by `y_scale` (printed with 17 digits) as `name`;
+// returns its path.
+inline std::string ScaledDryer(const std::string& name, double u_scale, double y_scale) {
   const std::string text = ReadFile(DatasetPath("dryer.csv"));
   std::string out = text.substr(0, text.find('\n') + 1);
   std::size_t pos = out.size();
@@ -22,10 +23,13 @@ inline std::string ScaledDryer(const std::string& name, double scale) {
     pos = end == std::string::npos ? text.size() : end + 1;
     if (line.find_first_not_of(" \r") == std::string::npos) continue;
     const std::size_t c1 = line.find(','), c2 = line.find(',', c1 + 1);
-    out += line.substr(0, c1) + "," + fmt::format("{:.17g}", std::stod(line.substr(c1 + 1, c2 - c1 - 1)) * scale) +
-           "," + fmt::format("{:.17g}", std::stod(line.substr(c2 + 1)) * scale) + "\n";
+    out += line.substr(0, c1) + "," + fmt::format("{:.17g}", std::stod(line.substr(c1 + 1, c2 - c1 - 1)) * u_scale) +
+           "," + fmt::format("{:.17g}", std::stod(line.substr(c2 + 1)) * y_scale) + "\n";
   }
   return WriteFile(name, out);
 }
+
+// dryer.csv with u and y multiplied by `scale`.
+inline std::string ScaledDryer(const std::string& name, double scale) { return ScaledDryer(name, scale, scale); }
 
 }  // namespace ident::testing

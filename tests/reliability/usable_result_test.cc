@@ -40,19 +40,7 @@ TEST(UsableResult, ForgettingFarBelowOneIsRefusedInsteadOfNanStandardErrors) {
 
 // u × 1e-100 and y × 1e100: the b parameters are near 1e198 and their variances near 1e396, beyond double.
 TEST(UsableResult, ColumnsOfFarApartScalesAreRefusedInsteadOfInfiniteStandardErrors) {
-  const std::string text = ReadFile(DatasetPath("dryer.csv"));
-  std::string out = "t,u,y\n";
-  std::size_t pos = text.find('\n') + 1;
-  while (pos < text.size()) {
-    const std::size_t end = text.find('\n', pos);
-    const std::string line = text.substr(pos, end - pos);
-    pos = end == std::string::npos ? text.size() : end + 1;
-    if (line.find_first_not_of(" \r") == std::string::npos) continue;
-    const std::size_t c1 = line.find(','), c2 = line.find(',', c1 + 1);
-    out += fmt::format("{},{:.17g},{:.17g}\n", line.substr(0, c1), std::stod(line.substr(c1 + 1, c2 - c1 - 1)) * 1e-100,
-                       std::stod(line.substr(c2 + 1)) * 1e100);
-  }
-  const std::string path = WriteFile("dryer_mixed.csv", out);
+  const std::string path = ScaledDryer("dryer_mixed.csv", 1e-100, 1e100);
   ExpectCliError("fit " + path + kUsableArx, "the standard error of parameter 'b1'");
   ExpectCliError("fit " + path + kUsableArx + " --json", "its variance is infinite (columns whose scales are too far apart");
 }
