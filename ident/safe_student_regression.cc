@@ -155,7 +155,7 @@ void SafeStudentRegression::Replay() noexcept {
   monitor_.Clear();
   for (long i = 0; i < stored_; ++i) {
     const auto sample = history_.col(Column(i));
-    est_->set_leverage_guard(Outlying(sample.tail(rho)));
+    est_->set_outlying_regressor(Outlying(sample.tail(rho)));
     const StepReport r = est_->Update(sample(0), sample.tail(rho));
     if (r.updated() && i >= stored_ - monitor_.window()) monitor_.Add(r.nu * r.weight);
   }

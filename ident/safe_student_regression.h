@@ -81,7 +81,7 @@ class SafeStudentRegression {
 
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
-    if (!options_.base.exact) est_->set_leverage_guard(Outlying(z));
+    if (!options_.base.exact) est_->set_outlying_regressor(Outlying(z));
     const StepReport report = est_->Update(y, z);
     if (options_.base.exact || !report.updated()) return report;
     Store(y, z);

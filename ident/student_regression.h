@@ -221,6 +221,12 @@ class BasicStudentRegression {
 
   // Switches the leverage guard (StudentRegressionOptions::leverage_guard) for the next updates. noexcept.
   void set_leverage_guard(bool on) noexcept { options_.leverage_guard = on; }
+  // Whether the guard treats the next regressors as outlying whatever their metric distance (default
+  // true: every regressor, the guard's behaviour when the caller gives no verdict). noexcept.
+  void set_outlying_regressor(bool outlying) noexcept { outlying_regressor_ = outlying; }
+  // Robust scales (in the metric z'Ṽ_z⁻¹z: its square, plus ρ) beyond which a regressor is outlying, and
+  // prediction errors (ê²/D_y beyond its square) that are gross, for the leverage guard.
+  static constexpr double kLeverage = 5;
 
   // Changes λ on the fly (the next update uses it). Throws InvalidArgument if λ ∉ (0, 1] or if λ is
   // inadmissible — ν(t) would reach ν_hard from the current ν or from ν(0) after a Reset() [spec §5, §7b].
@@ -265,7 +271,14 @@ class BasicStudentRegression {
     const approx::WeightSolution w = approx::SolveWeightInline(problem, weight_constants_);  // = SolveWeight
     details_ = {in.xi, in.xi_z, w.beta0, w.beta_hi, w.num_maxima};
     if (!w.ok) return std::numeric_limits<double>::quiet_NaN();
-    return options_.leverage_guard && w.num_maxima > 1 ? w.smallest_maximum : w.beta;
+    // The guard acts on a regressor the caller calls outlying, or one far out in the metric of the
+    // information matrix: z'Ṽ_z⁻¹z = 1 − ξ_z, ≈ ρ on average over the samples Ṽ_z summarises.
+    if (!options_.leverage_guard || !(outlying_regressor_ || 1 - in.xi_z > kLeverage * kLeverage + num_parameters()))
+      return w.beta;
+    if (w.num_maxima > 1) return w.smallest_maximum;  // the outlier reading of the two [spec §5]
+    // One maximum, a gross error: the smallest admissible weight β0 = 1/(ν − (ν−1)ξ), whose update
+    // β0·hh' adds the information of one ordinary sample (β0·h'Ṽ⁻¹h ≤ 1/ν·…) whatever the size of h.
+    return in.xi_z - in.xi > kLeverage * kLeverage ? w.beta0 : w.beta;
   }
 
   // s = 1.4826·MAD of column c of the window (RMS if 0, else 1).
@@ -382,6 +395,7 @@ class BasicStudentRegression {
   LdFactor<kDim> prior_factor_;
   double nu_hard_ = approx::NuHard(stats_.num_parameters(), options_.dof, options_.delta);
   double last_beta_ = std::numeric_limits<double>::quiet_NaN();
+  bool outlying_regressor_ = true;
   StudentStepDetails details_;
   approx::WeightConstants weight_constants_;  // of the last ν(t) (Weight())
   SandwichFactor sandwich_;

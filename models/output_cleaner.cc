@@ -95,8 +95,11 @@ double OutputCleaner::Clean(double y, double y_hat, double scale, bool flagged, 
         (options_.gross > 0 && !(std::abs(y - y_hat) > options_.gross * gross_scale)))
       return Accept(y);
   }
+  // (1): an error cleaned as gross (the warm-up screen, or (5) with gross > 0) is no evidence of y beyond
+  // ŷ (ψ redescends to 0); with gross = 0 every flagged error is clipped (Huber ψ).
+  const bool gross = t < options_.warm_up || options_.gross > 0;
   const double bound = options_.clip * scale;
-  const double cleaned = y_hat + std::clamp(y - y_hat, -bound, bound);  // (1)
+  const double cleaned = gross ? y_hat : y_hat + std::clamp(y - y_hat, -bound, bound);
   ++run_;
   ++cleaned_;
   return Store(std::clamp(cleaned, y_min_, y_max_));  // (2)

@@ -89,10 +89,10 @@ class Estimation {
       }
       const StepReport report = estimator_.Update(y, z_);
       flagged = decision_.Flags(report);
-      if (flagged) {  // the cleaned output of later regressors is built from ŷ and the noise scale
-        y_hat = y - report.prediction_error;
-        scale = estimator_.noise_std();
-      }
+      // Every prediction ŷ goes to the cleaner (its gross-error test compares |y − ŷ| with the robust
+      // scale of all recent prediction errors); a flagged output is rebuilt from ŷ and the noise scale.
+      y_hat = y - report.prediction_error;
+      scale = estimator_.noise_std();
       if (report.updated()) {
         ++updates_;
         ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);

@@ -184,6 +184,7 @@ StudentRegression Replayed(const RegressionPrior& prior, const Arx& d, int first
   so.prior = prior;
   so.leverage_guard = true;
   StudentRegression est(4, so);
+  est.set_outlying_regressor(false);  // the guard by the metric distance z'Ṽ_z⁻¹z alone
   for (int t = first; t < last; ++t) est.Update(d.y[t], d.z[t]);
   return est;
 }

@@ -25,8 +25,9 @@ TEST(OutputCleaner, DisabledOrUnflaggedStoresTheMeasurement) {
   EXPECT_EQ(on.cleaned(), 0);
 }
 
+// With gross = 0 every flagged sample is cleaned with the Huber ψ: the prediction plus the clipped error.
 TEST(OutputCleaner, FlaggedSampleBecomesThePredictionPlusTheClippedError) {
-  OutputCleaner c({.enabled = true, .clip = 2.0, .max_run = 5, .warm_up = 2});
+  OutputCleaner c({.enabled = true, .clip = 2.0, .max_run = 5, .warm_up = 2, .gross = 0});
   c.Clean(-10.0, 0.0, 1.0, true);  // warm-up: stored as is even when flagged
   c.Clean(10.0, 0.0, 1.0, true);
   EXPECT_EQ(c.cleaned(), 0);
@@ -50,10 +51,10 @@ TEST(OutputCleaner, AfterMaxRunCleanedSamplesTheMeasurementIsTrusted) {
   OutputCleaner c({.enabled = true, .clip = 1.0, .max_run = 2, .warm_up = 1});
   c.Clean(0.0, 0.0, 1.0, false);
   c.Clean(5.0, 0.0, 1.0, false);
-  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 1.0);
-  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 1.0);
+  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 0.0);  // gross (too few errors known for a scale): ŷ
+  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 0.0);
   EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 5.0);  // run of 2 reached (eq. (3))
-  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 1.0);  // the run restarts
+  EXPECT_DOUBLE_EQ(c.Clean(5.0, 0.0, 1.0, true), 0.0);  // the run restarts
 }
 
 TEST(OutputCleaner, NonFiniteInputsAndBadOptions) {
@@ -138,7 +139,7 @@ TEST(OutputCleaner, AfterWarmUpOnlyGrossFlaggedErrorsAreCleaned) {
   for (int t = 0; t < 16; ++t) c.Clean(t % 2 ? 0.1 : -0.1, 0.0, 1.0, false);  // errors ±0.1: scale 0.148
   EXPECT_EQ(c.Clean(0.5, 0.0, 0.05, true), 0.5);  // flagged, but 0.5 < 5·0.148
   EXPECT_EQ(c.cleaned(), 0);
-  EXPECT_DOUBLE_EQ(c.Clean(0.9, 0.0, 0.05, true), 0.1);  // gross: ŷ + clip(0.9, ±2·0.05), in range
+  EXPECT_DOUBLE_EQ(c.Clean(0.9, 0.05, 0.05, true), 0.05);  // gross: ψ = 0, the prediction ŷ, in range
   EXPECT_EQ(c.cleaned(), 1);
   EXPECT_THROW(OutputCleaner({.gross = -1}), InvalidArgument);
   EXPECT_THROW(OutputCleaner({.screen = std::nan("")}), InvalidArgument);
