@@ -98,6 +98,9 @@ class AnyRegressionEstimator {
   // the estimator restarts from a prior centred at its current estimate. False (state unchanged) where a
   // further pass cannot change the result (RLS and the batch estimators reach their optimum in one pass).
   virtual bool BeginPass() { return false; }
+  // The data have ended while a data-driven start-up still waits: start from every sample seen
+  // (SafeStudentRegression::FinishStartup). False where there is no start-up or it cannot start.
+  virtual bool FinishStartup() { return false; }
 };
 
 // Adapter: wraps a concrete estimator E.
@@ -139,6 +142,12 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
   bool BeginPass() override {
     if constexpr (requires { e_.BeginPass(); })
       return e_.BeginPass();
+    else
+      return false;
+  }
+  bool FinishStartup() override {
+    if constexpr (requires { e_.FinishStartup(); })
+      return e_.FinishStartup();
     else
       return false;
   }

@@ -36,8 +36,11 @@ int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
 // `refine_scale`. So the first replayed samples are weighed against Θ_r, not against a vague prior that the
 // first few of them would decide. A window that does not determine every coefficient from its inliers
 // has no such start: nullopt (see the checks below and the header comment).
+// With `strict` = false (the end of the data: no later window can do better) only a rank-deficient window
+// has no start.
 std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::MatrixXd>& window,
-                                                 const SafeStudentOptions& options, double nu0, double growth) {
+                                                 const SafeStudentOptions& options, double nu0, double growth,
+                                                 bool strict = true) {
   const Eigen::Index rho = window.cols() - 1;
   // Rows with a regressor coordinate beyond kLeverage robust scales of its column are left out of the fit
   // and of M_w (a gross output outlier entering later ARX regressors is such a row), as long as at least
@@ -68,7 +71,7 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
     // The residuals' robust scale; zero when more than half of the rows are fitted exactly (a window in
     // steady state), which says nothing of the noise: no start from such a window.
     const double se = MadScale(r);
-    IDENT_REQUIRE(se > 0, "more than half of the window is fitted exactly");
+    IDENT_REQUIRE(se > 0 || !strict, "more than half of the window is fitted exactly");
     const Eigen::VectorXd w = 2 / (1 + r.array().square() / gamma2);
     Eigen::MatrixXd M = Z.transpose() * w.asDiagonal() * Z / w.sum();
     M = 0.5 * (M + M.transpose());
@@ -81,16 +84,16 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
     IDENT_REQUIRE(chol.info() == Eigen::Success, "the window's regressors are rank-deficient");
     const Eigen::MatrixXd Linv = chol.matrixL().solve(Eigen::MatrixXd::Identity(rho, rho));
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> relative(Linv * M * Linv.transpose(), Eigen::EigenvaluesOnly);
-    IDENT_REQUIRE(relative.eigenvalues()(0) >= kInlierShare, "a direction rests on the fit's outliers");
+    IDENT_REQUIRE(relative.eigenvalues()(0) >= kInlierShare || !strict, "a direction rests on the fit's outliers");
     // Nor may a direction rest on one row: every weighted leverage w_i z_i'(Z'WZ)⁻¹z_i ≤ kMaxLeverage (a
     // binary input that has switched once in the window leaves the row of the switch to decide its
     // coefficients alone — and to fit a gross outlier there exactly).
     const Eigen::LLT<Eigen::MatrixXd> information(Z.transpose() * w.asDiagonal() * Z);
     for (Eigen::Index i = 0; i < Z.rows(); ++i) {
       const Eigen::VectorXd zi = Z.row(i).transpose();
-      IDENT_REQUIRE(w(i) * zi.dot(information.solve(zi)) <= kMaxLeverage, "a direction rests on a few rows");
+      IDENT_REQUIRE(w(i) * zi.dot(information.solve(zi)) <= kMaxLeverage || !strict, "a direction rests on a few rows");
     }
-    const double sigma0 = options.refine_scale ? growth * se : RobustScale(window.col(0));
+    const double sigma0 = options.refine_scale && se > 0 ? growth * se : RobustScale(window.col(0));
     RegressionPrior prior;
     prior.nu0 = nu0;
     prior.V0.resize(rho + 1, rho + 1);
@@ -161,7 +164,13 @@ void SafeStudentRegression::Replay() noexcept {
   }
 }
 
-void SafeStudentRegression::Restart(long recent, bool lock_in_restart) noexcept {
+bool SafeStudentRegression::FinishStartup() noexcept {
+  if (!in_startup() || stored_ <= num_parameters()) return false;
+  Restart(stored_, /*lock_in=*/false, /*strict=*/false);
+  return started_;
+}
+
+void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool strict) noexcept {
   const int rho = num_parameters();
   const double low_before = monitor_.low_fraction();
   Eigen::MatrixXd window(recent, rho + 1);  // the last `recent` samples, oldest first
@@ -179,7 +188,7 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart) noexcept 
   // Start-up: the window's fit is the prior of its samples; lock-in: ν0 = ρ+k+δ pseudo-samples at the
   // recent fit. Either way every kept sample is replayed.
   const double nu0 = lock_in_restart ? rho + o.dof + o.delta : static_cast<double>(recent);
-  std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth);
+  std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth, strict);
   if (!prior && !lock_in_restart) return;  // not identifiable yet: the start-up waits for more samples
   centre_ = centre;
   spread_ = spread;

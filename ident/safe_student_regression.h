@@ -12,11 +12,12 @@
 //      record that starts in steady state), more than half of the rows fitted exactly, a direction whose
 //      information the fit's outliers carry, or one row alone deciding a direction (weighted leverage
 //      above 0.8) — the start waits and is tried again every W samples on the last (up to) 5W.
-//   2. Leverage guard (StudentRegressionOptions::leverage_guard): when a sample is both unlike every
-//      regressor seen and grossly mispredicted, and its regressor is outlying — some coordinate beyond
-//      five robust scales of that coordinate in the last start or restart window — it is read as an
-//      outlier, not as new information. A new direction of ordinary values (an input that starts to
-//      move) is learnt as the maximin recursion would.
+//   2. Leverage guard (StudentRegressionOptions::leverage_guard): when a sample is grossly mispredicted and
+//      its regressor is outlying — some coordinate beyond five robust scales of that coordinate in the
+//      last start or restart window, or far out in the metric of the information matrix
+//      (z'Ṽ_z⁻¹z > 25 + ρ) — it is read as an outlier, not as new information: its weight adds at most
+//      the information of one ordinary sample. A new direction of ordinary values that the model
+//      predicts (an input that starts to move) is learnt as the maximin recursion would.
 //   3. Lock-in monitor and recovery. A LockInMonitor watches νβ(t) over the last M = max(100, 20ρ)
 //      samples; when more than half are below the threshold the estimator restarts as in 1 from the last
 //      max(W, M) samples and then replays every sample seen, so the estimate rests on all the data
@@ -133,6 +134,12 @@ class SafeStudentRegression {
   // or before any update.
   bool BeginPass();
 
+  // The end of the data while the start-up still waits (a short record, or one whose every window failed
+  // the start's checks): starts from the robust fit of every kept sample, with only a rank-deficient
+  // window refused, and replays them. True if it started; false (state unchanged) otherwise or when not
+  // in the start-up. The command line calls it after the last estimation row.
+  bool FinishStartup() noexcept;
+
   // Back to the state of a freshly built estimator with the same options: the provisional prior (the
   // explicit one if given), an empty history and a clear monitor.
   void Reset();
@@ -163,7 +170,8 @@ class SafeStudentRegression {
   Eigen::Index Column(long i) const { return (ring_start_ + i) % stored_; }
   // Rebuilds the estimator from the robust fit of the last `recent` samples and replays every kept sample
   // (the start-up, or a lock-in restart, which is recorded).
-  void Restart(long recent, bool lock_in) noexcept;
+  // `strict` = false: FinishStartup's start from every kept sample (see RobustWindowPrior).
+  void Restart(long recent, bool lock_in, bool strict = true) noexcept;
   // Replays every kept sample into est_ (the last M weights refill the monitor).
   void Replay() noexcept;
 

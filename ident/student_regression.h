@@ -70,14 +70,17 @@ struct StudentRegressionOptions {
   std::optional<RegressionPrior> prior;
   // Only the spec's recursion: no data-driven start-up (the command line's --exact).
   bool exact = false;
-  // Leverage guard: when H0 has two local maxima — a regressor unlike any seen so far together with a
-  // gross prediction error, "new information or outlier?" [spec §5] — take the outlier reading (the
-  // smaller β) instead of the larger H0. The maximin choice gives such a sample the weight of new
-  // information, an influence that grows without bound with the size of the regressor (a gross output
-  // outlier entering later ARX regressors); the guard bounds it, as GM-estimators bound leverage.
-  // A regressor that is new and fitted by the model has one maximum and is learnt as usual. Callers that
-  // can tell an outlying regressor from a new direction of ordinary values switch it per sample
-  // (set_leverage_guard; SafeStudentRegression does).
+  // Leverage guard, for an outlying regressor: one the caller calls outlying (set_outlying_regressor;
+  // by default every regressor), or one far out in the metric of the information matrix,
+  // z'Ṽ_z⁻¹z = 1 − ξ_z > 25 + ρ (≈ ρ on average over the samples Ṽ_z summarises). For such a sample,
+  // when H0 has two local maxima — "new information or outlier?" [spec §5] — take the outlier reading
+  // (the smaller β); when it has one and the error is gross (ê²/D_y > 25), take β0 = 1/(ν − (ν−1)ξ),
+  // the smallest admissible weight, whose update β0·hh' adds the information of one ordinary sample
+  // whatever the size of h. The maximin choice gives such a sample the weight of new information, an
+  // influence that grows without bound with the size of the regressor (a gross output outlier entering
+  // later ARX regressors); the guard bounds it, as GM-estimators bound leverage. A regressor that is new
+  // and fitted by the model is learnt as usual; a new direction with a gross error is learnt one
+  // ordinary sample's worth per sample. Switched per sample with set_leverage_guard.
   bool leverage_guard = false;
   // Data-driven start-up (used when `prior` is unset and not `exact`): the first W samples are run
   // with DefaultPrior() and kept; after sample W the estimator restarts from the prior

@@ -79,6 +79,8 @@ class ArxRegressor {
   // calls RestoreMeasured(), which puts the measured y(t−1) back for every later regressor.
   bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const;
   void RestoreMeasured();
+  // The estimator's predictions are trustworthy from now on: ends the cleaner's model-free warm-up.
+  void EndCleaningWarmUp() { cleaner_.EndWarmUp(); }
   const ArxStructure& structure() const { return structure_; }
   const OutputCleaner& cleaner() const { return cleaner_; }
 

@@ -21,10 +21,12 @@ std::string OutputCleaningOptions::Validate() const {
 OutputCleaner::OutputCleaner(const OutputCleaningOptions& options) : options_(options) {
   const std::string error = options_.Validate();
   IDENT_REQUIRE(error.empty(), "{}", error);
+  warm_up_end_ = options_.warm_up;
 }
 
 void OutputCleaner::Reset() {
   seen_ = cleaned_ = 0;
+  warm_up_end_ = options_.warm_up;
   run_ = 0;
   y_min_ = y_max_ = 0;
   have_range_ = false;
@@ -80,7 +82,7 @@ double OutputCleaner::ErrorScale() const { return RingScale(errors_, num_errors_
 double OutputCleaner::Clean(double y, double y_hat, double scale, bool flagged, bool judged) {
   const long t = seen_++;
   if (!options_.enabled || !judged || !have_range_ || run_ >= options_.max_run || !std::isfinite(y)) return Accept(y);
-  if (t < options_.warm_up) {  // (4): the model-free screen
+  if (t < warm_up_end_) {  // (4): the model-free screen
     const double s = DifferenceScale();
     if (!(options_.screen > 0 && s > 0 && std::abs(y - last_) > options_.screen * s)) return Accept(y);
     y_hat = last_;
@@ -97,7 +99,7 @@ double OutputCleaner::Clean(double y, double y_hat, double scale, bool flagged, 
   }
   // (1): an error cleaned as gross (the warm-up screen, or (5) with gross > 0) is no evidence of y beyond
   // ŷ (ψ redescends to 0); with gross = 0 every flagged error is clipped (Huber ψ).
-  const bool gross = t < options_.warm_up || options_.gross > 0;
+  const bool gross = t < warm_up_end_ || options_.gross > 0;
   const double bound = options_.clip * scale;
   const double cleaned = gross ? y_hat : y_hat + std::clamp(y - y_hat, -bound, bound);
   ++run_;

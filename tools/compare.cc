@@ -43,6 +43,8 @@ class RecordingEstimator final : public AnyRegressionEstimator {
     count_ = 0;  // the timed replay is of the last pass
     return inner_.BeginPass();
   }
+  bool in_startup() const override { return inner_.in_startup(); }
+  bool FinishStartup() override { return inner_.FinishStartup(); }
 
   // Nanoseconds per update of `fresh` over the recorded sequence and the read-out of its estimate
   // (repeated to last ≥ 5 ms).

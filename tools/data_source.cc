@@ -45,6 +45,7 @@ class ArxSource final : public DataSource {
     return regressor_.MeasuredRegressor(z_measured);
   }
   void RestoreMeasured() override { regressor_.RestoreMeasured(); }
+  void EndCleaningWarmUp() override { regressor_.EndCleaningWarmUp(); }
 
  private:
   int output_;

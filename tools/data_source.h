@@ -46,6 +46,8 @@ class DataSource {
   // the last output was cleaned, the regressor with the measured value instead, and a way to keep it.
   virtual bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> /*z_measured*/) const { return false; }
   virtual void RestoreMeasured() {}
+  // The estimator has made its robust start: cleaning judges by its predictions from now on.
+  virtual void EndCleaningWarmUp() {}
 };
 
 // Throws DataError for an unknown column, InvalidArgument for bad orders.

@@ -87,7 +87,9 @@ class Estimation {
         source_.RestoreMeasured();
         z_ = z_measured_;
       }
+      const bool was_in_startup = estimator_.in_startup();
       const StepReport report = estimator_.Update(y, z_);
+      if (was_in_startup && !estimator_.in_startup()) source_.EndCleaningWarmUp();
       flagged = decision_.Flags(report);
       // Every prediction ŷ goes to the cleaner (its gross-error test compares |y − ŷ| with the robust
       // scale of all recent prediction errors); a flagged output is rebuilt from ŷ and the noise scale.
@@ -111,8 +113,10 @@ class Estimation {
     source_.PushCheckedOutput(y, y_hat, scale, flagged, judged_);
   }
 
-  // Identifiability: every regressor must vary and none may be a combination of the others.
-  std::pair<int, int> Finish(const std::string& name) const {
+  // The end of the pass: a start-up that still waits starts from every sample seen. Identifiability:
+  // every regressor must vary and none may be a combination of the others.
+  std::pair<int, int> Finish(const std::string& name) {
+    estimator_.FinishStartup();
     const int rho = source_.num_parameters();
     const std::vector<std::string> names = source_.parameter_names();
     IDENT_REQUIRE(updates_ > 0 || failed_ < rejected_,

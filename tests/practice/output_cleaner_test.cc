@@ -145,6 +145,20 @@ TEST(OutputCleaner, AfterWarmUpOnlyGrossFlaggedErrorsAreCleaned) {
   EXPECT_THROW(OutputCleaner({.screen = std::nan("")}), InvalidArgument);
 }
 
+// EndWarmUp(): once the estimator has made its robust start, its predictions judge the samples (5) instead
+// of the model-free screen (4), which lets through a jump the recent differences hide.
+TEST(OutputCleaner, EndWarmUpHandsTheJudgementToTheModel) {
+  for (const bool ended : {false, true}) {
+    OutputCleaner c({.enabled = true, .max_run = 5, .warm_up = 100, .screen = 10, .gross = 5});
+    for (int t = 0; t < 20; ++t) c.Clean(t % 2 ? 1.0 : -1.0, 0.0, 1.0, false);  // differences ±2: s_Δ ≈ 3
+    if (ended) c.EndWarmUp();
+    for (int t = 0; t < 16; ++t) c.Clean(t % 2 ? 0.9 : -0.9, t % 2 ? 1.0 : -1.0, 0.1, false);  // errors ±0.1
+    // A jump of 8 from the last value: inside the screen's 10·s_Δ, but 80 robust scales of the errors.
+    const double stored = c.Clean(-8.9, -1.0, 0.1, true);
+    EXPECT_DOUBLE_EQ(stored, ended ? -1.0 : -8.9) << ended;
+  }
+}
+
 // Additive outlier or innovation: the regressor with the measured y(t−1) is offered after a cleaning,
 // and restoring it puts the measurement back into every later regressor.
 TEST(ArxRegressorCleaning, MeasuredRegressorAndRestoreAfterACleanedOutput) {
