@@ -30,7 +30,13 @@ void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
                  "cleaned value in later regressors")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
-  app.add_option("--clean-clip", cleaning.clip, "Cleaned value stays within C noise scales of the prediction")
+  app.add_option("--clean-clip", cleaning.clip,
+                 "With --clean-gross 0: a flagged output is stored as the prediction plus its error clipped to C "
+                 "noise scales (Huber)")
+      ->capture_default_str();
+  app.add_option("--clean-gross", cleaning.gross,
+                 "Clean a flagged output only if its error exceeds G robust scales of the recent prediction errors, "
+                 "and then store the prediction; 0: clean every flagged output with --clean-clip")
       ->capture_default_str();
   app.add_option("--clean-below", clean_below, "Flag a sample as outlier when its relative weight nu*beta is below W")
       ->capture_default_str();
@@ -60,7 +66,7 @@ std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<st
   models::OutputCleaningOptions clean = cleaning;
   clean.enabled = clean_regressors == "on";
   const std::string error = clean.Validate();
-  IDENT_REQUIRE(error.empty(), "--clean-clip: {}", error);
+  IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
   return MakeArxSource(columns, output, inputs, arx, source, clean);
 }
 

@@ -160,6 +160,11 @@ TEST(CompareCommand, RegressorCleaningImprovesCauchyOnDryer) {
         << outliers;
     EXPECT_GE(spread(on, "cauchy", "fit_one_step", "median"), spread(off, "cauchy", "fit_one_step", "median")) << outliers;
     EXPECT_EQ(spread(on, "rls", "fit_one_step", "mean"), spread(off, "rls", "fit_one_step", "mean"));  // identical
+    // A gross error cleaned to the prediction (the default) against the Huber value ŷ ± 2s of every
+    // flagged error (--clean-gross 0): the clipped error left in later regressors costs accuracy.
+    const nlohmann::json huber = CompareJson(args + " --clean-gross 0");
+    EXPECT_LT(spread(on, "cauchy", "theta_distance", "median"), spread(huber, "cauchy", "theta_distance", "median"))
+        << outliers;
   }
 }
 
@@ -237,6 +242,7 @@ TEST(CompareCommand, BadInputExitsOneWithOneLine) {
   ExpectBadInput("compare dryer --estimators rls --output y --input q", "no column 'q'");
   ExpectBadInput("compare dryer --estimators rls --clean-below 1.5", "--clean-below");
   ExpectBadInput("compare dryer --estimators rls --clean-clip -1 --clean-regressors on", "clip = -1");
+  ExpectBadInput("compare dryer --estimators rls --clean-gross -1", "--clean-clip/--clean-gross: cleaning gross = -1");
   ExpectBadInput("compare /nonexistent.csv --estimators rls --output y --input u", "cannot open '/nonexistent.csv'");
   const std::string csv = WriteFile("plain.csv", "t,u,y\n0,1,2\n1,2,3\n");
   ExpectBadInput("compare " + csv + " --estimators rls", "is not a bundled dataset with a suggested structure");
