@@ -68,6 +68,11 @@ struct LockInStatus {
   int restarts = 0;                // restarts made because of it
   double low_weight_fraction = 0;  // share of the current window with νβ < threshold
   std::vector<RestartEvent> events;  // one per restart, in order
+  // The robust start: the update after which it was made (0: none, the prior was given) and the samples
+  // its window fit used; `start_at_end`: made when the data ended (FinishStartup), from every sample.
+  long start_update = 0;
+  long start_window = 0;
+  bool start_at_end = false;
 };
 
 // Type-erased regression estimator for selection at run time.

@@ -149,8 +149,12 @@ long SafeStudentRegression::RecentWindow() const {
 
 std::optional<LockInStatus> SafeStudentRegression::lock_in() const {
   if (options_.base.exact) return std::nullopt;
-  return LockInStatus{monitor_.window(), monitor_.threshold(), options_.restart_on_lock_in, lock_ins_,
+  LockInStatus status{monitor_.window(), monitor_.threshold(), options_.restart_on_lock_in, lock_ins_,
                       restarts(),        monitor_.low_fraction(), events_};
+  status.start_update = start_update_;
+  status.start_window = start_window_;
+  status.start_at_end = start_at_end_;
+  return status;
 }
 
 void SafeStudentRegression::Replay() noexcept {
@@ -167,6 +171,7 @@ void SafeStudentRegression::Replay() noexcept {
 bool SafeStudentRegression::FinishStartup() noexcept {
   if (!in_startup() || stored_ <= num_parameters()) return false;
   Restart(stored_, /*lock_in=*/false, /*strict=*/false);
+  start_at_end_ = started_;
   return started_;
 }
 
@@ -198,6 +203,10 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool stri
     est_ = StudentRegression(rho, o);  // assigned only if the constructor succeeds
   } catch (...) {
     // Not reached for a finite window (the prior is validated); the current estimator is kept.
+  }
+  if (!lock_in_restart && !started_) {
+    start_update_ = updates_;
+    start_window_ = recent;
   }
   started_ = true;
   Replay();
@@ -258,6 +267,8 @@ void SafeStudentRegression::Reset() {
   started_ = false;
   lock_ins_ = 0;
   events_.clear();
+  start_update_ = start_window_ = 0;
+  start_at_end_ = false;
   monitor_.Clear();
 }
 

@@ -185,6 +185,8 @@ class SafeStudentRegression {
   long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
   int lock_ins_ = 0;
   std::vector<RestartEvent> events_;
+  long start_update_ = 0, start_window_ = 0;  // the robust start (LockInStatus)
+  bool start_at_end_ = false;
 };
 
 }  // namespace ident

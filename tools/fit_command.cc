@@ -85,7 +85,10 @@ nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, doubl
                     {"flagged", r.lock_in->flagged},
                     {"restarts", r.lock_in->restarts},
                     {"low_weight_fraction", r.lock_in->low_weight_fraction},
-                    {"events", RestartEventsJson(r.lock_in->events)}};
+                    {"events", RestartEventsJson(r.lock_in->events)},
+                    {"start_update", r.lock_in->start_update},
+                    {"start_window", r.lock_in->start_window},
+                    {"start_at_end", r.lock_in->start_at_end}};
   else
     j["lock_in"] = nullptr;
   j["nu"] = r.nu;
@@ -150,6 +153,11 @@ void PrintReport(const FitResult& r, const std::string& data, const FitCommandOp
     fmt::print("  lock-in monitor (window {}, weight threshold {}): flagged at {} update{}, {} restart{}; {:.0f} % of "
                "the last window below the threshold\n", l.window, l.threshold, l.flagged, l.flagged == 1 ? "" : "s",
                l.restarts, l.restarts == 1 ? "" : "s", 100 * l.low_weight_fraction);
+    if (l.start_at_end)
+      fmt::print("  robust start from all {} samples when the data ended (no earlier window determined every "
+                 "coefficient from its inliers)\n", l.start_window);
+    else if (l.start_update > 0)
+      fmt::print("  robust start after update {} from its last {} samples\n", l.start_update, l.start_window);
     for (const RestartEvent& e : l.events)
       fmt::print("    restart at update {}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n", e.update,
                  e.replayed, e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",

@@ -121,6 +121,11 @@ TEST(UsableResult, RobustStartUpOfAShortRecordStartsFromEverySample) {
   const auto cauchy = UsableFitJson("fit " + WriteFile("short12.csv", text) + model + "cauchy");
   const auto tiny = UsableFitJson("fit " + WriteFile("short12_tiny.csv", scaled) + model + "cauchy");
   const auto rls = UsableFitJson("fit " + WriteFile("short12_rls.csv", text) + model + "rls");
+  EXPECT_EQ(cauchy["lock_in"]["start_at_end"], true);
+  EXPECT_EQ(cauchy["lock_in"]["start_window"], 4);  // every update of the 6 estimation rows from t0 = 2
+  const auto dryer = UsableFitJson("fit dryer" + kUsableArx + " --estimator cauchy");
+  EXPECT_EQ(dryer["lock_in"]["start_at_end"], false);
+  EXPECT_EQ(dryer["lock_in"]["start_update"], 20);  // W = max(20, 4ρ)
   for (int i = 0; i < 2; ++i) {
     const double theta = cauchy["theta"][i], std = cauchy["theta_std"][i];
     EXPECT_NEAR(tiny["theta"][i].get<double>(), theta, 1e-9 * std::abs(theta)) << i;
