@@ -429,6 +429,40 @@ def sim_section(cells, clean, args):
     return lines
 
 
+def ordering_section(cells, estimator="cauchy", reference="rls"):
+    """Larger outliers no harder: per record and rate, `estimator`'s median θ distance at the smallest size
+    ≥ 20σ against the largest, and at every size ≥ 20σ its worst case against `reference`'s median."""
+    cases = {}
+    for c in cells:
+        if c["family"] in ("real", "sim") and c["size"] >= 20:
+            cases.setdefault((c["record"], c["rate"]), []).append(c)
+    lines = [f"## Larger outliers no harder ({estimator} against {reference})", "",
+             f"Median θ distance of {estimator} at the smallest size ≥ 20σ and at the largest (held when the "
+             "largest is within 0.01 of the smallest); at each size ≥ 20σ its worst case over the seeds against "
+             f"{reference}'s median (held when below).", "",
+             f"| record | rate | {estimator} median, smallest → largest size | held | worst {estimator} vs median "
+             f"{reference}, per size |", "|---|---|---|---|---|"]
+    for (record, rate), group in sorted(cases.items()):
+        group.sort(key=lambda c: c["size"])
+
+        def stat(cell, name, key):
+            s = cell["estimators"].get(name, {}).get("theta_distance", {})
+            return s.get(key)
+        low, high = stat(group[0], estimator, "median"), stat(group[-1], estimator, "median")
+        if low is None or high is None:
+            continue
+        held = "yes" if high <= low + 0.01 else "no"
+        parts = []
+        for c in group:
+            worst, median = stat(c, estimator, "worst"), stat(c, reference, "median")
+            if worst is not None and median is not None:
+                parts.append(f"{c['size']:g}σ: {fmt_num(worst, 3)} vs {fmt_num(median, 3)} "
+                             f"{'✓' if worst < median else '✗'}")
+        lines.append(f"| {record} | {100 * rate:g} % | {fmt_num(low, 3)} → {fmt_num(high, 3)} | {held} "
+                     f"| {'; '.join(parts)} |")
+    return lines
+
+
 def report(args, cells, command, version, wall_s):
     real = [c for c in cells if c["family"] == "real"]
     sim = [c for c in cells if c["family"] == "sim"]
@@ -445,6 +479,8 @@ def report(args, cells, command, version, wall_s):
         lines += real_section(real, args) + [""]
     if sim:
         lines += sim_section(sim, clean, args) + [""]
+    if "cauchy" in args.estimators and "rls" in args.estimators:
+        lines += ordering_section(real + sim) + [""]
     families = []
     if real:
         families.append(("real: ns/update (tool)", real, "ns_per_update"))
