@@ -279,8 +279,9 @@ class BasicStudentRegression {
     if (!options_.leverage_guard || !(outlying_regressor_ || 1 - in.xi_z > kLeverage * kLeverage + num_parameters()))
       return w.beta;
     if (w.num_maxima > 1) return w.smallest_maximum;  // the outlier reading of the two [spec §5]
-    // One maximum, a gross error: the smallest admissible weight β0 = 1/(ν − (ν−1)ξ), whose update
-    // β0·hh' adds the information of one ordinary sample (β0·h'Ṽ⁻¹h ≤ 1/ν·…) whatever the size of h.
+    // One maximum, a gross error: the smallest admissible weight β0 = 1/(ν − (ν−1)ξ), ξ = 1 − h'Ṽ⁻¹h,
+    // whose update β0·hh' has β0·h'Ṽ⁻¹h = (1−ξ)/(1 + (ν−1)(1−ξ)) < 1/(ν−1) in the metric of Ṽ: the
+    // information of one ordinary sample, whatever the size of h.
     return in.xi_z - in.xi > kLeverage * kLeverage ? w.beta0 : w.beta;
   }
 
