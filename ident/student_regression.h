@@ -74,7 +74,8 @@ struct StudentRegressionOptions {
   // by default every regressor), or one far out in the metric of the information matrix,
   // z'Ṽ_z⁻¹z = 1 − ξ_z > 25 + ρ (≈ ρ on average over the samples Ṽ_z summarises). For such a sample,
   // when H0 has two local maxima — "new information or outlier?" [spec §5] — take the outlier reading
-  // (the smaller β); when it has one and the error is gross (ê²/D_y > 25), take β0 = 1/(ν − (ν−1)ξ),
+  // (the smaller β); when it has one and the error is gross against the leverage (ê²/D_y above
+  // 25·min(1, (25+ρ)/q), q = z'Ṽ_z⁻¹z: Schweppe's GM form, error times lever arm), take β0 = 1/(ν − (ν−1)ξ),
   // the smallest admissible weight, whose update β0·hh' adds the information of one ordinary sample
   // whatever the size of h. The maximin choice gives such a sample the weight of new information, an
   // influence that grows without bound with the size of the regressor (a gross output outlier entering
@@ -228,7 +229,8 @@ class BasicStudentRegression {
   // true: every regressor, the guard's behaviour when the caller gives no verdict). noexcept.
   void set_outlying_regressor(bool outlying) noexcept { outlying_regressor_ = outlying; }
   // Robust scales (in the metric z'Ṽ_z⁻¹z: its square, plus ρ) beyond which a regressor is outlying, and
-  // prediction errors (ê²/D_y beyond its square) that are gross, for the leverage guard.
+  // prediction errors (ê²/D_y beyond its square, scaled down by the leverage) that are gross, for the
+  // leverage guard.
   static constexpr double kLeverage = 5;
 
   // Changes λ on the fly (the next update uses it). Throws InvalidArgument if λ ∉ (0, 1] or if λ is
@@ -282,7 +284,10 @@ class BasicStudentRegression {
     // One maximum, a gross error: the smallest admissible weight β0 = 1/(ν − (ν−1)ξ), ξ = 1 − h'Ṽ⁻¹h,
     // whose update β0·hh' has β0·h'Ṽ⁻¹h = (1−ξ)/(1 + (ν−1)(1−ξ)) < 1/(ν−1) in the metric of Ṽ: the
     // information of one ordinary sample, whatever the size of h.
-    return in.xi_z - in.xi > kLeverage * kLeverage ? w.beta0 : w.beta;
+    // "Gross" is judged against the leverage (Schweppe's GM form): ê²/D_y beyond 25·min(1, (25+ρ)/q), so
+    // beyond the leverage limit the product of error and lever arm, not the error alone, decides.
+    const double q = 1 - in.xi_z, limit = kLeverage * kLeverage + num_parameters();
+    return in.xi_z - in.xi > kLeverage * kLeverage * std::min(1.0, limit / q) ? w.beta0 : w.beta;
   }
 
   // s = 1.4826·MAD of column c of the window (RMS if 0, else 1).
