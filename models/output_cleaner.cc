@@ -99,9 +99,9 @@ double OutputCleaner::Clean(double y, double y_hat, double scale, bool flagged, 
   }
   // (1): an error cleaned as gross (the warm-up screen, or (5) with gross > 0) is no evidence of y beyond
   // ŷ (ψ redescends to 0); with gross = 0 every flagged error is clipped (Huber ψ).
-  const bool gross = t < warm_up_end_ || options_.gross > 0;
+  const bool redescend = t < warm_up_end_ || options_.gross > 0;  // the error was cleaned as gross
   const double bound = options_.clip * scale;
-  const double cleaned = gross ? y_hat : y_hat + std::clamp(y - y_hat, -bound, bound);
+  const double cleaned = redescend ? y_hat : y_hat + std::clamp(y - y_hat, -bound, bound);
   ++run_;
   ++cleaned_;
   return Store(std::clamp(cleaned, y_min_, y_max_));  // (2)

@@ -71,7 +71,8 @@ class Estimation {
         z_measured_(source.num_parameters()),
         ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())),
         max_abs_(Eigen::VectorXd::Zero(source.num_parameters())),
-        judged_(estimator.judges_outliers()) {
+        judged_(estimator.judges_outliers()),
+        in_startup_(estimator.in_startup()) {
     source_.Reset();
   }
 
@@ -87,9 +88,11 @@ class Estimation {
         source_.RestoreMeasured();
         z_ = z_measured_;
       }
-      const bool was_in_startup = estimator_.in_startup();
       const StepReport report = estimator_.Update(y, z_);
-      if (was_in_startup && !estimator_.in_startup()) source_.EndCleaningWarmUp();
+      if (in_startup_ && !estimator_.in_startup()) {  // the robust start is made: the model judges from now on
+        in_startup_ = false;
+        source_.EndCleaningWarmUp();
+      }
       flagged = decision_.Flags(report);
       // Every prediction ŷ goes to the cleaner (its gross-error test compares |y − ŷ| with the robust
       // scale of all recent prediction errors); a flagged output is rebuilt from ŷ and the noise scale.
@@ -168,6 +171,7 @@ class Estimation {
   Eigen::MatrixXd ZtZ_;
   Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)
   bool judged_;  // the estimator gives outlier verdicts (cleaning applies)
+  bool in_startup_;  // the estimator is in its start-up (asked after each update only while true)
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
 };
 

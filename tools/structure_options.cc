@@ -51,6 +51,11 @@ bool StructureCliOptions::Given() const {
 
 std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<std::string>& columns,
                                                             const std::string& source) const {
+  // The cleaning options are checked whatever the structure: a bad value is an error, not ignored.
+  models::OutputCleaningOptions clean = cleaning;
+  clean.enabled = clean_regressors == "on";
+  const std::string error = clean.Validate();
+  IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
   if (!regressors.empty()) {
     models::StaticRegression regression{regressors, intercept};
     return MakeStaticSource(columns, output, regression, source);
@@ -63,10 +68,6 @@ std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<st
     return v.size() == m ? v : std::vector<int>(m, v[0]);
   };
   models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
-  models::OutputCleaningOptions clean = cleaning;
-  clean.enabled = clean_regressors == "on";
-  const std::string error = clean.Validate();
-  IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
   return MakeArxSource(columns, output, inputs, arx, source, clean);
 }
 

@@ -243,6 +243,7 @@ TEST(CompareCommand, BadInputExitsOneWithOneLine) {
   ExpectBadInput("compare dryer --estimators rls --clean-below 1.5", "--clean-below");
   ExpectBadInput("compare dryer --estimators rls --clean-clip -1 --clean-regressors on", "clip = -1");
   ExpectBadInput("compare dryer --estimators rls --clean-gross -1", "--clean-clip/--clean-gross: cleaning gross = -1");
+  ExpectBadInput("compare stackloss --estimators rls --clean-gross -1", "--clean-clip/--clean-gross: cleaning gross = -1");
   ExpectBadInput("compare /nonexistent.csv --estimators rls --output y --input u", "cannot open '/nonexistent.csv'");
   const std::string csv = WriteFile("plain.csv", "t,u,y\n0,1,2\n1,2,3\n");
   ExpectBadInput("compare " + csv + " --estimators rls", "is not a bundled dataset with a suggested structure");
