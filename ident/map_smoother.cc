@@ -131,7 +131,8 @@ namespace {
 
 // Solver-side data of one distinct penalty.
 struct Prepared {
-  const PlqForm* plq = nullptr;
+  PlqForm scaled;                // the penalty's PLQ form in the data unit σ: p, b, lo, hi divided by σ
+  const PlqForm* plq = nullptr;  // = &scaled
   int k = 0, m = 0;
   bool constant = false;    // no finite bound: K = M, W = B'M^-1 B fixed (its Newton block is precomputed)
   bool identity_B = false;  // B = I, b = 0, p = 0: v = p + B'u = u and B r - b = r
@@ -260,14 +261,20 @@ template <int kN>
 class Solver {
  public:
   Solver(const MapSmootherProblem& p, const MapSmootherOptions& o)
-      : p_(p), o_(o), T_(p.T()), n_(p.state_dim()), nz_(p.measurement_dim()) {
+      : p_(p),
+        o_(o),
+        T_(p.T()),
+        n_(p.state_dim()),
+        nz_(p.measurement_dim()),
+        sigma_(internal::MapSmootherDataUnit(p.z)),
+        z_(p.z / sigma_) {
     int offset = 0;
     terms_.reserve(2 * (T_ + 1));
     for (int pass = 0; pass < 2; ++pass)
       for (int t = 0; t <= T_; ++t) {
         const Penalty& pen = pass == 0 ? p.ft(t) : p.gt(t);
         auto it = prepared_.find(&pen);
-        if (it == prepared_.end()) it = prepared_.emplace(&pen, Prepare(pen)).first;
+        if (it == prepared_.end()) it = prepared_.emplace(&pen, Prepare(pen, sigma_)).first;
         const double* F = pass == 0 && t > 0 ? p.Ft(t - 1).data() : nullptr;
         const double* H = pass == 1 ? p.Ht(t).data() : nullptr;
         const bool constant = it->second->constant;
@@ -337,7 +344,7 @@ class Solver {
 
   MapSmootherResult Run() {
     MapSmootherResult res;
-    const double z_scale = 1 + p_.z.cwiseAbs().maxCoeff();
+    const double z_scale = 1 + z_.cwiseAbs().maxCoeff();
     double bound_scale = 1;
     for (int c : bounded_) {
       if (has_lo_[c]) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
@@ -402,9 +409,15 @@ class Solver {
  private:
   int n() const { return kN > 0 ? kN : n_; }
 
-  static std::unique_ptr<Prepared> Prepare(const Penalty& pen) {
+  static std::unique_ptr<Prepared> Prepare(const Penalty& pen, double sigma) {
     auto prep = std::make_unique<Prepared>();
-    const PlqForm& f = pen.plq();
+    prep->scaled = pen.plq();
+    PlqForm& f = prep->scaled;
+    f.p /= sigma;
+    f.b /= sigma;
+    f.lo /= sigma;
+    f.hi /= sigma;
+    f.p0 /= sigma * sigma;
     prep->plq = &f;
     prep->k = f.rows();
     prep->m = pen.dim();
@@ -433,7 +446,7 @@ class Solver {
       for (int i = 0; i < n; ++i) out[i] = xt[i];
       if (term.F) AddMatVec<kN, kN>(term.F, n, n, xt - n, out, -1.0);
     } else {
-      const double* zt = p_.z.data() + static_cast<Eigen::Index>(t) * nz_;
+      const double* zt = z_.data() + static_cast<Eigen::Index>(t) * nz_;
       for (int i = 0; i < nz_; ++i) out[i] = include_constant ? zt[i] : 0.0;
       AddMatVec<0, kN>(term.H, nz_, n, xt, out, -1.0);
     }
@@ -747,9 +760,10 @@ class Solver {
     }
   }
 
-  // The states and dual controls u_t = p + B'u of the iterate; the rest is common to both paths.
+  // The states and dual controls u_t = p + B'u of the iterate, back in the data's unit; the rest is
+  // common to both paths.
   void Finish(MapSmootherResult* res, double z_scale, double mu) {
-    res->x = x_;
+    res->x = sigma_ * x_;
     res->u.resize(nz_, T_ + 1);
     for (const Term& term : terms_) {
       if (term.process) continue;
@@ -765,12 +779,15 @@ class Solver {
       for (int i = 0; i < nz_; ++i) ut[i] = f.p(i);
       AddMatTVec(f.B.data(), term.prep->k, nz_, u_.data() + term.offset, ut, 1.0);
     }
-    internal::FinishMapSmootherResult(p_, z_scale, mu, res);
+    res->u *= sigma_;
+    internal::FinishMapSmootherResult(p_, sigma_ * z_scale, mu, res);
   }
 
   const MapSmootherProblem& p_;
   const MapSmootherOptions& o_;
   const int T_, n_, nz_;
+  const double sigma_;     // the data unit (internal::MapSmootherDataUnit)
+  const Eigen::MatrixXd z_;  // the measurements in that unit
   std::map<const Penalty*, std::unique_ptr<Prepared>> prepared_;
   std::vector<Term> terms_;   // process terms t = 0..T, then measurement terms t = 0..T
   std::vector<Term> active_;  // the terms with a finite bound (non-constant Newton blocks), same order
@@ -808,6 +825,25 @@ MapSmootherResult Solve(const MapSmootherProblem& problem, const MapSmootherOpti
 }  // namespace
 
 namespace internal {
+
+double MapSmootherDataUnit(const Eigen::MatrixXd& z) {
+  std::vector<double> steps;
+  if (z.cols() > 1) {
+    steps.reserve(static_cast<std::size_t>(z.rows()) * (z.cols() - 1));
+    for (Eigen::Index t = 0; t + 1 < z.cols(); ++t)
+      for (Eigen::Index i = 0; i < z.rows(); ++i) steps.push_back(std::abs(z(i, t + 1) - z(i, t)));
+  }
+  if (!steps.empty()) {
+    const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+    std::nth_element(steps.begin(), mid, steps.end());
+    if (*mid > 0 && std::isfinite(*mid)) return *mid;
+    double mean = 0;
+    for (double d : steps) mean += d / static_cast<double>(steps.size());
+    if (mean > 0 && std::isfinite(mean)) return mean;
+  }
+  const double largest = z.size() ? z.cwiseAbs().maxCoeff() : 0.0;
+  return largest > 0 && std::isfinite(largest) ? largest : 1.0;
+}
 
 void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {
   if (!res->x.allFinite() || !res->u.allFinite()) {  // overflow or NaN in the iteration: nothing to evaluate

@@ -93,7 +93,8 @@ template <int kN>
 template <int kN>
 class FastSolver {
  public:
-  FastSolver(const MapSmootherProblem& p, const MapSmootherOptions& o) : p_(p), o_(o), T_(p.T()) {
+  FastSolver(const MapSmootherProblem& p, const MapSmootherOptions& o)
+      : p_(p), o_(o), T_(p.T()), sigma_(MapSmootherDataUnit(p.z)), z_(p.z.row(0).transpose() / sigma_) {
     invariant_ = p.F.size() == 1 && p.H.size() == 1 && p.process.size() <= 2 && p.measurement.size() == 1;
     // Bound-free process penalties: W = B'K^-1 B and c0 = p - B'K^-1 b, once per distinct penalty.
     std::vector<const Penalty*> seen;
@@ -106,7 +107,7 @@ class FastSolver {
       IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds",
                     f->Name());
       const Eigen::MatrixXd KinvB = llt.solve(q.B);
-      process_.push_back({f, q.B.transpose() * KinvB, q.p - KinvB.transpose() * q.b});
+      process_.push_back({f, q.B.transpose() * KinvB, (q.p - KinvB.transpose() * q.b) / sigma_});  // in the unit σ
     }
     const int num_constants = invariant_ ? std::min(T_ + 1, 3) : T_ + 1;
     constants_.resize(num_constants);
@@ -120,7 +121,6 @@ class FastSolver {
     steps_ = reinterpret_cast<StepState<kN>*>(arena_->Take(N * state_doubles));
     for (std::size_t t = 0; t < N; ++t) new (&steps_[t]) StepState<kN>{};
     x_ = arena_->Take(N * kN);
-    z_ = p.z.data();
     for (int t = 0; t <= T_; ++t) {  // strictly interior start, C'u + s = c exactly (as the general path)
       const StepConstants<kN>& c = constants_[ConstantIndex(t)];
       StepState<kN>& s = steps_[t];
@@ -136,7 +136,7 @@ class FastSolver {
 
   MapSmootherResult Run() {
     MapSmootherResult res;
-    const double z_scale = 1 + p_.z.cwiseAbs().maxCoeff();
+    const double z_scale = 1 + z_.cwiseAbs().maxCoeff();
     const double num_constraints = 2.0 * (T_ + 1);
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
@@ -174,10 +174,10 @@ class FastSolver {
     }
     res.iterations = iter;
     SetMapSmootherMessage(&res);
-    res.x = Eigen::Map<const Eigen::MatrixXd>(x_, kN, T_ + 1);
+    res.x = sigma_ * Eigen::Map<const Eigen::MatrixXd>(x_, kN, T_ + 1);  // back in the data's unit
     res.u.resize(1, T_ + 1);
-    for (int t = 0; t <= T_; ++t) res.u(0, t) = steps_[t].u;  // p + B'u = u (identity B, p = 0)
-    FinishMapSmootherResult(p_, z_scale, mu, &res);
+    for (int t = 0; t <= T_; ++t) res.u(0, t) = sigma_ * steps_[t].u;  // p + B'u = u (identity B, p = 0)
+    FinishMapSmootherResult(p_, sigma_ * z_scale, mu, &res);
     return res;
   }
 
@@ -229,8 +229,8 @@ class FastSolver {
     Eigen::Map<VecN>(c->c0) = f.c0;
     Eigen::Map<VecN>(c->H) = p_.Ht(t).row(0).transpose();
     const PlqForm& g = p_.gt(t).plq();
-    c->lo = g.lo(0);
-    c->hi = g.hi(0);
+    c->lo = g.lo(0) / sigma_;  // in the unit σ
+    c->hi = g.hi(0) / sigma_;
     c->m = g.M(0, 0);
   }
 
@@ -433,7 +433,8 @@ class FastSolver {
   std::unique_ptr<WorkArena> arena_;
   StepState<kN>* steps_ = nullptr;
   double* x_ = nullptr;  // kN x (T+1)
-  const double* z_ = nullptr;
+  const double sigma_;         // the data unit (MapSmootherDataUnit)
+  const Eigen::VectorXd z_;    // the measurements in that unit
   double bound_scale_ = 1, matrix_scale_ = 1;
 };
 

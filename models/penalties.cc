@@ -163,7 +163,9 @@ Penalty Penalty::PiecewiseLinear(const Eigen::VectorXd& knots, const Eigen::Vect
                   j + 1, knots(j + 1), knots(j));
     slope(j) = (values(j + 1) - values(j)) / (knots(j + 1) - knots(j));
   }
-  const double tol = 1e-9 * (1 + slope.cwiseAbs().maxCoeff());
+  // Relative to the steepest slope, so that the same penalty in other units (knots × s, values × s²) keeps
+  // the same kinks.
+  const double tol = 1e-9 * slope.cwiseAbs().maxCoeff();
   for (int j = 1; j < J; ++j)
     IDENT_REQUIRE(slope(j) >= slope(j - 1) - tol,
                   "piecewise_linear is not convex at knot {} (slope {} then {})", j, slope(j - 1), slope(j));

@@ -86,6 +86,19 @@ TEST(Penalties, PiecewiseLinearIsInfiniteOutsideItsKnots) {
   EXPECT_DOUBLE_EQ(f.Value(V1(0.6)), 0.1 + 0.4 * 0.3 / 0.8);
 }
 
+// The same penalty in units s times smaller (knots × s, values × s²) has the same kinks: the PLQ form keeps
+// one row per kink plus the two domain bounds, and its value is s² times the original at r/s.
+TEST(Penalties, PiecewiseLinearKeepsItsKinksInAnyUnit) {
+  const Penalty f = ScalarPenalties().back();
+  for (const double s : {0x1p-40, 1e-6, 1.0, 1e6}) {
+    const Penalty g = Penalty::PiecewiseLinear(s * f.knots(), s * s * f.values());
+    EXPECT_EQ(g.plq().rows(), f.plq().rows()) << "s " << s;
+    for (const double r : {-1.7, -0.4, 0.2, 0.6, 2.9})
+      EXPECT_NEAR(g.Value(V1(s * r)), s * s * f.Value(V1(r)), 1e-12 * s * s * (1 + std::abs(f.Value(V1(r)))))
+          << "s " << s << " r " << r;
+  }
+}
+
 // rho*(v) = sup_r { v r - rho(r) } over r in [-40, 40] (or dom rho) by ternary search on the concave
 // function; +inf is recognised when the sup keeps growing towards the ends of [-40, 40].
 double ConjugateBySearch(const Penalty& f, double v) {

@@ -20,6 +20,7 @@
 #include "fuzz/rls_property.h"
 #include "fuzz/student_property.h"
 #include "fuzz/smooth_model_property.h"
+#include "fuzz/smoother_scaling_property.h"
 
 namespace ident::testing {
 namespace {
@@ -81,6 +82,10 @@ TEST(FuzzCorpus, GridObserverPropertiesHoldOnEveryCommittedInput) {
 
 TEST(FuzzCorpus, SmoothModelReaderPropertiesHoldOnEveryCommittedInput) {
   EXPECT_GE(ReplayCorpus("smooth_model_fuzzer", &fuzz::SmoothModelProperty), 14);
+}
+
+TEST(FuzzCorpus, SmootherScalingPropertiesHoldOnEveryCommittedInput) {
+  EXPECT_GE(ReplayCorpus("smoother_scaling_fuzzer", &fuzz::SmootherScalingProperty), 12);
 }
 
 TEST(FuzzCorpus, LogConcaveMlePropertiesHoldOnEveryCommittedInput) {
