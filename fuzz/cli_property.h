@@ -1,11 +1,14 @@
 // Properties of the whole command line, run in-process through tools::RunCommandLine: the fuzzer's bytes
 // choose a small data file (raw bytes, or rows of numbers and odd tokens) and an argument vector
 // (subcommand fit, compare, smooth, logcondens or datasets, options and values from vocabularies that
-// include the limits and the bad values). For every input:
+// include the limits and the bad values; `mems` on a small study). For every input:
 //   - the exit code is 0 (success), 1 (bad data or options) or 2 (usage error);
 //   - a failed run prints exactly one line "ident: error: <message>" on std::cerr;
 //   - the data file and the model file are byte for byte what they were (no input is modified);
-//   - no temporary output file is left behind, and a --trace file exists only after a successful fit.
+//   - no temporary output file is left behind, and a --trace file exists only after a successful run;
+//   - what a successful run writes reads back: --json output is one JSON document; compare --csv output
+//     is a header starting "estimator" and rows of as many fields; the mems --csv and --trace files read
+//     with ident's CSV reader (ident/io/csv.h), which takes only finite numbers.
 // IDENT_CLI_FUZZ_LOG=1 prints each call, its exit code and its error line.
 // Standard output goes to /dev/null during the run (descriptor 1 redirected, std::cout to a string).
 #pragma once
@@ -26,7 +29,11 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "fuzz/fuzz_util.h"
+#include "ident/common/error.h"
+#include "ident/io/csv.h"
 #include "tools/command_line.h"
 
 namespace ident::fuzz {
@@ -108,6 +115,26 @@ inline std::string ModelFile(ByteReader& in) {
 
 }  // namespace cli_internal
 
+// "" if `text` is a header whose first field is `first` and at least one row, all with as many
+// comma-separated fields.
+inline std::string CsvTableShape(const std::string& text, const std::string& first) {
+  std::istringstream lines(text);
+  std::string line;
+  long fields = -1, rows = 0;
+  while (std::getline(lines, line)) {
+    const long n = 1 + std::count(line.begin(), line.end(), ',');
+    if (fields < 0) {
+      if (line.rfind(first + ",", 0) != 0) return "header does not start with '" + first + ",'";
+      fields = n;
+    } else if (n != fields) {
+      return "a row has " + std::to_string(n) + " fields, the header " + std::to_string(fields);
+    } else {
+      ++rows;
+    }
+  }
+  return rows > 0 ? "" : "no rows";
+}
+
 inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
   using namespace cli_internal;
   ByteReader in(data, size);
@@ -118,7 +145,8 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
   Spit(model_path, model_text);
   std::filesystem::remove(trace_path);
 
-  static const char* const kCommands[] = {"fit", "fit", "fit", "compare", "compare", "smooth", "logcondens", "datasets"};
+  static const char* const kCommands[] = {"fit",    "fit",        "fit",      "compare", "compare",
+                                          "smooth", "logcondens", "datasets", "mems"};
   static const char* const kValues[] = {"0",   "1",     "2",    "3",     "-1",    "0.5",  "0.99",  "1e-300",
                                         "1e300", "nan", "inf",  "abc",   "",      "2147483647", "1e80", "0.2",
                                         "5",   "u",     "y",    "x",     "z",     "q",    "mean",  "none"};
@@ -129,13 +157,26 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
       "--split", "--detrend", "--missing", "--json", "--passes", "--intercept", "--nu0", "--vy0", "--vz0",
       "--lock-in-window", "--lock-in-threshold", "--clean-regressors", "--exact", "--trace", "--stabilised",
       "--estimators", "--outliers", "--trials", "--csv", "--column", "--bogus"};
+  static const char* const kMemsOptions[] = {"--t-mean", "--seed", "--h", "--ep-window", "--csv", "--trace",
+                                             "--steps", "--grid-points", "--t-mean", "--bogus"};
   const std::string command = Pick(in, kCommands);
+  const std::string mems_csv = dir + "/mems.csv";
+  std::filesystem::remove(mems_csv);
   std::vector<std::string> args = {"ident", command};
   if (command == "smooth") args.insert(args.end(), {"--model", model_path});
-  if (command != "datasets") args.push_back(data_path);
+  if (command != "datasets" && command != "mems") args.push_back(data_path);
+  if (command == "mems") {  // a small study (200 steps, 16² grid: tens of milliseconds); sizes drawn below are refused
+    args.insert(args.end(), {"--steps", "200", "--grid-points", "16", "--t-mean", "0.5"});
+    const int mems_options = in.Byte() % 5;
+    for (int i = 0; i < mems_options; ++i) {
+      const std::string option = Pick(in, kMemsOptions);
+      args.push_back(option);
+      args.push_back(option == "--csv" ? mems_csv : option == "--trace" ? trace_path : Pick(in, kValues));
+    }
+  }
   if (command == "fit" || command == "compare") args.insert(args.end(), {"--output", "y", "--input", "u"});
   if (command == "compare") args.insert(args.end(), {"--trials", "1", "--estimators", "rls"});
-  const int options = in.Byte() % 9;
+  const int options = command == "mems" ? 0 : in.Byte() % 9;
   for (int i = 0; i < options; ++i) {
     const std::string option = Pick(in, kFitOptions);
     args.push_back(option);
@@ -189,6 +230,21 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
     if (entry.path().filename().string().find(".tmp-") != std::string::npos)
       return "temporary file left: " + entry.path().string() + ":" + call;
   if (code != 0 && std::filesystem::exists(trace_path)) return "trace written by a failed run:" + call;
+  if (code != 0) return "";
+  auto has = [&](const char* option) { return std::find(args.begin(), args.end(), option) != args.end(); };
+  if (has("--json") && !nlohmann::json::accept(out.str())) return "--json output is not one JSON document:" + call;
+  if (command == "compare" && has("--csv"))
+    if (std::string bad = CsvTableShape(out.str(), "estimator"); !bad.empty())
+      return "compare --csv output: " + bad + ":" + call;
+  if (command == "mems")
+    for (const std::string& file : {mems_csv, trace_path}) {
+      if (!std::filesystem::exists(file)) continue;
+      try {
+        io::ReadCsv(file);
+      } catch (const std::exception& e) {
+        return "mems output " + file + " does not read back (" + e.what() + "):" + call;
+      }
+    }
   return "";
 }
 

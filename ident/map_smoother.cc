@@ -266,7 +266,7 @@ class Solver {
         T_(p.T()),
         n_(p.state_dim()),
         nz_(p.measurement_dim()),
-        sigma_(internal::MapSmootherDataUnit(p.z)),
+        sigma_(internal::MapSmootherDataUnit(p)),
         z_(p.z / sigma_) {
     int offset = 0;
     terms_.reserve(2 * (T_ + 1));
@@ -826,7 +826,8 @@ MapSmootherResult Solve(const MapSmootherProblem& problem, const MapSmootherOpti
 
 namespace internal {
 
-double MapSmootherDataUnit(const Eigen::MatrixXd& z) {
+double MapSmootherDataUnit(const MapSmootherProblem& problem) {
+  const Eigen::MatrixXd& z = problem.z;
   std::vector<double> steps;
   if (z.cols() > 1) {
     steps.reserve(static_cast<std::size_t>(z.rows()) * (z.cols() - 1));
@@ -842,7 +843,22 @@ double MapSmootherDataUnit(const Eigen::MatrixXd& z) {
     if (mean > 0 && std::isfinite(mean)) return mean;
   }
   const double largest = z.size() ? z.cwiseAbs().maxCoeff() : 0.0;
-  return largest > 0 && std::isfinite(largest) ? largest : 1.0;
+  if (largest > 0 && std::isfinite(largest)) return largest;
+  // Measurements all zero: the penalties' own scale, the largest finite bound, offset or linear term of
+  // their PLQ forms (all in the unit of the residuals).
+  double bound = 0;
+  auto take = [&](const Eigen::VectorXd& v) {
+    for (double x : v)
+      if (std::isfinite(x)) bound = std::max(bound, std::abs(x));
+  };
+  for (const std::vector<models::Penalty>* penalties : {&problem.process, &problem.measurement})
+    for (const models::Penalty& f : *penalties) {
+      take(f.plq().lo);
+      take(f.plq().hi);
+      take(f.plq().b);
+      take(f.plq().p);
+    }
+  return bound > 0 ? bound : 1.0;
 }
 
 void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {

@@ -94,7 +94,7 @@ template <int kN>
 class FastSolver {
  public:
   FastSolver(const MapSmootherProblem& p, const MapSmootherOptions& o)
-      : p_(p), o_(o), T_(p.T()), sigma_(MapSmootherDataUnit(p.z)), z_(p.z.row(0).transpose() / sigma_) {
+      : p_(p), o_(o), T_(p.T()), sigma_(MapSmootherDataUnit(p)), z_(p.z.row(0).transpose() / sigma_) {
     invariant_ = p.F.size() == 1 && p.H.size() == 1 && p.process.size() <= 2 && p.measurement.size() == 1;
     // Bound-free process penalties: W = B'K^-1 B and c0 = p - B'K^-1 b, once per distinct penalty.
     std::vector<const Penalty*> seen;

@@ -5,7 +5,7 @@
 //    PiecewiseLinear(k, v) → PiecewiseLinear(s·k, s²·v) — the objective of (P) at s·x is s² times the
 //    original at x [BCW eq. (2.1)], so the MAP states are s·x̂ and the optimum s²·(P)*.
 //  - Shifted: z' = z + d with a piecewise-linear measurement penalty whose knots move by d leaves every
-//    residual's penalty, and so x̂, unchanged.
+//    residual's penalty, and so the optimum and (where unique) x̂, unchanged.
 // Both solver paths, s from 1e-6 to 1e6.
 #include <cmath>
 #include <random>
@@ -69,13 +69,20 @@ MapSmootherProblem RandomScalableProblem(int trial, std::mt19937& rng) {
       break;
     default: p.measurement = {ScalableVee(lo, lo + (hi - lo) * U(rng), hi, 0.5 + U(rng), 0.5 + U(rng))}; break;
   }
+  std::uniform_real_distribution<double> V(-1, 1);
+  auto random_vector = [&] { return Eigen::VectorXd(Eigen::VectorXd::NullaryExpr(n, [&] { return V(rng); })); };
   Eigen::MatrixXd x(n, T + 1);
-  x.col(0) = Eigen::VectorXd::Random(n);
-  for (int t = 1; t <= T; ++t) x.col(t) = F * x.col(t - 1) + 0.5 * Eigen::VectorXd::Random(n);
+  x.col(0) = random_vector();
+  for (int t = 1; t <= T; ++t) x.col(t) = F * x.col(t - 1) + 0.5 * random_vector();
   p.z.resize(1, T + 1);
   for (int t = 0; t <= T; ++t) p.z(0, t) = x.col(t).sum() + lo + (hi - lo) * (0.05 + 0.9 * U(rng));
   return p;
 }
+
+// With a quadratic process penalty (on x_0 and every w_t) the objective is strictly convex in x and the MAP
+// states are unique; with Huber or box process penalties a piecewise-linear measurement penalty can leave
+// directions in which the objective is flat to the solver's tolerance, and only the optimum is compared.
+bool StrictlyConvex(int trial) { return trial % 3 == 1; }
 
 MapSmootherProblem ScaledProblem(const MapSmootherProblem& p, double s) {
   MapSmootherProblem q = p;
@@ -100,8 +107,10 @@ TEST(ScaledProblem, MapStatesScaleWithTheData) {
         const MapSmootherResult r = SolveMapSmoother(ScaledProblem(p, s), o);
         ASSERT_EQ(r.status, MapSmootherStatus::kConverged)
             << "trial " << trial << " s " << s << " fast " << fast << ": " << r.message;
-        EXPECT_LE((r.x / s - base.x).cwiseAbs().maxCoeff(), 1e-6 * x_scale)
-            << "trial " << trial << " s " << s << " fast " << fast;
+        if (StrictlyConvex(trial)) {
+          EXPECT_LE((r.x / s - base.x).cwiseAbs().maxCoeff(), 1e-6 * x_scale)
+              << "trial " << trial << " s " << s << " fast " << fast;
+        }
         EXPECT_NEAR(r.primal / (s * s), base.primal, 1e-7 * (1 + std::abs(base.primal)))
             << "trial " << trial << " s " << s << " fast " << fast;
         EXPECT_LE(std::abs(r.relative_gap), 1e-6) << "trial " << trial << " s " << s << " fast " << fast;
@@ -129,8 +138,10 @@ TEST(ShiftedProblem, MapStatesDoNotMoveWithTheMeasurementOrigin) {
         q.measurement = {Penalty::PiecewiseLinear(knots.array() + d, values)};
         const MapSmootherResult r = SolveMapSmoother(q, o);
         ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << "trial " << trial << " d " << d << ": " << r.message;
-        EXPECT_LE((r.x - base.x).cwiseAbs().maxCoeff(), 1e-6 * (1 + base.x.cwiseAbs().maxCoeff()))
-            << "trial " << trial << " d " << d << " fast " << fast;
+        if (StrictlyConvex(trial)) {
+          EXPECT_LE((r.x - base.x).cwiseAbs().maxCoeff(), 1e-6 * (1 + base.x.cwiseAbs().maxCoeff()))
+              << "trial " << trial << " d " << d << " fast " << fast;
+        }
         EXPECT_NEAR(r.primal, base.primal, 1e-7 * (1 + std::abs(base.primal))) << "trial " << trial << " d " << d;
         ++cases;
       }
