@@ -10,7 +10,7 @@
 #include <boost/math/quadrature/sinh_sinh.hpp>
 #include <boost/math/tools/minima.hpp>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::approx {
 namespace {

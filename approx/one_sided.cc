@@ -7,7 +7,7 @@
 #include <Eigen/Cholesky>
 
 #include "approx/weighting_polynomial.h"
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::approx {
 namespace {

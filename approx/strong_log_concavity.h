@@ -25,7 +25,7 @@
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::approx {
 

@@ -1,11 +1,11 @@
-// Time of the batch robust references (ident/batch_regression.h) against least squares on the same data:
+// Time of the batch robust references (ident/regression/batch_regression.h) against least squares on the same data:
 // n rows, ρ = 4, Cauchy noise with 20 % gross outliers. Run: build/bench/batch_regression_benchmark
 #include <random>
 
 #include <Eigen/Dense>
 #include <benchmark/benchmark.h>
 
-#include "ident/batch_regression.h"
+#include "ident/regression/batch_regression.h"
 
 namespace {
 

@@ -1,8 +1,8 @@
-// ns per update of the Kárný–Hangos Cauchy and Student-t (k = 3) estimators (ident/student_regression.h)
-// against the LD-form RLS (ident/rls.h), all dynamic-size, exponential forgetting 0.99, on a
+// ns per update of the Kárný–Hangos Cauchy and Student-t (k = 3) estimators (ident/regression/student_regression.h)
+// against the LD-form RLS (ident/regression/rls.h), all dynamic-size, exponential forgetting 0.99, on a
 // pre-generated regression stream with Cauchy noise and ρ ∈ {2, 4, 8, 16, 32} parameters. The closing
 // tables give cauchy / RLS and student / RLS per ρ, measured in this run. Goal (issue 3): cauchy ≤ 1.3× RLS.
-// BM_SafeCauchy: the Cauchy estimator with ident fit's lock-in safeguard (ident/safe_student_regression.h).
+// BM_SafeCauchy: the Cauchy estimator with ident fit's lock-in safeguard (ident/regression/safe_student_regression.h).
 // BM_CauchyWithoutRoot splits the ratio: the Cauchy step with a free weight (β = 1/ν) against RLS, and
 // the full Cauchy step against it (what the root of the weighting cubic adds, docs/kh.md).
 //
@@ -14,11 +14,11 @@
 
 #include "bench/support/ratio_reporter.h"
 #include "bench/support/regression_stream.h"
-#include "ident/extended_information.h"
-#include "ident/rls.h"
-#include "ident/safe_student_regression.h"
-#include "ident/step_driver.h"
-#include "ident/student_regression.h"
+#include "ident/regression/internal/extended_information.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/safe_student_regression.h"
+#include "ident/regression/internal/step_driver.h"
+#include "ident/regression/student_regression.h"
 
 namespace {
 

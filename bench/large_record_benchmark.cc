@@ -14,7 +14,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench/support/ratio_reporter.h"
-#include "ident/estimator_registry.h"
+#include "ident/regression/estimator_registry.h"
 #include "ident/io/csv.h"
 #include "models/arx.h"
 #include "tools/data_source.h"

@@ -1,5 +1,5 @@
-// ns per update of the LD-factorised RLS (ident/rls.h) against the dense covariance-form oracle
-// (ident/dense_rls.h), both dynamic-size, forgetting 0.99, on a pre-generated random regression
+// ns per update of the LD-factorised RLS (ident/regression/rls.h) against the dense covariance-form oracle
+// (tests/support/dense_rls.h), both dynamic-size, forgetting 0.99, on a pre-generated random regression
 // stream with n ∈ {2, 4, 8, 16, 32} parameters. The closing table gives LD / dense per n, measured
 // in this run. Goal (foundation issue): LD ≤ 1.2× dense at every n.
 //
@@ -13,8 +13,8 @@
 
 #include "bench/support/ratio_reporter.h"
 #include "bench/support/regression_stream.h"
-#include "ident/dense_rls.h"
-#include "ident/rls.h"
+#include "tests/support/dense_rls.h"
+#include "ident/regression/rls.h"
 
 namespace {
 

@@ -4,7 +4,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "approx/logconcave_mle.h"
+#include "ident/density/logconcave_mle.h"
 
 namespace {
 

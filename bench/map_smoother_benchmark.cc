@@ -8,7 +8,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ident/map_smoother.h"
+#include "ident/smoothing/map_smoother.h"
 
 namespace {
 

@@ -5,8 +5,8 @@
 // Stream: y(t) = θ'z(t) + e(t), ρ = 4, z(t) ~ N(0, I) white (persistently exciting),
 //         e(t) ~ N(0, 0.1²) except with probability 1 % a gross outlier e(t) ~ N(0, 10²) (100 σ).
 // Estimators, each with exponential forgetting λ = 0.999 (window ≈ 1000 samples):
-//   - LD-form RLS (ident/rls.h);
-//   - the Kárný–Hangos Cauchy estimator (ident/student_regression.h, k = 1, δ = 1) with the spec §8
+//   - LD-form RLS (ident/regression/rls.h);
+//   - the Kárný–Hangos Cauchy estimator (ident/regression/student_regression.h, k = 1, δ = 1) with the spec §8
 //     prior (`exact`: ν(0) = ρ+k+δ, V(0) = diag(1, 1e-3·I)); both use V(t) = (1−β)Ṽ + βhh'.
 // Checks:
 //   - min over every step of min_i d_i (D stays positive) and the number of steps not taken;
@@ -27,9 +27,9 @@
 #include <Eigen/Dense>
 #include <fmt/core.h>
 
-#include "ident/ld_factor.h"
-#include "ident/rls.h"
-#include "ident/student_regression.h"
+#include "ident/linalg/ld_factor.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/student_regression.h"
 
 namespace {
 

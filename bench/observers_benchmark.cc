@@ -10,14 +10,14 @@
 
 #include <benchmark/benchmark.h>
 
-#include "ident/covariance_bound.h"
-#include "ident/crossing_reading.h"
-#include "ident/excursion_reading.h"
-#include "ident/grid_observer.h"
-#include "ident/kalman_filter.h"
-#include "ident/lc_gaussian_filter.h"
-#include "ident/truncated_gaussian_filter.h"
-#include "ident/window_ep_filter.h"
+#include "ident/observers/covariance_bound.h"
+#include "studies/mems/crossing_reading.h"
+#include "studies/mems/excursion_reading.h"
+#include "ident/observers/grid_observer.h"
+#include "ident/observers/kalman_filter.h"
+#include "ident/observers/lc_gaussian_filter.h"
+#include "ident/observers/truncated_gaussian_filter.h"
+#include "studies/mems/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 
@@ -122,7 +122,7 @@ void BM_LcGaussianFilterEventVariant(benchmark::State& state) {
 BENCHMARK_TEMPLATE(BM_LcGaussianFilterEventVariant, ident::LcGaussianFilter)->Unit(benchmark::kMicrosecond);
 BENCHMARK_TEMPLATE(BM_LcGaussianFilterEventVariant, ident::BasicLcGaussianFilter<2>)->Unit(benchmark::kMicrosecond);
 
-// One crossing update (the exact wedge of (x1(k−1), x1(k)), ident/crossing_reading.h) after a prediction,
+// One crossing update (the exact wedge of (x1(k−1), x1(k)), studies/mems/crossing_reading.h) after a prediction,
 // on a state near the threshold: the cost of a step where the reading changes (≈ 2 per event).
 void BM_LcCrossingWedge(benchmark::State& state) {
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
@@ -185,7 +185,7 @@ void StepThroughMemsRun(benchmark::State& state, Filter& f, const ident::models:
   }
 }
 
-// The study's lc_window variant (ident/window_ep_filter.h), averaged per step over the precomputed run:
+// The study's lc_window variant (studies/mems/window_ep_filter.h), averaged per step over the precomputed run:
 // every reading of the last W steps an exact site, banded EP sweeps until the sites settle (1e-6).
 void BM_LcWindowVariant(benchmark::State& state) {
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);
@@ -200,7 +200,7 @@ void BM_LcWindowVariant(benchmark::State& state) {
 }
 BENCHMARK(BM_LcWindowVariant)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMicrosecond);
 
-// The study's lc_truncated variant (ident/truncated_gaussian_filter.h), averaged per step over the same run:
+// The study's lc_truncated variant (ident/observers/truncated_gaussian_filter.h), averaged per step over the same run:
 // exact moments on the rectangle R(y(k−1)) × R(y(k)), then the projection onto Gaussians on R(y(k)).
 void BM_LcTruncatedVariant(benchmark::State& state) {
   const auto model = ident::models::MemsAccelerometerDynamics(0.01, 1.0);

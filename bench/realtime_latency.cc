@@ -21,9 +21,9 @@
 #include <Eigen/Core>
 #include <benchmark/benchmark.h>
 
-#include "ident/rls.h"
-#if __has_include("ident/student_regression.h")
-#include "ident/student_regression.h"
+#include "ident/regression/rls.h"
+#if __has_include("ident/regression/student_regression.h")
+#include "ident/regression/student_regression.h"
 #define IDENT_HAS_CAUCHY 1
 #endif
 
@@ -213,7 +213,7 @@ class LatencyReporter : public benchmark::ConsoleReporter {
                   i["cauchy_p50_ns"] / i["rls_p50_ns"], i["ratio_net"]);
     }
 #ifndef IDENT_HAS_CAUCHY
-    std::printf("Cauchy / RLS: the Cauchy estimator (ident/student_regression.h) is not in this build\n");
+    std::printf("Cauchy / RLS: the Cauchy estimator (ident/regression/student_regression.h) is not in this build\n");
 #endif
     std::fflush(stdout);
   }

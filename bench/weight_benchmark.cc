@@ -14,7 +14,7 @@
 #include "approx/weighting_polynomial.h"
 #include "bench/support/ratio_reporter.h"
 #include "bench/support/regression_stream.h"
-#include "ident/student_regression.h"
+#include "ident/regression/student_regression.h"
 
 namespace {
 

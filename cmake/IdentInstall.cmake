@@ -1,23 +1,24 @@
 # Install rules: `cmake --install <build> [--prefix <dir>]` puts in place
-#   include/ident/{ident,models,approx}/**.h   the public headers, paths preserved (consumers write
-#                                               #include "ident/rls.h" as inside the tree)
-#   lib/libident_{core,regression,models,approx}.a  the layer libraries
+#   include/ident/{common,models,approx,ident}/**.h  the public headers, paths preserved (consumers write
+#                                               #include "ident/regression/rls.h" as inside the tree)
+#   lib/libident_{models,approx,linalg,regression,observers,smoothing,density,control,io}.a  the libraries
 #   lib/cmake/Ident/IdentConfig.cmake, IdentConfigVersion.cmake, IdentTargets*.cmake
-# Consumers: find_package(Ident 0.1 REQUIRED) and link Ident::ident (or Ident::regression, Ident::models,
-# Ident::approx, Ident::common). Everything here is in the COMPONENT `ident_development`, so
+# Consumers: find_package(Ident 0.1 REQUIRED) and link Ident::ident (all of them) or one folder's target
+# (Ident::regression, Ident::observers, Ident::smoothing, ...). Everything here is in the COMPONENT `ident_development`, so
 # `cmake --install <build> --component ident_development` installs only the library package.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 set(IDENT_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/Ident")
 
-set(ident_installed_targets ident_common ident_models ident_approx ident_regression ident_core)
+set(ident_installed_targets ident_common ident_models ident_approx ident_linalg ident_regression ident_observers
+                            ident_smoothing ident_density ident_control ident_io ident_core)
 install(TARGETS ${ident_installed_targets}
         EXPORT IdentTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT ident_development
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT ident_development
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ident)
-foreach(layer models approx ident)
+foreach(layer common models approx ident)
   install(DIRECTORY "${PROJECT_SOURCE_DIR}/${layer}/"
           DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/ident/${layer}"
           COMPONENT ident_development

@@ -15,8 +15,8 @@
 
 #include <fmt/format.h>
 
-#include "approx/logconcave_mle.h"
-#include "ident/map_smoother.h"
+#include "ident/density/logconcave_mle.h"
+#include "ident/smoothing/map_smoother.h"
 #ifdef IDENT_EXAMPLE_HAS_PLOT
 #include "tools/gnuplot.h"
 #endif

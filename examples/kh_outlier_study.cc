@@ -29,9 +29,9 @@
 
 #include <Eigen/Core>
 
-#include "ident/rls.h"
-#include "ident/safe_student_regression.h"
-#include "ident/student_regression.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/safe_student_regression.h"
+#include "ident/regression/student_regression.h"
 
 namespace {
 

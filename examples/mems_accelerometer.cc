@@ -15,7 +15,7 @@
 
 #include <fmt/format.h>
 
-#include "ident/mems_study.h"
+#include "studies/mems/mems_study.h"
 
 int main(int argc, char** argv) {
   const int steps = argc > 1 ? std::atoi(argv[1]) : 2000;

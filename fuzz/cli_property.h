@@ -32,7 +32,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "ident/io/csv.h"
 #include "tools/command_line.h"
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <string_view>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "ident/io/csv.h"
 
 namespace ident::fuzz {

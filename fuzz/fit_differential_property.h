@@ -22,10 +22,10 @@
 #include <fmt/format.h>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
-#include "ident/estimator_registry.h"
+#include "common/error.h"
+#include "ident/regression/estimator_registry.h"
 #include "ident/io/csv.h"
-#include "ident/regression_prior.h"
+#include "ident/regression/regression_prior.h"
 #include "models/arx.h"
 #include "tools/data_source.h"
 #include "tools/fit.h"

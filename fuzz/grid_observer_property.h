@@ -1,4 +1,4 @@
-// Properties of the grid Bayesian observer (ident/grid_observer.h) fed arbitrary models and readings.
+// Properties of the grid Bayesian observer (ident/observers/grid_observer.h) fed arbitrary models and readings.
 // Input: 1 byte for the grid (dimension 1 + bit 0, so 1 or 2 states; 8 + (byte >> 1) % 9 points per
 // dimension, i.e. 8..16: small grids, fast steps), then operations until the bytes run out, read as in
 // observer_property.h: 1 byte op
@@ -27,8 +27,8 @@
 
 #include "fuzz/fuzz_util.h"
 #include "fuzz/observer_property.h"
-#include "ident/common/error.h"
-#include "ident/grid_observer.h"
+#include "common/error.h"
+#include "ident/observers/grid_observer.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 

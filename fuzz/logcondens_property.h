@@ -20,9 +20,9 @@
 #include <string>
 #include <vector>
 
-#include "approx/logconcave_mle.h"
+#include "ident/density/logconcave_mle.h"
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::fuzz {
 

@@ -1,5 +1,5 @@
 // Properties of the recursive state observers fed arbitrary doubles: the square-root Kalman filter
-// (ident/kalman_filter.h) and the log-concave Gaussian filter (ident/lc_gaussian_filter.h).
+// (ident/observers/kalman_filter.h) and the log-concave Gaussian filter (ident/observers/lc_gaussian_filter.h).
 // Input: 1 byte n (1..3 states), then operations until the bytes run out: 1 byte op
 //   even -> Predict with A (n×n), B (n×1), P_N = G G' (G n×n; or, if the op's bit 1 is set, P_N taken raw),
 //           and u;
@@ -24,9 +24,9 @@
 #include <Eigen/Core>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
-#include "ident/kalman_filter.h"
-#include "ident/lc_gaussian_filter.h"
+#include "common/error.h"
+#include "ident/observers/kalman_filter.h"
+#include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 

@@ -39,7 +39,7 @@
 #include <Eigen/Core>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "ident/io/csv.h"
 #include "tools/fit.h"
 #include "tools/output_file.h"

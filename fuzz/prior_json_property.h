@@ -15,8 +15,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "ident/common/error.h"
-#include "ident/ld_factor.h"
+#include "common/error.h"
+#include "ident/linalg/ld_factor.h"
 #include "tools/estimator_options.h"
 
 namespace ident::fuzz {

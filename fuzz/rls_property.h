@@ -7,7 +7,7 @@
 // Update() is noexcept: a throw would terminate the process, which libFuzzer reports.
 // With flags bit 2 (and forgetting 1, 0.999 or 0.99, not stabilised, the informative prior) the samples
 // are tame instead (each number a signed byte / 16, at most 300 samples) and the LD form is checked
-// against the plain covariance-form oracle (ident/dense_rls.h) after every step:
+// against the plain covariance-form oracle (tests/support/dense_rls.h) after every step:
 //   |θ_LD − θ_dense| ≤ 1e-6·(1 + |θ|) and ν equal to 1e-12 relative.
 #pragma once
 
@@ -20,8 +20,8 @@
 #include <Eigen/Core>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/dense_rls.h"
-#include "ident/rls.h"
+#include "tests/support/dense_rls.h"
+#include "ident/regression/rls.h"
 
 namespace ident::fuzz {
 

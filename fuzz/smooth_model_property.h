@@ -20,8 +20,8 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
-#include "ident/map_smoother.h"
+#include "common/error.h"
+#include "ident/smoothing/map_smoother.h"
 #include "tools/smooth_model.h"
 
 namespace ident::fuzz {

@@ -22,8 +22,8 @@
 #include <Eigen/Core>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
-#include "ident/map_smoother.h"
+#include "common/error.h"
+#include "ident/smoothing/map_smoother.h"
 #include "models/penalties.h"
 
 namespace ident::fuzz {

@@ -18,8 +18,8 @@
 #include <Eigen/Core>
 
 #include "fuzz/fuzz_util.h"
-#include "ident/common/error.h"
-#include "ident/student_regression.h"
+#include "common/error.h"
+#include "ident/regression/student_regression.h"
 
 namespace ident::fuzz {
 

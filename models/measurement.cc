@@ -7,7 +7,7 @@
 #include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <boost/math/special_functions/erf.hpp>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::models {
 namespace {

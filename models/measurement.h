@@ -14,7 +14,7 @@
 // Tilted moments: for threshold and quantiser the interval-truncated normal in closed form (normal tail
 // in log space, Boost.Math erf/erfc); otherwise adaptive Gauss–Kronrod quadrature around the mode of
 // the (log-concave, hence unimodal) tilted density. The multivariate posterior then follows exactly:
-// with k = P c / (c'Pc),  m' = m + k (μ_s − c'm),  P' = P − k k' (c'Pc − v_s)   (ident/lc_gaussian_filter.h).
+// with k = P c / (c'Pc),  m' = m + k (μ_s − c'm),  P' = P − k k' (c'Pc − v_s)   (ident/observers/lc_gaussian_filter.h).
 //
 // Example:
 //   ident::models::ThresholdSensor sensor(Eigen::Vector2d(1, 0), /*threshold=*/1.0);

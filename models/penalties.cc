@@ -7,7 +7,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::models {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::models {
 

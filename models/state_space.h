@@ -4,7 +4,7 @@
 //
 // Time-varying models: keep one LinearStateSpace per step and pass it to the observer's Predict();
 // the observers never store a pointer to it. The grid observer also accepts any log-concave noise
-// density (ident/grid_observer.h); the Gaussian P_N here is what the Kalman-type filters use.
+// density (ident/observers/grid_observer.h); the Gaussian P_N here is what the Kalman-type filters use.
 //
 // Example:
 //   auto model = ident::models::LinearStateSpace::Make(A, B, P_N);   // validates sizes and P_N ≥ 0

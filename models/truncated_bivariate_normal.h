@@ -1,6 +1,6 @@
 // Moments of a bivariate normal restricted to a quadrant (Tallis 1961), the measurement update of a
 // reading that constrains a correlated pair s = (s1, s2) to half-lines, e.g. the threshold sensor's
-// crossing reading s1 = x1(k−1) < T ≤ x1(k) = s2 (ident/crossing_reading.h).
+// crossing reading s1 = x1(k−1) < T ≤ x1(k) = s2 (studies/mems/crossing_reading.h).
 //
 // Provides:
 //   LogUpperOrthantProbability(h, k, ρ) log P(X > h, Y > k) for standard normals with correlation ρ:

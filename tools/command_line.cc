@@ -10,7 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "tools/commands.h"
 
 namespace ident::tools {

@@ -21,7 +21,7 @@
 
 #include <Eigen/Core>
 
-#include "ident/estimator_registry.h"
+#include "ident/regression/estimator_registry.h"
 #include "ident/io/csv.h"
 #include "tools/fit.h"
 

@@ -12,7 +12,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "ident/io/csv.h"
 #include "tools/commands.h"
 #include "tools/compare.h"

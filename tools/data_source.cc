@@ -3,7 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::tools {
 namespace {

@@ -8,7 +8,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 #ifndef IDENT_DATASETS_DIR
 #define IDENT_DATASETS_DIR "datasets"

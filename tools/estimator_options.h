@@ -8,7 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ident/estimator_registry.h"
+#include "ident/regression/estimator_registry.h"
 
 namespace ident::tools {
 

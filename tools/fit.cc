@@ -10,7 +10,7 @@
 #include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::tools {
 namespace {

@@ -25,8 +25,8 @@
 #include <Eigen/Core>
 
 #include "ident/io/csv.h"
-#include "ident/outlier_decision.h"
-#include "ident/regression_estimator.h"
+#include "ident/regression/outlier_decision.h"
+#include "ident/regression/regression_estimator.h"
 #include "tools/data_source.h"
 
 namespace ident::tools {

@@ -10,7 +10,7 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "ident/io/csv.h"
 #include "tools/commands.h"
 #include "tools/estimator_options.h"
@@ -195,7 +195,7 @@ void RunFit(const FitCommandOptions& o) {
   // Default priors in the data's own scale, so that a record in small or large units fits as it does in
   // units of 1: RLS gets the flat prior of RegressionPrior::Flat(mean squares) (unless --exact, which keeps
   // the absolute flat prior of the recursion and with it the small-information check); the Kárný–Hangos
-  // estimators' data-driven start-up prior is scale-invariant already (ident/student_regression.h).
+  // estimators' data-driven start-up prior is scale-invariant already (ident/regression/student_regression.h).
   const bool default_prior = !settings.prior && !settings.exact;
   const bool scaled_rls = default_prior && settings.name == "rls";
   if (default_prior && !scaled_rls) options.min_regressor_information = 0;

@@ -8,7 +8,7 @@
 
 #include <fmt/format.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "tools/output_file.h"
 
 namespace ident::tools {

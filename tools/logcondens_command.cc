@@ -1,5 +1,5 @@
 // ident logcondens SAMPLES.csv [--column NAME] [--json]
-// The nonparametric log-concave MLE of a univariate sample (approx/logconcave_mle.h): knots, the
+// The nonparametric log-concave MLE of a univariate sample (ident/density/logconcave_mle.h): knots, the
 // log-density phi at the knots, and the log-likelihood sum_i log f_hat(X_i).
 #include <algorithm>
 #include <iostream>
@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "approx/logconcave_mle.h"
-#include "ident/common/error.h"
+#include "ident/density/logconcave_mle.h"
+#include "common/error.h"
 #include "ident/io/csv.h"
 #include "tools/commands.h"
 

@@ -2,7 +2,7 @@
 //            [--trace FILE] [--plot FILE]
 // The MEMS accelerometer study of Henningsson & Åström (2006, sec. V): prints the analogue of Fig. 9
 // (RMS velocity error of each observer against the measured mean time between events) and writes the
-// Fig. 8 variance traces (--trace CSV, and the second panel of --plot). See ident/mems_study.h.
+// Fig. 8 variance traces (--trace CSV, and the second panel of --plot). See studies/mems/mems_study.h.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -13,8 +13,8 @@
 
 #include <fmt/format.h>
 
-#include "ident/common/error.h"
-#include "ident/mems_study.h"
+#include "common/error.h"
+#include "studies/mems/mems_study.h"
 #include "tools/commands.h"
 #include "tools/gnuplot.h"
 #include "tools/output_file.h"

@@ -13,7 +13,7 @@
 
 #include <fmt/format.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::tools {
 namespace {

@@ -1,5 +1,5 @@
 // ident smooth --model MODEL.json DATA.csv [--json]
-// MAP smoothing with convex penalties and the dual control problem (ident/map_smoother.h): prints the
+// MAP smoothing with convex penalties and the dual control problem (ident/smoothing/map_smoother.h): prints the
 // primal and dual objective values, the duality gap, the states x (one row per time) and the
 // interior-point iteration count. The model format is described in tools/smooth_model.h.
 #include <algorithm>
@@ -12,8 +12,8 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/common/error.h"
-#include "ident/map_smoother.h"
+#include "common/error.h"
+#include "ident/smoothing/map_smoother.h"
 #include "tools/commands.h"
 #include "tools/smooth_model.h"
 

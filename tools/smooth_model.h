@@ -20,7 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "ident/map_smoother.h"
+#include "ident/smoothing/map_smoother.h"
 
 namespace ident::tools {
 

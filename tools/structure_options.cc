@@ -1,6 +1,6 @@
 #include "tools/structure_options.h"
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::tools {
 

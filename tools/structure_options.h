@@ -8,7 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ident/outlier_decision.h"
+#include "ident/regression/outlier_decision.h"
 #include "models/output_cleaner.h"
 #include "tools/data_source.h"
 
@@ -23,7 +23,7 @@ struct StructureCliOptions {
   std::vector<std::string> regressors;
   bool intercept = false;
   // Outlier cleaning of past outputs in ARX regressors (models/output_cleaner.h) and the decision
-  // threshold on the estimator's relative weight νβ (ident/outlier_decision.h).
+  // threshold on the estimator's relative weight νβ (ident/regression/outlier_decision.h).
   std::string clean_regressors = "on";  // "on" | "off" (on: safe by the study in docs/practice.md)
   models::OutputCleaningOptions cleaning;  // clip etc.; `enabled` follows clean_regressors
   double clean_below = 0.2;

@@ -37,9 +37,9 @@
 
 #include "ident/control/pole_placement.h"
 #include "ident/control/rst_controller.h"
-#include "ident/rls.h"
-#if __has_include("ident/student_regression.h")
-#include "ident/student_regression.h"
+#include "ident/regression/rls.h"
+#if __has_include("ident/regression/student_regression.h")
+#include "ident/regression/student_regression.h"
 #define IDENT_HAS_CAUCHY 1
 #endif
 #ifdef IDENT_HAS_GNUPLOT

@@ -4,7 +4,7 @@
 
 #include <fmt/core.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::control {
 

@@ -20,7 +20,7 @@
 
 #include <Eigen/Core>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::control {
 

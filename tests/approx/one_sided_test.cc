@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/rls.h"
-#include "ident/student_regression.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/student_regression.h"
 
 namespace ident::approx {
 namespace {

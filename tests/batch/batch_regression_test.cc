@@ -1,4 +1,4 @@
-// The batch robust regressions (ident/batch_regression.h) against R on the bundled records, and checks that do
+// The batch robust regressions (ident/regression/batch_regression.h) against R on the bundled records, and checks that do
 // not need R: the estimating equations at the solution, a brute-force multi-start search for a better Cauchy
 // optimum, invariances, the estimator adapter, input validation and the run time.
 //
@@ -20,9 +20,9 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 
-#include "ident/batch_regression.h"
-#include "ident/common/error.h"
-#include "ident/regression_estimator.h"
+#include "ident/regression/batch_regression.h"
+#include "common/error.h"
+#include "ident/regression/regression_estimator.h"
 #include "tests/support/sanitizer.h"
 #include "tests/support/test_data.h"
 

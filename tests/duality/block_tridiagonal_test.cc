@@ -1,5 +1,5 @@
-// Block-tridiagonal Cholesky (ident/block_tridiagonal.h) against a dense LLT solve of the same matrix.
-#include "ident/block_tridiagonal.h"
+// Block-tridiagonal Cholesky (ident/linalg/block_tridiagonal.h) against a dense LLT solve of the same matrix.
+#include "ident/linalg/block_tridiagonal.h"
 
 #include <random>
 

@@ -1,4 +1,4 @@
-// Uniqueness of the reconstruction of the states from the dual solution (ident/map_smoother.h):
+// Uniqueness of the reconstruction of the states from the dual solution (ident/smoothing/map_smoother.h):
 // w_t in d f_t*(y_t) determines w_t only where f_t* is differentiable at y_t. Checked on an instance
 // solved by hand (l1 process noise: total-variation smoothing of a step, with dual states that sit on
 // the boundary of dom f* both degenerately and strictly), and on l1 / Huber / quadratic / Vapnik
@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/map_smoother.h"
+#include "ident/smoothing/map_smoother.h"
 
 namespace ident {
 namespace {

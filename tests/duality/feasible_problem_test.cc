@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "ident/map_smoother.h"
+#include "ident/smoothing/map_smoother.h"
 #include "models/penalties.h"
 
 namespace ident {

@@ -1,7 +1,7 @@
-// Log-concave density MLE (approx/logconcave_mle.h): the characterisation (KKT) conditions of
+// Log-concave density MLE (ident/density/logconcave_mle.h): the characterisation (KKT) conditions of
 // Dümbgen, Hüsler & Rufibach, closed-form cases, and golden values from R's logcondens produced by
 // tests/duality/data/logcondens_golden.R (committed beside its output; R is not needed to run this test).
-#include "approx/logconcave_mle.h"
+#include "ident/density/logconcave_mle.h"
 
 #include <cmath>
 #include <fstream>
@@ -11,7 +11,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "tests/support/test_data.h"
 
 namespace ident::approx {

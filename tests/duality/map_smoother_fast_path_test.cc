@@ -1,16 +1,16 @@
-// The MAP smoother's fused fast path (ident/map_smoother_fast_path.h) against the general interior-point
+// The MAP smoother's fused fast path (ident/smoothing/internal/map_smoother_fast_path.h) against the general interior-point
 // path (MapSmootherOptions::fast_path = false: per-term PLQ dispatch, block Cholesky) on random problems of
 // the fast path's structure, n = 1..4, time-invariant and time-varying; which problems take it. The
 // agreement of both paths with an independent dense method is in map_smoother_test.cc
 // (L1AndHuberMatchAnExhaustiveActiveSetSolutionOfTheDenseDual runs both).
-#include "ident/map_smoother_fast_path.h"
+#include "ident/smoothing/internal/map_smoother_fast_path.h"
 
 #include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
 
-#include "ident/map_smoother.h"
+#include "ident/smoothing/map_smoother.h"
 #include "tests/duality/random_matrices.h"
 
 namespace ident {

@@ -1,8 +1,8 @@
-// MAP smoother and its dual control problem (ident/map_smoother.h) checked against independent
+// MAP smoother and its dual control problem (ident/smoothing/map_smoother.h) checked against independent
 // methods: a Kalman filter + Rauch-Tung-Striebel smoother for quadratic penalties, an exhaustive
 // active-set solution of the dense dual box QP for l1/Huber measurement noise, weak duality at
 // arbitrary feasible points, and the duality gap on random PLQ instances.
-#include "ident/map_smoother.h"
+#include "ident/smoothing/map_smoother.h"
 
 #include <cmath>
 #include <random>
@@ -11,7 +11,7 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "tests/duality/random_matrices.h"
 
 namespace ident {

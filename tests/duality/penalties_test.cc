@@ -9,7 +9,7 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::models {
 namespace {

@@ -1,12 +1,12 @@
 // WorkArena: zeroed, aligned, disjoint arrays within the capacity; huge pages only for large blocks;
 // over-use is an InvalidArgument.
-#include "ident/work_arena.h"
+#include "ident/linalg/work_arena.h"
 
 #include <cstdint>
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident {
 namespace {

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/rls.h"
+#include "ident/regression/rls.h"
 #include "tests/support/test_data.h"
 
 namespace ident {

@@ -1,4 +1,4 @@
-#include "ident/ld_factor.h"
+#include "ident/linalg/ld_factor.h"
 
 #include <random>
 
@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident {
 namespace {

@@ -1,4 +1,4 @@
-#include "ident/rls.h"
+#include "ident/regression/rls.h"
 
 #include <random>
 
@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/dense_rls.h"
+#include "tests/support/dense_rls.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {

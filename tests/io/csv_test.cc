@@ -3,7 +3,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 

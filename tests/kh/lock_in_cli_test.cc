@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/safe_student_regression.h"
+#include "ident/regression/safe_student_regression.h"
 #include "tests/kh/lock_in_data.h"
 #include "tests/support/cli.h"
 

@@ -10,12 +10,12 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/batch_regression.h"
-#include "ident/lock_in_monitor.h"
-#include "ident/regression_prior.h"
-#include "ident/rls.h"
-#include "ident/safe_student_regression.h"
-#include "ident/student_regression.h"
+#include "ident/regression/batch_regression.h"
+#include "ident/regression/lock_in_monitor.h"
+#include "ident/regression/regression_prior.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/safe_student_regression.h"
+#include "ident/regression/student_regression.h"
 #include "tests/kh/lock_in_data.h"
 #include "tests/support/alloc_counter.h"
 
@@ -159,7 +159,7 @@ TEST(SafeStudentRegression, RecoversFromTheCauchyLockIn) {
   EXPECT_GE(locked, 2);  // the mechanism is reproduced (76 of 200 runs in the study)
 }
 
-// The documented robust prior of a window (ident/safe_student_regression.h), rebuilt here from the public
+// The documented robust prior of a window (ident/regression/safe_student_regression.h), rebuilt here from the public
 // parts: Cauchy ML of the window, weights 2/(1 + r²/γ²), M_w, σ0 = G^{(k+1)/(2k)}·RobustScale(r).
 RegressionPrior RobustPriorOf(const Eigen::MatrixXd& window, double nu0, double dof, double growth = 4) {
   const Eigen::MatrixXd Z = window.rightCols(window.cols() - 1);

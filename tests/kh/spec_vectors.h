@@ -11,8 +11,8 @@
 
 #include <Eigen/Core>
 
-#include "ident/regression_prior.h"
-#include "ident/student_regression.h"
+#include "ident/regression/regression_prior.h"
+#include "ident/regression/student_regression.h"
 #include "tests/support/test_data.h"
 
 namespace ident::testing {

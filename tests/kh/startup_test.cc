@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/student_regression.h"
+#include "ident/regression/student_regression.h"
 #include "tests/support/cli.h"
 
 namespace ident {

@@ -1,6 +1,6 @@
 // StudentRegression (Kárný–Hangos, LD form) against an independent dense recursion and the
 // properties of spec §10: LD ≡ dense, invariance, admissibility, forgetting, outliers, limits.
-#include "ident/student_regression.h"
+#include "ident/regression/student_regression.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,8 +10,8 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "ident/estimator_registry.h"
-#include "ident/rls.h"
+#include "ident/regression/estimator_registry.h"
+#include "ident/regression/rls.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 
 namespace ident::models {
 namespace {

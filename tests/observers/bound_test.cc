@@ -9,10 +9,10 @@
 #include <gtest/gtest.h>
 
 #include "approx/strong_log_concavity.h"
-#include "ident/covariance_bound.h"
-#include "ident/grid_observer.h"
-#include "ident/kalman_filter.h"
-#include "ident/mems_study.h"
+#include "ident/observers/covariance_bound.h"
+#include "ident/observers/grid_observer.h"
+#include "ident/observers/kalman_filter.h"
+#include "studies/mems/mems_study.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "tests/support/sanitizer.h"

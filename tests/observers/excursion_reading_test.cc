@@ -1,4 +1,4 @@
-// The excursion reading (ident/excursion_reading.h): fixed-lag EP over the stacked states of a threshold
+// The excursion reading (studies/mems/excursion_reading.h): fixed-lag EP over the stacked states of a threshold
 // excursion. Checked against (1) the exact crossing-wedge update when the excursion has one factor (EP is
 // exact there), (2) seeded Monte Carlo of the exact posterior (rejection sampling of the stacked
 // Gaussian path against the whole reading sequence), where EP must be close and closer than the
@@ -11,10 +11,10 @@
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
-#include "ident/crossing_reading.h"
-#include "ident/excursion_reading.h"
-#include "ident/lc_gaussian_filter.h"
+#include "common/error.h"
+#include "studies/mems/crossing_reading.h"
+#include "studies/mems/excursion_reading.h"
+#include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 

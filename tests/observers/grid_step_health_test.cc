@@ -9,8 +9,8 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "ident/common/step_report.h"
-#include "ident/grid_observer.h"
+#include "common/step_report.h"
+#include "ident/observers/grid_observer.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 

@@ -1,7 +1,7 @@
 // TriangularizeInPlace (the array-form filters' QR step) against the defining property of the R factor:
 // A = Q R with Q orthogonal means R'R = A'A, R upper triangular; checked for the fixed sizes the Kalman filter
 // uses and a dynamic tall matrix, with a random A (seeded).
-#include "ident/householder_triangularize.h"
+#include "ident/linalg/householder_triangularize.h"
 
 #include <random>
 

@@ -1,7 +1,7 @@
-// The jackknife standard error of a ratio of sums (ident/jackknife.h), which the MEMS study prints beside
+// The jackknife standard error of a ratio of sums (studies/mems/jackknife.h), which the MEMS study prints beside
 // each calibration: against its closed form for two groups, and against the sampling spread of the ratio
 // over seeded Monte Carlo replicates of independent groups.
-#include "ident/jackknife.h"
+#include "studies/mems/jackknife.h"
 
 #include <array>
 #include <cmath>

@@ -10,7 +10,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include "ident/state_observer.h"
+#include "ident/observers/state_observer.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 

@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
-#include "ident/common/step_report.h"
-#include "ident/lc_gaussian_filter.h"
+#include "common/error.h"
+#include "common/step_report.h"
+#include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
 
 namespace ident::models {

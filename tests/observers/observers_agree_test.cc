@@ -9,10 +9,10 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
-#include "ident/grid_observer.h"
-#include "ident/kalman_filter.h"
-#include "ident/lc_gaussian_filter.h"
+#include "common/error.h"
+#include "ident/observers/grid_observer.h"
+#include "ident/observers/kalman_filter.h"
+#include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "tests/observers/linear_gaussian_data.h"

@@ -10,11 +10,11 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/grid_observer.h"
-#include "ident/kalman_filter.h"
-#include "ident/lc_gaussian_filter.h"
-#include "ident/observer_registry.h"
-#include "ident/truncated_gaussian_filter.h"
+#include "ident/observers/grid_observer.h"
+#include "ident/observers/kalman_filter.h"
+#include "ident/observers/lc_gaussian_filter.h"
+#include "ident/observers/observer_registry.h"
+#include "ident/observers/truncated_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "tests/observers/linear_gaussian_data.h"

@@ -11,12 +11,12 @@
 #include <Eigen/Cholesky>
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
-#include "ident/grid_observer.h"
-#include "ident/kalman_filter.h"
-#include "ident/lc_gaussian_filter.h"
-#include "ident/observer_registry.h"
-#include "ident/truncated_gaussian_filter.h"
+#include "common/error.h"
+#include "ident/observers/grid_observer.h"
+#include "ident/observers/kalman_filter.h"
+#include "ident/observers/lc_gaussian_filter.h"
+#include "ident/observers/observer_registry.h"
+#include "ident/observers/truncated_gaussian_filter.h"
 #include "tests/observers/linear_gaussian_data.h"
 
 namespace ident {

@@ -2,7 +2,7 @@
 // independent references: nested 2-D adaptive quadrature of the density (1e-10), Owen's T closed form of
 // the bivariate normal CDF (Boost.Math), the 1-D truncated normal when one side is unbounded, and the
 // product of 1-D truncations when ρ = 0. Then the crossing update of the log-concave Gaussian filter
-// (ident/crossing_reading.h) against 2-D quadrature of the posterior of x(k) written the other way round.
+// (studies/mems/crossing_reading.h) against 2-D quadrature of the posterior of x(k) written the other way round.
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -13,8 +13,8 @@
 #include <boost/math/distributions/normal.hpp>
 #include <gtest/gtest.h>
 
-#include "ident/crossing_reading.h"
-#include "ident/lc_gaussian_filter.h"
+#include "studies/mems/crossing_reading.h"
+#include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "models/truncated_bivariate_normal.h"

@@ -1,4 +1,4 @@
-// Sliding-window EP over the threshold sensor's readings (ident/window_ep_filter.h). Checked against
+// Sliding-window EP over the threshold sensor's readings (studies/mems/window_ep_filter.h). Checked against
 // (1) the plain assumed-density filter (W = 1 must be exactly LcGaussianFilter::Correct at every step);
 // (2) a dense EP of the same sites over the stacked states x(0 … K), written out here in moment form
 // (no chain, no messages): the banded forward–backward EP must reach the same fixed point (1e-9);
@@ -17,11 +17,11 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
-#include "ident/crossing_reading.h"
-#include "ident/lc_gaussian_filter.h"
-#include "ident/truncated_gaussian_filter.h"
-#include "ident/window_ep_filter.h"
+#include "common/error.h"
+#include "studies/mems/crossing_reading.h"
+#include "ident/observers/lc_gaussian_filter.h"
+#include "ident/observers/truncated_gaussian_filter.h"
+#include "studies/mems/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "models/truncated_bivariate_normal.h"

@@ -8,8 +8,8 @@
 
 #include <Eigen/Core>
 
-#include "ident/common/error.h"
-#include "ident/rls.h"
+#include "common/error.h"
+#include "ident/regression/rls.h"
 
 int main() {
   constexpr int kSamples = 20;

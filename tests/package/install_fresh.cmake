@@ -10,7 +10,7 @@ execute_process(COMMAND "${CMAKE_COMMAND}" --install "${BUILD_DIR}" --prefix "${
 if(NOT result EQUAL 0)
   message(FATAL_ERROR "cmake --install failed (${result})")
 endif()
-foreach(f include/ident/ident/rls.h include/ident/ident/common/error.h include/ident/models/arx.h
+foreach(f include/ident/ident/regression/rls.h include/ident/common/error.h include/ident/models/arx.h
           lib/cmake/Ident/IdentConfig.cmake lib/cmake/Ident/IdentConfigVersion.cmake)
   if(NOT EXISTS "${PREFIX}/${f}")
     message(FATAL_ERROR "install is missing ${f}")

@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/common/error.h"
-#include "ident/estimator_registry.h"
+#include "common/error.h"
+#include "ident/regression/estimator_registry.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 #include "tools/compare.h"

@@ -1,11 +1,11 @@
-// Bounded regressor cleaning (models/output_cleaner.h) and the outlier decision (ident/outlier_decision.h).
+// Bounded regressor cleaning (models/output_cleaner.h) and the outlier decision (ident/regression/outlier_decision.h).
 #include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
-#include "ident/outlier_decision.h"
+#include "common/error.h"
+#include "ident/regression/outlier_decision.h"
 #include "models/arx.h"
 #include "models/output_cleaner.h"
 

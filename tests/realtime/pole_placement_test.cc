@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "ident/control/rst_controller.h"
 #include "tests/support/alloc_counter.h"
 

@@ -10,7 +10,7 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
-#include "ident/rls.h"
+#include "ident/regression/rls.h"
 #include "tests/realtime/arx_stream.h"
 #include "tests/support/alloc_counter.h"
 

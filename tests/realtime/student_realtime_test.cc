@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "approx/weighting_polynomial.h"
-#include "ident/student_regression.h"
+#include "ident/regression/student_regression.h"
 #include "tests/realtime/arx_stream.h"
 #include "tests/support/alloc_counter.h"
 
@@ -169,7 +169,7 @@ TYPED_TEST(StudentRealtime, PosteriorCovarianceAtAnyTimeEqualsTheDenseMultivaria
 
 // The sampling covariance c·V_z⁻¹/n with c = κ²·n/(n−ρ)·mean(ψ²)/mean(ψ')², κ = 1 + (ρ/n)·var(ψ')/mean(ψ')²,
 // ψ = wê, ψ' = (k+1)(k−u)/(k+u)²,
-// w = (k+1)/(k+u), u = ξ_z − ξ, means discounted by λ [ident/student_regression.h]. Reference: the sums
+// w = (k+1)/(k+u), u = ξ_z − ξ, means discounted by λ [ident/regression/student_regression.h]. Reference: the sums
 // formed here from the step reports and details, V_z densely from the reported weights as above.
 TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
   const auto data = ArxDataWithOutliers(35, 400);

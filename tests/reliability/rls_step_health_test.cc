@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "ident/rls.h"
+#include "ident/regression/rls.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {

@@ -1,4 +1,4 @@
-// The O(ρ) step guard (ident/step_guard.h, run by ident/step_driver.h) decides exactly as the
+// The O(ρ) step guard (ident/regression/internal/step_guard.h, run by ident/regression/internal/step_driver.h) decides exactly as the
 // straightforward guard it replaces — copy the statistics, take the step, check every d_i ≥ DBL_MIN
 // and L, Θ̂ finite, restore if not — on samples of wildly mixed scales; and the Student-t/Cauchy
 // estimator, now guarded the same way, stays healthy on the fuzz reproducers (d not positive after
@@ -15,9 +15,9 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "ident/extended_information.h"
-#include "ident/rls.h"
-#include "ident/student_regression.h"
+#include "ident/regression/internal/extended_information.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/student_regression.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {

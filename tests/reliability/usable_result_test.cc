@@ -10,12 +10,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/batch_regression.h"
-#include "ident/common/error.h"
-#include "ident/estimator_registry.h"
-#include "ident/rls.h"
-#include "ident/safe_student_regression.h"
-#include "ident/student_regression.h"
+#include "ident/regression/batch_regression.h"
+#include "common/error.h"
+#include "ident/regression/estimator_registry.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/safe_student_regression.h"
+#include "ident/regression/student_regression.h"
 #include "tests/reliability/scaled_dryer.h"
 #include "tests/support/cli.h"
 

@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "tests/support/cli.h"
 
 namespace ident::testing {

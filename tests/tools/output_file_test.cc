@@ -16,7 +16,7 @@
 
 #include <fmt/format.h>
 
-#include "ident/common/error.h"
+#include "common/error.h"
 #include "tests/support/cli.h"
 #include "tools/output_file.h"
 #include "tools/output_paths.h"

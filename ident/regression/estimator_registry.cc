@@ -1,0 +1,133 @@
+#include "ident/regression/estimator_registry.h"
+
+#include <charconv>
+#include <cmath>
+#include <functional>
+#include <map>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "ident/regression/batch_regression.h"
+#include "common/error.h"
+#include "ident/regression/rls.h"
+#include "ident/regression/safe_student_regression.h"
+
+namespace ident {
+namespace {
+
+using Factory = std::function<std::unique_ptr<AnyRegressionEstimator>(const EstimatorSettings&, int)>;
+
+std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int rho) {
+  IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator 'rls'", *s.dof);
+  IDENT_REQUIRE(!s.delta, "delta = {} does not apply to estimator 'rls' (it is a Kárný–Hangos convention: cauchy, "
+                "student)", s.delta.value_or(1));
+  IDENT_REQUIRE(!s.lock_in.any(),
+                "the lock-in options apply to the robust estimators (cauchy, student), not to 'rls'");
+  RlsOptions options;
+  options.forgetting = s.forgetting;
+  options.prior = s.prior;
+  return std::make_unique<RegressionEstimatorModel<RecursiveLeastSquares>>("rls", rho, options);
+}
+
+// Kárný–Hangos Student-t regression with k = dof; `name` is "cauchy" (k = 1) or "student".
+std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, int rho, const std::string& name,
+                                                    double dof) {
+  SafeStudentOptions options;  // start-up prior and lock-in safeguards unless exact (docs/kh.md)
+  options.base.dof = dof;
+  options.base.delta = s.delta.value_or(1);
+  options.base.forgetting = s.forgetting;
+  options.base.prior = s.prior;
+  options.base.exact = s.exact;
+  IDENT_REQUIRE(!s.exact || !s.lock_in.any(),
+                "the lock-in options have no effect with exact (the paper's recursion has no lock-in safeguard)");
+  if (s.lock_in.window) options.lock_in_window = *s.lock_in.window;
+  if (s.lock_in.threshold) options.lock_in_threshold = *s.lock_in.threshold;
+  options.restart_on_lock_in = s.lock_in.restart;
+  return std::make_unique<RegressionEstimatorModel<SafeStudentRegression>>(name, rho, options);
+}
+
+std::unique_ptr<AnyRegressionEstimator> MakeCauchy(const EstimatorSettings& s, int rho) {
+  IDENT_REQUIRE(!s.dof || *s.dof == 1, "dof = {} does not apply to estimator 'cauchy' (it is student with k = 1; "
+                "use --estimator student --dof {})", s.dof.value_or(1), s.dof.value_or(1));
+  return MakeStudent(s, rho, "cauchy", 1.0);
+}
+
+std::unique_ptr<AnyRegressionEstimator> MakeStudentT(const EstimatorSettings& s, int rho) {
+  IDENT_REQUIRE(s.dof.has_value(), "estimator 'student' needs dof (degrees of freedom k > 0: --dof 3 or student:3)");
+  IDENT_REQUIRE(std::isfinite(*s.dof) && *s.dof > 0, "dof = {}; estimator 'student' needs a finite k > 0", *s.dof);
+  // nu_hard >= (k+3-delta)/k grows without bound as k -> 0: a small k leaves the first step no valid
+  // weight unless nu(1) exceeds it. Name k, not the prior, when this term alone decides.
+  const double k = *s.dof;
+  const int delta = s.delta.value_or(1);
+  const double nu0 = s.prior ? s.prior->nu0 : rho + k + delta;
+  const double nu1 = s.forgetting.stabilised ? nu0 + 1 : s.forgetting.factor * nu0 + 1;
+  IDENT_REQUIRE(!(std::isfinite(nu1) && nu1 > 1 && nu1 <= (k + 3 - delta) / k),
+                "dof = {} is too small: nu_hard >= (k+3-delta)/k = {:.6g} exceeds the first step's nu(1) = {:.6g} "
+                "(nu0 = {:.6g}, delta = {}); need k > {:.6g}",
+                k, (k + 3 - delta) / k, nu1, nu0, delta, (3 - delta) / (nu1 - 1));
+  return MakeStudent(s, rho, fmt::format("student:{}", *s.dof), *s.dof);
+}
+
+// The batch robust references (ident/regression/batch_regression.h): they solve on all samples, with no prior,
+// forgetting or safeguard to set.
+std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, int rho, const std::string& name,
+                                                  BatchMethod method) {
+  IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator '{}'", *s.dof, name);
+  IDENT_REQUIRE(!s.delta, "delta = {} does not apply to estimator '{}'", s.delta.value_or(1), name);
+  IDENT_REQUIRE(s.forgetting.factor == 1 && !s.forgetting.stabilised,
+                "forgetting does not apply to the batch estimator '{}' (it weighs every sample of the record)", name);
+  IDENT_REQUIRE(!s.prior, "a prior does not apply to the batch estimator '{}'", name);
+  IDENT_REQUIRE(!s.exact, "exact does not apply to the batch estimator '{}'", name);
+  IDENT_REQUIRE(!s.lock_in.any(), "the lock-in options apply to the robust recursive estimators (cauchy, student), "
+                "not to '{}'", name);
+  BatchRegressionOptions options;
+  options.method = method;
+  return std::make_unique<RegressionEstimatorModel<BatchRegressionEstimator>>(name, rho, options);
+}
+
+const std::vector<std::pair<std::string, Factory>>& Registry() {
+  static const std::vector<std::pair<std::string, Factory>> registry = {
+      {"rls", MakeRls},
+      {"cauchy", MakeCauchy},
+      {"student", MakeStudentT},
+      {"huber", [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); }},
+      {"cauchy-ml",
+       [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); }},
+  };
+  return registry;
+}
+
+}  // namespace
+
+EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base) {
+  const auto colon = spec.find(':');
+  base.name = std::string(spec.substr(0, colon));
+  IDENT_REQUIRE(!base.name.empty(), "estimator '{}' has no name", spec);
+  if (colon != std::string_view::npos) {
+    std::string_view arg = spec.substr(colon + 1);
+    if (arg.starts_with("k=")) arg.remove_prefix(2);
+    double value = 0;
+    const auto [ptr, ec] = std::from_chars(arg.data(), arg.data() + arg.size(), value);
+    IDENT_REQUIRE(ec == std::errc() && ptr == arg.data() + arg.size() && !arg.empty(),
+                  "estimator '{}': '{}' is not a number (use e.g. student:3)", spec, arg);
+    base.dof = value;
+  }
+  return base;
+}
+
+std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings,
+                                                                int num_parameters) {
+  for (const auto& [name, factory] : Registry())
+    if (name == settings.name) return factory(settings, num_parameters);
+  throw InvalidArgument(fmt::format("unknown estimator '{}' (known: {})", settings.name,
+                                    fmt::join(RegressionEstimatorNames(), ", ")));
+}
+
+std::vector<std::string> RegressionEstimatorNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : Registry()) names.push_back(entry.first);
+  return names;
+}
+
+}  // namespace ident

@@ -1,0 +1,61 @@
+// Run-time selection of regression estimators by name.
+//
+//   "rls"                     RecursiveLeastSquares
+//   "cauchy"                  SafeStudentRegression with k = 1 (Kárný–Hangos; rejects dof ≠ 1)
+//   "student" (needs dof)     SafeStudentRegression with k = dof ("student:3" or dof = 3)
+//                             (exact = true: the plain StudentRegression recursion, no safeguards)
+//   "huber"                   batch Huber M-estimation (IRLS, MAD scale; ident/regression/batch_regression.h)
+//   "cauchy-ml"               batch Cauchy maximum likelihood in Θ and scale, global optimum from many starts
+//   (further names are registered in estimator_registry.cc as estimators are added)
+//
+// Example:
+//   ident::EstimatorSettings s = ident::ParseEstimatorSpec("rls");
+//   s.forgetting.factor = 0.99;
+//   auto est = ident::MakeRegressionEstimator(s, /*num_parameters=*/4);   // throws on bad options
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "ident/regression/forgetting.h"
+#include "ident/regression/regression_estimator.h"
+#include "ident/regression/regression_prior.h"
+
+namespace ident {
+
+// The lock-in safeguard of the robust estimators (ident/regression/safe_student_regression.h); unset = its defaults
+// (window max(100, 20ρ), threshold 0.3, restart on).
+struct LockInSettings {
+  std::optional<int> window;        // M in 2..1000000 (kMaxLockInWindow; 0 = automatic)
+  std::optional<double> threshold;  // 0 < threshold < (k+1)/k
+  bool restart = true;              // false: flag lock-ins only, never restart
+  bool any() const { return window || threshold || !restart; }
+};
+
+// Options common to the command line and the registry; each estimator reads those it knows and
+// rejects ones that make no sense for it, naming the option.
+struct EstimatorSettings {
+  std::string name = "rls";
+  ForgettingOptions forgetting;
+  std::optional<RegressionPrior> prior;  // explicit (ν(0), V(0)); otherwise the estimator's default
+  std::optional<double> dof;             // Student-t degrees of freedom k
+  std::optional<int> delta;              // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos; unset: 1)
+  bool exact = false;                    // switch off every safeguard beyond the spec's recursion
+  LockInSettings lock_in;                // refused (if any() is set) for "rls" and together with `exact`
+};
+
+// Parses "name" or "name:value" / "name:k=value" (e.g. "student:3", "student:k=3") into
+// settings.name and settings.dof. Throws InvalidArgument for a malformed spec.
+EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base = {});
+
+// Builds the estimator; throws InvalidArgument naming the option for an unknown name or bad option.
+std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings,
+                                                                int num_parameters);
+
+// The registered names, in the order they are documented.
+std::vector<std::string> RegressionEstimatorNames();
+
+}  // namespace ident

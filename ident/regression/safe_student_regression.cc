@@ -1,0 +1,275 @@
+#include "ident/regression/safe_student_regression.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "ident/regression/batch_regression.h"
+
+namespace ident {
+namespace {
+
+// The estimator that runs until the first restart: the explicit prior, or the provisional one without the
+// plain class's own start-up rule.
+StudentRegressionOptions Provisional(StudentRegressionOptions o) {
+  if (!o.exact && !o.prior) o.exact = true;
+  if (!o.exact) o.leverage_guard = true;
+  return o;
+}
+
+int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
+  IDENT_REQUIRE(o.lock_in_window == 0 || (o.lock_in_window >= 2 && o.lock_in_window <= kMaxLockInWindow),
+                "lock_in_window = {}; need 0 (automatic) or 2..{}", o.lock_in_window, kMaxLockInWindow);
+  return o.lock_in_window > 0 ? o.lock_in_window : std::max(100, 20 * std::max(rho, 1));
+}
+
+// The prior after a high-breakdown fit of a window of samples (rows (y, z')): Cauchy maximum likelihood from
+// elemental-subset starts (ident/regression/batch_regression.h) gives Θ_r, γ and the weights w_i = 2/(1 + r_i²/γ²) of
+// its residuals r_i. The prior is the class member [spec §2] of ν0 pseudo-samples centred there (ν0 = W at
+// the start-up, where the fit summarises the window; ρ+k+δ at a lock-in restart, which replays everything):
+//   V_z(0) = M_w = Σ w_i z_i z_i' / Σ w_i,  V_zy(0) = M_w Θ_r,  V_y(0) = σ0² + Θ_r'M_w Θ_r  (D_y(0) = σ0²),
+// σ0 = G^{(k+1)/(2k)}·s_e with s_e = RobustScale of the residuals (spec §8's safe side), or s_y without
+// `refine_scale`. So the first replayed samples are weighed against Θ_r, not against a vague prior that the
+// first few of them would decide. A window that does not determine every coefficient from its inliers
+// has no such start: nullopt (see the checks below and the header comment).
+// With `strict` = false (the end of the data: no later window can do better) only a rank-deficient window
+// has no start.
+std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::MatrixXd>& window,
+                                                 const SafeStudentOptions& options, double nu0, double growth,
+                                                 bool strict = true) {
+  const Eigen::Index rho = window.cols() - 1;
+  // Rows with a regressor coordinate beyond kLeverage robust scales of its column are left out of the fit
+  // and of M_w (a gross output outlier entering later ARX regressors is such a row), as long as at least
+  // 2ρ+1 rows remain.
+  constexpr double kLeverage = SafeStudentRegression::kLeverage, kInlierShare = 0.1, kMaxLeverage = 0.8;
+  const Eigen::Index n = window.rows();
+  Eigen::Array<bool, Eigen::Dynamic, 1> keep = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(n, true);
+  for (Eigen::Index j = 1; j <= rho; ++j) {
+    Eigen::VectorXd column = window.col(j);
+    std::nth_element(column.data(), column.data() + n / 2, column.data() + n);
+    const double median = column(n / 2), scale = RobustScale(window.col(j));
+    keep = keep && ((window.col(j).array() - median).abs() <= kLeverage * scale);
+  }
+  if (keep.count() < 2 * rho + 1) keep.setConstant(true);
+  Eigen::MatrixXd kept(keep.count(), rho + 1);
+  for (Eigen::Index i = 0, k = 0; i < n; ++i)
+    if (keep(i)) kept.row(k++) = window.row(i);
+  const auto Z = kept.rightCols(rho);
+  try {
+    CauchyMlOptions search;  // a window of tens of rows: fewer starts than a whole record needs
+    search.elemental_starts = std::max<int>(20, 5 * static_cast<int>(rho));
+    search.lts_starts = 3;
+    search.polished = 3;
+    const BatchRegressionResult fit = CauchyMlRegression(Z, kept.col(0), search);
+    const Eigen::VectorXd r = kept.col(0) - Z * fit.theta;
+    const double gamma2 = fit.scale * fit.scale;
+    IDENT_REQUIRE(gamma2 > 0, "the window is fitted exactly");
+    // The residuals' robust scale; zero when more than half of the rows are fitted exactly (a window in
+    // steady state), which says nothing of the noise: no start from such a window.
+    const double se = MadScale(r);
+    IDENT_REQUIRE(se > 0 || !strict, "more than half of the window is fitted exactly");
+    const Eigen::VectorXd w = 2 / (1 + r.array().square() / gamma2);
+    Eigen::MatrixXd M = Z.transpose() * w.asDiagonal() * Z / w.sum();
+    M = 0.5 * (M + M.transpose());
+    // The fit must rest on its inliers in every direction: the information of the weighted rows, M_w,
+    // against that of all kept rows, M_0 = Z'Z/n, generalised eigenvalues ≥ kInlierShare. A direction
+    // that only a few rows carry (a binary input that has switched twice) can be left to rows the
+    // fit calls outliers, and a start there would be arbitrary.
+    const Eigen::MatrixXd M0 = Z.transpose() * Z / static_cast<double>(Z.rows());
+    const Eigen::LLT<Eigen::MatrixXd> chol(M0);
+    IDENT_REQUIRE(chol.info() == Eigen::Success, "the window's regressors are rank-deficient");
+    const Eigen::MatrixXd Linv = chol.matrixL().solve(Eigen::MatrixXd::Identity(rho, rho));
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> relative(Linv * M * Linv.transpose(), Eigen::EigenvaluesOnly);
+    IDENT_REQUIRE(relative.eigenvalues()(0) >= kInlierShare || !strict, "a direction rests on the fit's outliers");
+    // Nor may a direction rest on one row: every weighted leverage w_i z_i'(Z'WZ)⁻¹z_i ≤ kMaxLeverage (a
+    // binary input that has switched once in the window leaves the row of the switch to decide its
+    // coefficients alone — and to fit a gross outlier there exactly).
+    const Eigen::LLT<Eigen::MatrixXd> information(Z.transpose() * w.asDiagonal() * Z);
+    for (Eigen::Index i = 0; i < Z.rows(); ++i) {
+      const Eigen::VectorXd zi = Z.row(i).transpose();
+      IDENT_REQUIRE(w(i) * zi.dot(information.solve(zi)) <= kMaxLeverage || !strict, "a direction rests on a few rows");
+    }
+    const double sigma0 = options.refine_scale && se > 0 ? growth * se : RobustScale(window.col(0));
+    RegressionPrior prior;
+    prior.nu0 = nu0;
+    prior.V0.resize(rho + 1, rho + 1);
+    prior.V0.bottomRightCorner(rho, rho) = M;
+    prior.V0.bottomLeftCorner(rho, 1) = M * fit.theta;
+    prior.V0.topRightCorner(1, rho) = prior.V0.bottomLeftCorner(rho, 1).transpose();
+    prior.V0(0, 0) = sigma0 * sigma0 + fit.theta.dot(M * fit.theta);
+    prior.Validate();
+    return prior;
+  } catch (const InvalidArgument&) {
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
+SafeStudentRegression::SafeStudentRegression(int num_parameters, const SafeStudentOptions& options)
+    : options_(options),
+      est_(std::in_place, num_parameters, Provisional(options.base)),
+      monitor_(DefaultMonitorWindow(options, num_parameters), options.lock_in_threshold) {
+  IDENT_REQUIRE(std::isfinite(options.scale_growth) && options.scale_growth >= 1,
+                "scale_growth = {}; need a finite G >= 1", options.scale_growth);
+  // νβ ≈ (k+1)/(k + ê²/D_y) [spec §7a]: (k+1)/k for a sample the model fits exactly, so a threshold at or
+  // above it would count every sample as low and restart every M samples.
+  const double k = options.base.dof, top = (k + 1) / k;
+  IDENT_REQUIRE(options.lock_in_threshold < top,
+                "lock-in threshold = {}; need 0 < threshold < (k+1)/k = {} (the weight nu*beta of a sample fitted "
+                "exactly)", options.lock_in_threshold, top);
+  IDENT_REQUIRE(options.startup_window == 0 || options.startup_window >= 2,
+                "startup_window = {}; need 0 (automatic) or at least 2 samples", options.startup_window);
+  IDENT_REQUIRE(options.history_limit == 0 || options.history_limit >= std::max(2, monitor_.window()),
+                "history_limit = {}; need 0 (keep every sample) or at least the lock-in window {}",
+                options.history_limit, monitor_.window());
+  IDENT_REQUIRE(options.history_reserve >= 0 && options.history_reserve <= 100'000'000,
+                "history_reserve = {}; need 0 <= history_reserve <= 1e8 samples", options.history_reserve);
+  if (options_.base.exact) return;
+  if (!options_.base.prior)
+    startup_window_ = options_.startup_window > 0 ? options_.startup_window : std::max(20, 4 * num_parameters);
+  const long reserve = std::max<long>({options_.history_reserve, startup_window_, monitor_.window()});
+  history_.resize(num_parameters + 1,
+                  options_.history_limit > 0 ? std::min(reserve, options_.history_limit) : reserve);
+}
+
+void SafeStudentRegression::Grow() noexcept {
+  long capacity = 2 * std::max<long>(history_.cols(), 1);
+  if (options_.history_limit > 0) capacity = std::min(capacity, options_.history_limit);
+  history_.conservativeResize(Eigen::NoChange, capacity);
+}
+
+long SafeStudentRegression::RecentWindow() const {
+  return std::min<long>(stored_, std::max(startup_window_, monitor_.window()));
+}
+
+std::optional<LockInStatus> SafeStudentRegression::lock_in() const {
+  if (options_.base.exact) return std::nullopt;
+  LockInStatus status{monitor_.window(), monitor_.threshold(), options_.restart_on_lock_in, lock_ins_,
+                      restarts(),        monitor_.low_fraction(), events_};
+  status.start_update = start_update_;
+  status.start_window = start_window_;
+  status.start_at_end = start_at_end_;
+  return status;
+}
+
+void SafeStudentRegression::Replay() noexcept {
+  const int rho = num_parameters();
+  monitor_.Clear();
+  for (long i = 0; i < stored_; ++i) {
+    const auto sample = history_.col(Column(i));
+    est_->set_outlying_regressor(Outlying(sample.tail(rho)));
+    const StepReport r = est_->Update(sample(0), sample.tail(rho));
+    if (r.updated() && i >= stored_ - monitor_.window()) monitor_.Add(r.nu * r.weight);
+  }
+}
+
+bool SafeStudentRegression::FinishStartup() noexcept {
+  if (!in_startup() || stored_ <= num_parameters()) return false;
+  Restart(stored_, /*lock_in=*/false, /*strict=*/false);
+  start_at_end_ = started_;
+  return started_;
+}
+
+void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool strict) noexcept {
+  const int rho = num_parameters();
+  const double low_before = monitor_.low_fraction();
+  Eigen::MatrixXd window(recent, rho + 1);  // the last `recent` samples, oldest first
+  for (long i = 0; i < recent; ++i) window.row(i) = history_.col(Column(stored_ - recent + i)).transpose();
+  Eigen::VectorXd centre(rho), spread(rho);
+  for (int j = 0; j < rho; ++j) {
+    Eigen::VectorXd column = window.col(j + 1);
+    std::nth_element(column.data(), column.data() + recent / 2, column.data() + recent);
+    centre(j) = column(recent / 2);
+    spread(j) = RobustScale(window.col(j + 1));
+  }
+  StudentRegressionOptions o = options_.base;
+  o.leverage_guard = true;
+  const double growth = std::pow(options_.scale_growth, (o.dof + 1) / (2 * o.dof));
+  // Start-up: the window's fit is the prior of its samples; lock-in: ν0 = ρ+k+δ pseudo-samples at the
+  // recent fit. Either way every kept sample is replayed.
+  const double nu0 = lock_in_restart ? rho + o.dof + o.delta : static_cast<double>(recent);
+  std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth, strict);
+  if (!prior && !lock_in_restart) return;  // not identifiable yet: the start-up waits for more samples
+  centre_ = centre;
+  spread_ = spread;
+  if (!prior) prior = RegressionPrior::FromWindow(window, rho + o.dof + o.delta, o.delta);  // vague, equivariant
+  try {
+    o.prior = *prior;
+    est_ = StudentRegression(rho, o);  // assigned only if the constructor succeeds
+  } catch (...) {
+    // Not reached for a finite window (the prior is validated); the current estimator is kept.
+  }
+  if (!lock_in_restart && !started_) {
+    start_update_ = updates_;
+    start_window_ = recent;
+  }
+  started_ = true;
+  Replay();
+  if (!lock_in_restart) return;
+  RestartEvent event;
+  event.update = updates_;
+  event.replayed = stored_;
+  event.dropped = updates_ - stored_;
+  event.low_weight_before = low_before;
+  event.low_weight_after = monitor_.low_fraction();
+  event.resolved = !monitor_.flagged();
+  events_.push_back(event);
+  // A restart that did not help was not a lock-in: back off before the next one.
+  backoff_ = event.resolved ? 1 : 2 * backoff_;
+  next_restart_ = event.resolved ? 0 : updates_ + backoff_ * monitor_.window();
+}
+
+bool SafeStudentRegression::BeginPass() {
+  if (options_.base.exact || updates_ == 0) return false;
+  StudentRegressionOptions o = options_.base;
+  o.leverage_guard = true;
+  o.prior = RegressionPrior{static_cast<double>(updates_), est_->statistics().V()};
+  // D_y(0) = the t_k scale² of the kept samples' residuals at Θ̂ (the EM fixed point s² = mean(w_i r_i²),
+  // w_i = (k+1)/(k + r_i²/s²)), to which the recursion's D_y tends [spec §2], instead of a D_y still on its
+  // way there from the start-up's deliberately large D_y(0). V_y(0) = D_y(0) + Θ̂'V_zΘ̂.
+  if (stored_ > num_parameters()) {
+    const int rho = num_parameters();
+    const Eigen::VectorXd theta = est_->parameters();
+    Eigen::ArrayXd r2(stored_);
+    for (long i = 0; i < stored_; ++i) {
+      const auto sample = history_.col(Column(i));
+      r2(i) = std::pow(sample(0) - theta.dot(sample.tail(rho)), 2);
+    }
+    const double k = o.dof;
+    double s2 = std::pow(RobustScale(r2.sqrt().matrix()), 2);
+    for (int iteration = 0; iteration < 200 && s2 > 0; ++iteration) {
+      const double next = (r2 * (k + 1) / (k + r2 / s2)).mean();
+      const bool done = std::abs(next - s2) <= 1e-10 * s2;
+      s2 = next;
+      if (done) break;
+    }
+    if (s2 > 0 && std::isfinite(s2)) o.prior->V0(0, 0) += s2 - est_->Dy();
+  }
+  est_ = StudentRegression(num_parameters(), o);
+  stored_ = ring_start_ = updates_ = 0;
+  next_restart_ = 0;
+  backoff_ = 1;
+  started_ = true;
+  monitor_.Clear();
+  return true;
+}
+
+void SafeStudentRegression::Reset() {
+  est_ = StudentRegression(num_parameters(), Provisional(options_.base));
+  stored_ = ring_start_ = updates_ = 0;
+  next_restart_ = 0;
+  backoff_ = 1;
+  started_ = false;
+  lock_ins_ = 0;
+  events_.clear();
+  start_update_ = start_window_ = 0;
+  start_at_end_ = false;
+  monitor_.Clear();
+}
+
+}  // namespace ident

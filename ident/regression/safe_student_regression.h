@@ -1,0 +1,192 @@
+// SafeStudentRegression: the Kárný–Hangos Student-t/Cauchy estimator (ident/regression/student_regression.h) with the
+// safeguards that make it robust on data nobody tuned it for. It is what `ident fit --estimator cauchy`
+// and the registry's "cauchy"/"student" run, and what an embedding should use (docs/kh.md).
+//
+//   1. Robust start. The first W = max(20, 4ρ) samples run on the provisional prior ν(0) = ρ+k+δ,
+//      V(0) = diag(1, 1e−3·I). Then a high-breakdown batch fit of the window (Cauchy maximum likelihood
+//      from elemental-subset starts, ident/regression/batch_regression.h, leaving out rows with a regressor beyond
+//      five robust scales) gives Θ_r, and the estimator restarts from the class member of W pseudo-samples
+//      centred there (D_y(0) = G^{(k+1)/k}·s_e², s_e the residuals' robust scale) and replays the window.
+//      Outliers in y and in the regressors, up to the fit's breakdown point, do not move the start. While
+//      the window does not determine every coefficient from its inliers — regressors not identifiable (a
+//      record that starts in steady state), more than half of the rows fitted exactly, a direction whose
+//      information the fit's outliers carry, or one row alone deciding a direction (weighted leverage
+//      above 0.8) — the start waits and is tried again every W samples on the last (up to) 5W.
+//   2. Leverage guard (StudentRegressionOptions::leverage_guard): when a sample is grossly mispredicted and
+//      its regressor is outlying — some coordinate beyond five robust scales of that coordinate in the
+//      last start or restart window, or far out in the metric of the information matrix
+//      (z'Ṽ_z⁻¹z > 25 + ρ) — it is read as an outlier, not as new information: its weight adds at most
+//      the information of one ordinary sample. A new direction of ordinary values that the model
+//      predicts (an input that starts to move) is learnt as the maximin recursion would.
+//   3. Lock-in monitor and recovery. A LockInMonitor watches νβ(t) over the last M = max(100, 20ρ)
+//      samples; when more than half are below the threshold the estimator restarts as in 1 from the last
+//      max(W, M) samples and then replays every sample seen, so the estimate rests on all the data
+//      (ν at the end is the number of updates plus ν(0)). A restart that leaves the last window still
+//      mostly low-weighted was not a lock-in (the noise is heavier-tailed than the model); the next
+//      restart then waits twice as long. Each restart is recorded (restart_events()).
+//   With `base.exact` none of this happens: the spec's recursion with the fixed prior (the --exact option).
+//   An explicit `base.prior` switches off 1 (the prior is used as given); 2 and 3 stay on.
+//
+// The covariance() is the sandwich covariance of ident/regression/student_regression.h (calibrated whatever the
+// noise law); posterior_covariance() the one-sided posterior's own.
+//
+// Memory and cost: every updated sample is kept (ρ+1 doubles; `history_limit` caps it, then a restart
+// replays the most recent ones and says so). Update() is O(ρ²); it allocates only when the history grows
+// (geometrically; `history_reserve` pre-sizes it) and at restarts, which replay the history (O(nρ²)).
+//
+// Example:
+//   ident::SafeStudentOptions o;            // Cauchy, δ = 1, safeguards on
+//   o.base.dof = 3;                         // Student-t with k = 3
+//   ident::SafeStudentRegression est(/*num_parameters=*/4, o);
+//   for (...) est.Update(y, z);
+//   est.parameters(); est.covariance(); est.restarts(); est.restart_events();
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "common/step_report.h"
+#include "ident/regression/lock_in_monitor.h"
+#include "ident/regression/regression_estimator.h"
+#include "ident/regression/student_regression.h"
+
+namespace ident {
+
+// The largest lock-in window M (the monitor keeps one flag per sample of the window).
+inline constexpr int kMaxLockInWindow = 1'000'000;
+
+struct SafeStudentOptions {
+  StudentRegressionOptions base;  // dof, delta, forgetting, explicit prior, exact
+  int startup_window = 0;         // W; 0 = max(20, 4ρ)
+  bool refine_scale = true;       // σ0 from the residuals of the robust window fit (else s_y)
+  // G > 1: D_y(0) = G^{(k+1)/k}·s_e², above the noise scale² (the safe side of spec §8's hazard) by the
+  // amount that the recursion's D_y(t) ∝ ν^{−(k+1)/k} decay removes while ν grows G-fold.
+  double scale_growth = 4;
+  bool restart_on_lock_in = true;
+  int lock_in_window = 0;          // M in 2..kMaxLockInWindow; 0 = max(100, 20ρ)
+  double lock_in_threshold = 0.3;  // νβ below this counts as a low weight
+  long history_limit = 0;          // samples kept for replay; 0 = all
+  long history_reserve = 0;        // samples the history is sized for at construction
+};
+
+class SafeStudentRegression {
+ public:
+  using ParamVector = StudentRegression::ParamVector;
+  // Robust scales beyond which a regressor coordinate is outlying (the leverage guard and the start-up fit).
+  static constexpr double kLeverage = 5;
+
+  // Throws InvalidArgument naming the option if `options` is invalid or inadmissible.
+  SafeStudentRegression(int num_parameters, const SafeStudentOptions& options = {});
+
+  template <class Derived>
+  StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
+    if (!options_.base.exact) est_->set_outlying_regressor(Outlying(z));
+    const StepReport report = est_->Update(y, z);
+    if (options_.base.exact || !report.updated()) return report;
+    Store(y, z);
+    if (in_startup()) {
+      // Every W samples until the regressors of the last (up to 5W) samples are identifiable.
+      if (updates_ % startup_window_ == 0) Restart(std::min<long>(stored_, 5L * startup_window_), /*lock_in=*/false);
+    } else if (monitor_.Add(report.nu * report.weight)) {
+      ++lock_ins_;
+      if (options_.restart_on_lock_in && updates_ >= next_restart_) Restart(RecentWindow(), /*lock_in=*/true);
+    }
+    return report;
+  }
+
+  // True while the start-up window is being collected.
+  bool in_startup() const { return startup_window_ > 0 && !started_; }
+  // Updates at which the monitor flagged a lock-in / restarts made because of it.
+  int lock_ins() const { return lock_ins_; }
+  int restarts() const { return static_cast<int>(events_.size()); }
+  const std::vector<RestartEvent>& restart_events() const { return events_; }
+  const LockInMonitor& monitor() const { return monitor_; }
+  // The same for the common interface (ident/regression/regression_estimator.h); nullopt with `base.exact` (no monitor).
+  std::optional<LockInStatus> lock_in() const;
+
+  int num_parameters() const { return est_->num_parameters(); }
+  const ParamVector& parameters() const { return est_->parameters(); }
+  template <class Derived>
+  double Predict(const Eigen::MatrixBase<Derived>& z) const {
+    return est_->Predict(z);
+  }
+  // The sampling covariance of Θ̂ (StudentRegression::covariance, a sandwich) and the one-sided
+  // posterior's own.
+  Eigen::MatrixXd covariance() const { return est_->covariance(); }
+  Eigen::MatrixXd posterior_covariance() const { return est_->posterior_covariance(); }
+  double nu() const { return est_->nu(); }
+  double Dy() const { return est_->Dy(); }
+  double noise_std() const { return est_->noise_std(); }
+  double beta() const { return est_->beta(); }
+  const StudentStepDetails& last_step() const { return est_->last_step(); }
+  const RegressionPrior& prior() const { return est_->prior(); }
+  const StudentRegression& estimator() const { return *est_; }
+  const SafeStudentOptions& options() const { return options_; }
+  // Number of samples kept for replay.
+  long history_size() const { return stored_; }
+
+  // Another pass over the same samples (AnyRegressionEstimator::BeginPass): the recursion restarts from
+  // the current posterior's shape with the weight of ν(0) = ρ+k+δ pseudo-samples — V(0) = V(t), so
+  // Θ0 = Θ̂ and D_y(0) = D_y — and the history and monitor are cleared; the caller then feeds the samples
+  // again, each weighed against an estimate near the end result. False (state unchanged) with `base.exact`
+  // or before any update.
+  bool BeginPass();
+
+  // The end of the data while the start-up still waits (a short record, or one whose every window failed
+  // the start's checks): starts from the robust fit of every kept sample, with only a rank-deficient
+  // window refused, and replays them. True if it started; false (state unchanged) otherwise or when not
+  // in the start-up. The command line calls it after the last estimation row.
+  bool FinishStartup() noexcept;
+
+  // Back to the state of a freshly built estimator with the same options: the provisional prior (the
+  // explicit one if given), an empty history and a clear monitor.
+  void Reset();
+
+ private:
+  template <class Derived>
+  void Store(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
+    ++updates_;
+    if (options_.history_limit > 0 && stored_ == options_.history_limit) {  // a ring of the last samples
+      history_.col(ring_start_) << y, z;
+      ring_start_ = (ring_start_ + 1) % stored_;
+      return;
+    }
+    if (stored_ == history_.cols()) Grow();
+    history_.col(stored_++) << y, z;
+  }
+  void Grow() noexcept;
+  // Some coordinate of z beyond kLeverage robust scales of its column in the last (re)start window.
+  template <class Derived>
+  bool Outlying(const Eigen::MatrixBase<Derived>& z) const noexcept {
+    if (!started_ || centre_.size() != z.size()) return false;
+    for (Eigen::Index i = 0; i < z.size(); ++i)
+      if (std::abs(z(i) - centre_(i)) > kLeverage * spread_(i)) return true;
+    return false;
+  }
+  long RecentWindow() const;
+  // Column i (0 = oldest) of the kept samples.
+  Eigen::Index Column(long i) const { return (ring_start_ + i) % stored_; }
+  // Rebuilds the estimator from the robust fit of the last `recent` samples and replays every kept sample
+  // (the start-up, or a lock-in restart, which is recorded).
+  // `strict` = false: FinishStartup's start from every kept sample (see RobustWindowPrior).
+  void Restart(long recent, bool lock_in, bool strict = true) noexcept;
+  // Replays every kept sample into est_ (the last M weights refill the monitor).
+  void Replay() noexcept;
+
+  SafeStudentOptions options_;
+  std::optional<StudentRegression> est_;
+  int startup_window_ = 0;  // 0 = no start-up (explicit prior or exact)
+  bool started_ = false;
+  LockInMonitor monitor_;
+  Eigen::MatrixXd history_;  // (ρ+1) x capacity: y, z of every updated sample (column = sample)
+  Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the last (re)start window
+  long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
+  int lock_ins_ = 0;
+  std::vector<RestartEvent> events_;
+  long start_update_ = 0, start_window_ = 0;  // the robust start (LockInStatus)
+  bool start_at_end_ = false;
+};
+
+}  // namespace ident

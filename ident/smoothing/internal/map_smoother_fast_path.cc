@@ -1,0 +1,462 @@
+#include "ident/smoothing/internal/map_smoother_fast_path.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <new>
+#include <vector>
+
+#include <Eigen/Cholesky>
+
+#include "common/error.h"
+#include "ident/linalg/work_arena.h"
+
+namespace ident::internal {
+namespace {
+
+using models::Penalty;
+using models::PlqForm;
+
+bool HasFiniteBound(const PlqForm& f) { return f.lo.array().isFinite().any() || f.hi.array().isFinite().any(); }
+
+// Scalar identity-B term with both bounds finite: rho(r) = sup_{lo <= u <= hi} { u r - 1/2 m u^2 }.
+bool IsScalarBoxTerm(const Penalty& g) {
+  const PlqForm& f = g.plq();
+  return g.dim() == 1 && f.rows() == 1 && f.B(0, 0) == 1.0 && f.b(0) == 0.0 && f.p(0) == 0.0 &&
+         std::isfinite(f.lo(0)) && std::isfinite(f.hi(0)) && f.M(0, 0) >= 0.0;
+}
+
+// The data of one time step that does not change between iterations. Time-invariant problems share three
+// of these (t = 0, 0 < t < T, t = T); time-varying ones have one per step.
+template <int kN>
+struct StepConstants {
+  double Db[kN * kN];  // constant Newton block D_t = W_t + F_t' W_{t+1} F_t (process terms)
+  double E[kN * kN];   // sub-diagonal block E_t = -W_t F_{t-1} (t >= 1)
+  double F[kN * kN];   // F_{t-1} (t >= 1)
+  double W[kN * kN];   // W_t = B'K^-1 B of the process penalty f_t (bound-free: u = K^-1 (B r - b) implicitly)
+  double c0[kN];       // c0 = p - B'K^-1 b: p + B'u = c0 + W r
+  double H[kN];        // H_t (1 x n)
+  double lo, hi, m;    // measurement penalty: box [lo, hi], M = m
+};
+
+// The iterate and work values of one time step (nz = 1: one PLQ coordinate per step).
+template <int kN>
+struct StepState {
+  double u, slo, shi, qlo, qhi;       // multiplier of g_t, slacks and multipliers of lo <= u <= hi
+  double du, dslo, dshi, dqlo, dqhi;  // Newton direction
+  double islo, ishi, iqlo, iqhi;      // reciprocals (once per iteration: no divisions in the other passes)
+  double kd;                          // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
+  double r3, rt3;                     // R3 and R3 - e of the current direction
+  double R4[kN];                      // gradient residual
+  double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
+  double dx[kN];                      // state direction
+  double gf[kN];                      // g / (K + H g), g = P0 H' (the measurement's rank-one term)
+  double P[kN * kN];                  // P_t = S_t^-1, S_t = D_t - E_t P_{t-1} E_t'
+};
+
+// In-place inverse of a symmetric positive definite kN x kN matrix (column-major); false if a pivot is not
+// positive. n = 1, 2 in closed form (one reciprocal), Gauss-Jordan without pivoting beyond.
+template <int kN>
+[[gnu::always_inline]] inline bool InvertSpd(double* A) {
+  if constexpr (kN == 1) {
+    if (!(A[0] > 0) || !std::isfinite(A[0])) return false;
+    A[0] = 1.0 / A[0];
+    return true;
+  } else if constexpr (kN == 2) {
+    const double a = A[0], b = A[1], d = A[3];
+    const double det = a * d - b * b;
+    if (!(a > 0) || !(det > 0) || !std::isfinite(det)) return false;
+    const double idet = 1.0 / det;
+    A[0] = d * idet;
+    A[1] = A[2] = -b * idet;
+    A[3] = a * idet;
+    return true;
+  } else {
+    for (int k = 0; k < kN; ++k) {
+      const double pivot = A[k + k * kN];
+      if (!(pivot > 0) || !std::isfinite(pivot)) return false;
+      const double ip = 1.0 / pivot;
+      A[k + k * kN] = 1.0;
+      for (int j = 0; j < kN; ++j) A[k + j * kN] *= ip;
+      for (int i = 0; i < kN; ++i) {
+        if (i == k) continue;
+        const double f = A[i + k * kN];
+        A[i + k * kN] = 0.0;
+        for (int j = 0; j < kN; ++j) A[i + j * kN] -= f * A[k + j * kN];
+      }
+    }
+    return true;
+  }
+}
+
+template <int kN>
+class FastSolver {
+ public:
+  FastSolver(const MapSmootherProblem& p, const MapSmootherOptions& o)
+      : p_(p), o_(o), T_(p.T()), sigma_(MapSmootherDataUnit(p)), z_(p.z.row(0).transpose() / sigma_) {
+    invariant_ = p.F.size() == 1 && p.H.size() == 1 && p.process.size() <= 2 && p.measurement.size() == 1;
+    // Bound-free process penalties: W = B'K^-1 B and c0 = p - B'K^-1 b, once per distinct penalty.
+    std::vector<const Penalty*> seen;
+    for (int t = 0; t <= T_ && (t < 2 || !invariant_); ++t) {
+      const Penalty* f = &p.ft(t);
+      if (std::find(seen.begin(), seen.end(), f) != seen.end()) continue;
+      seen.push_back(f);
+      const PlqForm& q = f->plq();
+      Eigen::LLT<Eigen::MatrixXd> llt(q.M);
+      IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds",
+                    f->Name());
+      const Eigen::MatrixXd KinvB = llt.solve(q.B);
+      process_.push_back({f, q.B.transpose() * KinvB, (q.p - KinvB.transpose() * q.b) / sigma_});  // in the unit σ
+    }
+    const int num_constants = invariant_ ? std::min(T_ + 1, 3) : T_ + 1;
+    constants_.resize(num_constants);
+    for (int t = 0; t <= T_; ++t) {
+      const int i = ConstantIndex(t);
+      if (t == 0 || !invariant_ || (i == 1 && t == 1) || t == T_) FillConstants(t, &constants_[i]);
+    }
+    const std::size_t N = T_ + 1;
+    const std::size_t state_doubles = (sizeof(StepState<kN>) + sizeof(double) - 1) / sizeof(double);
+    arena_ = std::make_unique<WorkArena>(WorkArena::Padded(N * state_doubles) + WorkArena::Padded(N * kN));
+    steps_ = reinterpret_cast<StepState<kN>*>(arena_->Take(N * state_doubles));
+    for (std::size_t t = 0; t < N; ++t) new (&steps_[t]) StepState<kN>{};
+    x_ = arena_->Take(N * kN);
+    for (int t = 0; t <= T_; ++t) {  // strictly interior start, C'u + s = c exactly (as the general path)
+      const StepConstants<kN>& c = constants_[ConstantIndex(t)];
+      StepState<kN>& s = steps_[t];
+      s.u = 0.5 * (c.lo + c.hi);
+      s.slo = s.u - c.lo;
+      s.shi = c.hi - s.u;
+      s.qlo = s.qhi = 1.0;
+      bound_scale_ = std::max({bound_scale_, std::abs(c.lo), std::abs(c.hi)});
+    }
+    for (const auto& F : p.F) matrix_scale_ = std::max(matrix_scale_, 1 + F.cwiseAbs().maxCoeff());
+    for (const auto& H : p.H) matrix_scale_ = std::max(matrix_scale_, 1 + H.cwiseAbs().maxCoeff());
+  }
+
+  MapSmootherResult Run() {
+    MapSmootherResult res;
+    const double z_scale = 1 + z_.cwiseAbs().maxCoeff();
+    const double num_constraints = 2.0 * (T_ + 1);
+    res.status = MapSmootherStatus::kMaxIterations;
+    int iter = 0;
+    double mu = 0, alpha = 0, mu_scale = 1;  // mu_scale: the general path's
+    for (;; ++iter) {
+      const Residuals r = StepAndResiduals(alpha);
+      mu = r.complementarity / num_constraints;
+      if (iter == 0) mu_scale = std::max(1.0, mu);
+      const double kkt = std::max({mu, r.r3max / z_scale, r.r4max / (r.v_scale * matrix_scale_)});
+      res.kkt_residual = kkt;
+      if (kkt <= o_.tolerance) {
+        res.status = MapSmootherStatus::kConverged;
+        break;
+      }
+      if (iter >= o_.max_iterations) break;
+      if (r.umax > 1e10 * bound_scale_ * z_scale) {
+        res.status = MapSmootherStatus::kInfeasible;
+        break;
+      }
+      if (!FactorAndForward()) {  // as the general path: accept a breakdown at the precision limit
+        res.status = kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged
+                                                          : MapSmootherStatus::kNumericalFailure;
+        break;
+      }
+      // Mehrotra predictor-corrector: affine direction, centring sigma = (mu_aff / mu)^3, then the
+      // corrected direction with the second-order term ds_aff .* dq_aff.
+      const Backward affine = BackwardAndRecover(0.0, false);
+      const double alpha_aff = std::min(1.0, affine.max_step);
+      const double mu_aff =
+          (r.complementarity + alpha_aff * (affine.sum1 + alpha_aff * affine.sum2)) / num_constraints;
+      const double sigma = std::pow(std::clamp(mu_aff / mu, 0.0, 1.0), 3);
+      CorrectorForward(sigma * mu);
+      const Backward corrected = BackwardAndRecover(sigma * mu, true);
+      alpha = std::min(1.0, o_.step_fraction * corrected.max_step);
+    }
+    res.iterations = iter;
+    SetMapSmootherMessage(&res);
+    res.x = sigma_ * Eigen::Map<const Eigen::MatrixXd>(x_, kN, T_ + 1);  // back in the data's unit
+    res.u.resize(1, T_ + 1);
+    for (int t = 0; t <= T_; ++t) res.u(0, t) = sigma_ * steps_[t].u;  // p + B'u = u (identity B, p = 0)
+    FinishMapSmootherResult(p_, sigma_ * z_scale, mu, &res);
+    return res;
+  }
+
+ private:
+  struct ProcessPenalty {
+    const Penalty* penalty;
+    Eigen::MatrixXd W;
+    Eigen::VectorXd c0;
+  };
+  struct Residuals {
+    double complementarity = 0, r3max = 0, r4max = 0, v_scale = 1, umax = 0;
+  };
+  struct Backward {
+    double max_step = std::numeric_limits<double>::infinity();
+    double sum1 = 0, sum2 = 0;  // sum s.*dq + q.*ds, sum ds.*dq (complementarity after a step)
+  };
+
+  int ConstantIndex(int t) const {
+    if (!invariant_) return t;
+    return t == 0 ? 0 : t == T_ ? std::min(T_, 2) : 1;
+  }
+
+  const ProcessPenalty& Process(int t) const {
+    const Penalty* f = &p_.ft(t);
+    for (const ProcessPenalty& q : process_)
+      if (q.penalty == f) return q;
+    return process_.front();  // not reached: every f_t was prepared
+  }
+
+  void FillConstants(int t, StepConstants<kN>* c) const {
+    using MatN = Eigen::Matrix<double, kN, kN>;
+    using VecN = Eigen::Matrix<double, kN, 1>;
+    const ProcessPenalty& f = Process(t);
+    const MatN W = f.W;
+    MatN Db = W, E = MatN::Zero(), F = MatN::Zero();
+    if (t < T_) {
+      const ProcessPenalty& next = Process(t + 1);
+      const MatN Fn = p_.Ft(t);
+      Db += Fn.transpose() * MatN(next.W) * Fn;
+    }
+    if (t > 0) {
+      F = p_.Ft(t - 1);
+      E = -W * F;
+    }
+    Eigen::Map<MatN>(c->Db) = Db;
+    Eigen::Map<MatN>(c->E) = E;
+    Eigen::Map<MatN>(c->F) = F;
+    Eigen::Map<MatN>(c->W) = W;
+    Eigen::Map<VecN>(c->c0) = f.c0;
+    Eigen::Map<VecN>(c->H) = p_.Ht(t).row(0).transpose();
+    const PlqForm& g = p_.gt(t).plq();
+    c->lo = g.lo(0) / sigma_;  // in the unit σ
+    c->hi = g.hi(0) / sigma_;
+    c->m = g.M(0, 0);
+  }
+
+  const StepConstants<kN>& Constants(int t) const { return constants_[ConstantIndex(t)]; }
+
+  // Applies the pending step x, u, s, q += alpha d (alpha = 0: none), then R3 = r - m u - (q_hi - q_lo) and
+  // R4 = sum J'(p + B'u) (process: c0 + W r on x_t - F x_{t-1}; measurement: -H'u), in one forward pass.
+  Residuals StepAndResiduals(double alpha) {
+    Residuals out;
+    for (int t = 0; t <= T_; ++t) {
+      const StepConstants<kN>& c = Constants(t);
+      StepState<kN>& s = steps_[t];
+      double* xt = x_ + t * kN;
+      if (alpha > 0) {
+        for (int i = 0; i < kN; ++i) xt[i] += alpha * s.dx[i];
+        s.u += alpha * s.du;
+        s.slo += alpha * s.dslo;
+        s.shi += alpha * s.dshi;
+        s.qlo += alpha * s.dqlo;
+        s.qhi += alpha * s.dqhi;
+      }
+      double r[kN], v[kN];
+      for (int i = 0; i < kN; ++i) r[i] = xt[i];
+      if (t > 0)
+        for (int j = 0; j < kN; ++j)
+          for (int i = 0; i < kN; ++i) r[i] -= c.F[i + j * kN] * xt[j - kN];
+      for (int i = 0; i < kN; ++i) v[i] = c.c0[i];
+      for (int j = 0; j < kN; ++j)
+        for (int i = 0; i < kN; ++i) v[i] += c.W[i + j * kN] * r[j];
+      double hx = 0;
+      for (int i = 0; i < kN; ++i) {
+        out.v_scale = std::max(out.v_scale, std::abs(v[i]));
+        s.R4[i] = v[i] - c.H[i] * s.u;
+        hx += c.H[i] * xt[i];
+      }
+      if (t > 0) {  // R4_{t-1} -= F_{t-1}' v: now complete
+        StepState<kN>& prev = steps_[t - 1];
+        for (int j = 0; j < kN; ++j) {
+          double fv = 0;
+          for (int i = 0; i < kN; ++i) fv += c.F[i + j * kN] * v[i];
+          prev.R4[j] -= fv;
+          out.r4max = std::max(out.r4max, std::abs(prev.R4[j]));
+        }
+      }
+      const double au = std::abs(s.u);
+      out.v_scale = std::max(out.v_scale, au);
+      out.umax = std::max(out.umax, au);
+      s.r3 = z_[t] - hx - c.m * s.u - (s.qhi - s.qlo);
+      out.r3max = std::max(out.r3max, std::abs(s.r3));
+      out.complementarity += s.slo * s.qlo + s.shi * s.qhi;
+    }
+    for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(steps_[T_].R4[i]));
+    return out;
+  }
+
+  // rt3 = R3 - e,  e = S_hi^-1 (-R2_hi + Q_hi R1_hi) - S_lo^-1 (-R2_lo + Q_lo R1_lo)  (general path's
+  // RightHandSide), then v_t = P_t (b_t - E_t v_{t-1}) with b_t = -R4_t + H' K^-1 rt3, where
+  // P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1).
+  template <bool kCorrector>
+  [[gnu::always_inline]] inline void ForwardRightHandSide(const StepConstants<kN>& c, StepState<kN>& s,
+                                                           const double* v_prev, double target) {
+    const double r1hi = s.u + s.shi - c.hi, r1lo = -s.u + s.slo + c.lo;
+    double r2lo = s.slo * s.qlo - target, r2hi = s.shi * s.qhi - target;
+    if constexpr (kCorrector) {
+      r2lo += s.dslo * s.dqlo;
+      r2hi += s.dshi * s.dqhi;
+    }
+    const double e = (-r2hi + s.qhi * r1hi) * s.ishi - (-r2lo + s.qlo * r1lo) * s.islo;
+    s.rt3 = s.r3 - e;
+    double b[kN];
+    for (int i = 0; i < kN; ++i) b[i] = -s.R4[i];
+    if (v_prev)
+      for (int j = 0; j < kN; ++j)
+        for (int i = 0; i < kN; ++i) b[i] -= c.E[i + j * kN] * v_prev[j];
+    for (int i = 0; i < kN; ++i) {
+      double pb = 0;
+      for (int k = 0; k < kN; ++k) pb += s.P[i + k * kN] * b[k];
+      s.v[i] = pb + s.rt3 * s.gf[i];
+    }
+  }
+
+  // Block LDL' of the Newton matrix (D_t = Db_t + K^-1 H'H, E_t) fused with the predictor's forward
+  // substitution: A = L diag(S_t) L' with L_t = E_t P_{t-1}; the solves use v_t = P_t y_t, so that L is not
+  // stored and the large K^-1 of coordinates at a kink never multiplies a vector. False if a Schur complement S_t is not numerically positive definite.
+  bool FactorAndForward() {
+    for (int t = 0; t <= T_; ++t) {
+      const StepConstants<kN>& c = Constants(t);
+      StepState<kN>& s = steps_[t];
+      s.islo = 1.0 / s.slo;
+      s.ishi = 1.0 / s.shi;
+      s.iqlo = 1.0 / s.qlo;
+      s.iqhi = 1.0 / s.qhi;
+      const double ikd = c.m + s.qlo * s.islo + s.qhi * s.ishi;  // K = M + D, D = q/s (barrier curvature)
+      s.kd = 1.0 / ikd;
+      // S_t = Db_t - E_t P_{t-1} E_t' + K^-1 H'H. The measurement term is added to the inverse by
+      // Sherman-Morrison, P_t = P0 - g g' / (K + H g) with P0 = (Db_t - E_t P_{t-1} E_t')^-1, g = P0 H':
+      // K^-1 grows to ~1/mu on the coordinates at a kink, where inverting S_t directly cancels terms of
+      // order K^-2 (tested: the iteration then stalls near 1e-10). P0 is the inverse of a matrix of the
+      // process terms' size.
+      double* P = s.P;
+      for (int i = 0; i < kN * kN; ++i) P[i] = c.Db[i];
+      if (t > 0) {
+        const double* Pp = steps_[t - 1].P;
+        double PE[kN * kN];  // P_{t-1} E_t'
+        for (int j = 0; j < kN; ++j)
+          for (int i = 0; i < kN; ++i) {
+            double pe = 0;
+            for (int k = 0; k < kN; ++k) pe += Pp[i + k * kN] * c.E[j + k * kN];
+            PE[i + j * kN] = pe;
+          }
+        for (int j = 0; j < kN; ++j)
+          for (int i = 0; i < kN; ++i) {
+            double epe = 0;
+            for (int k = 0; k < kN; ++k) epe += c.E[i + k * kN] * PE[k + j * kN];
+            P[i + j * kN] -= epe;
+          }
+      }
+      if (!InvertSpd<kN>(P)) return false;
+      double g[kN], hg = 0;
+      for (int i = 0; i < kN; ++i) {
+        double gi = 0;
+        for (int k = 0; k < kN; ++k) gi += P[i + k * kN] * c.H[k];
+        g[i] = gi;
+        hg += c.H[i] * gi;
+      }
+      const double f = 1.0 / (ikd + hg);
+      for (int j = 0; j < kN; ++j)
+        for (int i = 0; i < kN; ++i) P[i + j * kN] -= f * g[i] * g[j];
+      for (int i = 0; i < kN; ++i) s.gf[i] = f * g[i];
+      ForwardRightHandSide<false>(c, s, t > 0 ? steps_[t - 1].v : nullptr, 0.0);
+    }
+    return true;
+  }
+
+  void CorrectorForward(double target) {
+    for (int t = 0; t <= T_; ++t)
+      ForwardRightHandSide<true>(Constants(t), steps_[t], t > 0 ? steps_[t - 1].v : nullptr, target);
+  }
+
+  // dx_t = v_t - P_t E_{t+1}' dx_{t+1} (backward substitution), then du = K^-1 (rt3 - H dx),
+  // ds, dq (general path's Direction), the largest step keeping s, q > 0 and the complementarity sums.
+  Backward BackwardAndRecover(double target, bool corrector) {
+    Backward out;
+    double max_ratio = 0;  // max -d/v over components: the step limit is 1 / max_ratio
+    for (int t = T_; t >= 0; --t) {
+      const StepConstants<kN>& c = Constants(t);
+      StepState<kN>& s = steps_[t];
+      double dx[kN];
+      for (int i = 0; i < kN; ++i) dx[i] = s.v[i];
+      if (t < T_) {
+        const double* En = Constants(t + 1).E;
+        const double* dxn = steps_[t + 1].dx;
+        double e[kN];
+        for (int i = 0; i < kN; ++i) {
+          double ed = 0;
+          for (int k = 0; k < kN; ++k) ed += En[k + i * kN] * dxn[k];
+          e[i] = ed;
+        }
+        for (int i = 0; i < kN; ++i) {
+          double pe = 0;
+          for (int k = 0; k < kN; ++k) pe += s.P[i + k * kN] * e[k];
+          dx[i] -= pe;
+        }
+      }
+      double hdx = 0;
+      for (int i = 0; i < kN; ++i) {
+        s.dx[i] = dx[i];
+        hdx += c.H[i] * dx[i];
+      }
+      const double du = s.kd * (s.rt3 - hdx);
+      const double r1hi = s.u + s.shi - c.hi, r1lo = -s.u + s.slo + c.lo;
+      double r2lo = s.slo * s.qlo - target, r2hi = s.shi * s.qhi - target;
+      if (corrector) {
+        r2lo += s.dslo * s.dqlo;
+        r2hi += s.dshi * s.dqhi;
+      }
+      const double dshi = -r1hi - du, dslo = -r1lo + du;
+      const double dqhi = (-r2hi - s.qhi * dshi) * s.ishi, dqlo = (-r2lo - s.qlo * dslo) * s.islo;
+      s.du = du;
+      s.dshi = dshi;
+      s.dslo = dslo;
+      s.dqhi = dqhi;
+      s.dqlo = dqlo;
+      max_ratio = std::max({max_ratio, -dslo * s.islo, -dshi * s.ishi, -dqlo * s.iqlo, -dqhi * s.iqhi});
+      if (!corrector) {
+        out.sum1 += s.slo * dqlo + s.qlo * dslo + s.shi * dqhi + s.qhi * dshi;
+        out.sum2 += dslo * dqlo + dshi * dqhi;
+      }
+    }
+    if (max_ratio > 0) out.max_step = 1.0 / max_ratio;
+    return out;
+  }
+
+  const MapSmootherProblem& p_;
+  const MapSmootherOptions& o_;
+  const int T_;
+  bool invariant_ = false;  // one F, one H, f_0 and one f, one g: three step-constant records
+  std::vector<ProcessPenalty> process_;
+  std::vector<StepConstants<kN>> constants_;
+  std::unique_ptr<WorkArena> arena_;
+  StepState<kN>* steps_ = nullptr;
+  double* x_ = nullptr;  // kN x (T+1)
+  const double sigma_;         // the data unit (MapSmootherDataUnit)
+  const Eigen::VectorXd z_;    // the measurements in that unit
+  double bound_scale_ = 1, matrix_scale_ = 1;
+};
+
+}  // namespace
+
+bool MapSmootherFastPathApplies(const MapSmootherProblem& p) {
+  const int n = p.state_dim();
+  if (n < 1 || n > 4 || p.measurement_dim() != 1) return false;
+  for (const Penalty& f : p.process)
+    if (HasFiniteBound(f.plq())) return false;
+  for (const Penalty& g : p.measurement)
+    if (!IsScalarBoxTerm(g)) return false;
+  return true;
+}
+
+MapSmootherResult SolveMapSmootherFastPath(const MapSmootherProblem& p, const MapSmootherOptions& o) {
+  switch (p.state_dim()) {
+    case 1: return FastSolver<1>(p, o).Run();
+    case 2: return FastSolver<2>(p, o).Run();
+    case 3: return FastSolver<3>(p, o).Run();
+    default: return FastSolver<4>(p, o).Run();
+  }
+}
+
+}  // namespace ident::internal

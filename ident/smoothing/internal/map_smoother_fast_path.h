@@ -1,0 +1,50 @@
+// The MAP smoother's fused fast path (internal to ident/smoothing/map_smoother.cc; see ident/smoothing/map_smoother.h).
+//
+// For the common structure — every process penalty f_t without finite bounds (quadratic), every
+// measurement scalar (nz = 1) with an identity-B PLQ penalty with both bounds finite (l1, Huber,
+// quantile, scalar box monitoring) — the interior-point iteration of SolveMapSmoother (Aravkin, Burke &
+// Pillonetto, JMLR 14 (2013), sec. 4; Mehrotra predictor-corrector) runs as five fused passes over time
+// per iteration, with no per-term dispatch:
+//   1. the pending step, the residuals R3, R4 and the complementarity of the iterate;
+//   2. the block LDL' factorisation of the Newton matrix fused with the forward substitution of the
+//      predictor right-hand side: P_t = S_t^-1 with S_t = Db_t - E_t P_{t-1} E_t' + K_t^-1 H_t'H_t, the
+//      measurement's rank-one term added by Sherman-Morrison (no square roots; two reciprocals per block;
+//      no cancellation when K_t^-1 ~ 1/mu at a kink), v_t = P_t (b_t - E_t v_{t-1});
+//   3. the backward substitution dx_t = v_t - P_t E_{t+1}' dx_{t+1} fused with the recovery of du, ds, dq,
+//      the step length and the three sums that give the complementarity after the affine step;
+//   4., 5. the same forward/backward passes for the corrector.
+// Same start, same directions (in exact arithmetic), same stopping rule as the general path.
+//
+// Example (what SolveMapSmoother does):
+//   if (options.fast_path && internal::MapSmootherFastPathApplies(problem))
+//     return internal::SolveMapSmootherFastPath(problem, options);
+#pragma once
+
+#include "ident/smoothing/map_smoother.h"
+
+namespace ident::internal {
+
+// True if the fast path handles the problem (structure above, state dimension 1..4).
+bool MapSmootherFastPathApplies(const MapSmootherProblem& problem);
+
+// The interior point on the fast path, then the common finish (objectives, dual point, reconstruction).
+MapSmootherResult SolveMapSmootherFastPath(const MapSmootherProblem& problem, const MapSmootherOptions& options);
+
+// The unit in which both paths iterate: the median of |z_{t+1} - z_t| over all measurement coordinates
+// (the typical step of the data, which neither the magnitude of the states nor a shift of the origin
+// changes), else the mean, else max |z|; with all measurements zero, the largest finite bound, offset b
+// or linear term p of the penalties' PLQ forms; else 1. Each path solves the problem in this unit — z/σ and
+// every PLQ form with p, b, lo, hi divided by σ (the penalty σ⁻²ρ(σr), so that (P) at x/σ is σ⁻² times
+// (P) at x [BCW eq. (2.1)]) — and multiplies the states and dual controls back. The iterates, and so the
+// absolute stopping tests, are then the same for data in any unit.
+double MapSmootherDataUnit(const MapSmootherProblem& problem);
+
+// The part of the result both paths share (defined in map_smoother.cc): from res->x (states) and res->u
+// (dual controls p + B'u of each measurement term, before projection) computes w, the projected dual
+// point u, y, both objectives, the gap, x_from_dual and the non-unique reconstruction steps.
+void FinishMapSmootherResult(const MapSmootherProblem& problem, double z_scale, double mu, MapSmootherResult* res);
+
+// The iteration report shared by both paths: res->message from res->status and iterations.
+void SetMapSmootherMessage(MapSmootherResult* res);
+
+}  // namespace ident::internal
