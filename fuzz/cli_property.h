@@ -10,7 +10,8 @@
 //     is a header starting "estimator" and rows of as many fields; the mems --csv and --trace files read
 //     with ident's CSV reader (ident/io/csv.h), which takes only finite numbers.
 // IDENT_CLI_FUZZ_LOG=1 prints each call, its exit code and its error line.
-// Standard output goes to /dev/null during the run (descriptor 1 redirected, std::cout to a string).
+// Standard output is captured during the run: descriptor 1 (fmt::print, printf) to a file in the run's
+// directory, std::cout to a string; what a run printed is the two together.
 #pragma once
 
 #include <fcntl.h>
@@ -201,9 +202,10 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
 
   std::ostringstream err, out;
   std::fflush(stdout);
-  const int saved_stdout = dup(1), null = open("/dev/null", O_WRONLY);  // descriptor 1 to /dev/null meanwhile
-  dup2(null, 1);
-  close(null);
+  const std::string stdout_path = dir + "/stdout.txt";
+  const int saved_stdout = dup(1), captured = open(stdout_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  dup2(captured, 1);  // descriptor 1 to the file meanwhile
+  close(captured);
   std::streambuf* const old_err = std::cerr.rdbuf(err.rdbuf());
   std::streambuf* const old_out = std::cout.rdbuf(out.rdbuf());
   const int code = tools::RunCommandLine(static_cast<int>(args.size()), argv.data());
@@ -213,6 +215,7 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
   std::clearerr(stdout);
   dup2(saved_stdout, 1);
   close(saved_stdout);
+  const std::string printed = out.str() + Slurp(stdout_path);
 
   std::string call;
   for (const std::string& a : args) call += " " + a;
@@ -232,9 +235,9 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
   if (code != 0 && std::filesystem::exists(trace_path)) return "trace written by a failed run:" + call;
   if (code != 0) return "";
   auto has = [&](const char* option) { return std::find(args.begin(), args.end(), option) != args.end(); };
-  if (has("--json") && !nlohmann::json::accept(out.str())) return "--json output is not one JSON document:" + call;
+  if (has("--json") && !nlohmann::json::accept(printed)) return "--json output is not one JSON document:" + call;
   if (command == "compare" && has("--csv"))
-    if (std::string bad = CsvTableShape(out.str(), "estimator"); !bad.empty())
+    if (std::string bad = CsvTableShape(printed, "estimator"); !bad.empty())
       return "compare --csv output: " + bad + ":" + call;
   if (command == "mems")
     for (const std::string& file : {mems_csv, trace_path}) {

@@ -9,7 +9,8 @@
 //     and, since it iterates in the data's own unit, the same iterates: the status, the states and the
 //     objective agree to rounding (1e-12 relative);
 //   - shifted (piecewise-linear measurement penalty): z' = z + d with the knots moved by d leaves every
-//     residual's penalty unchanged: the same status and the optimum to 1e-7 relative.
+//     residual's penalty unchanged: the same status and the same optimum, the two primal values apart
+//     by at most the sum of their reported duality gaps.
 // Holds if both hold whenever P converges; non-convergence of P itself is another property's business
 // (tests/duality/feasible_problem_test.cc).
 #pragma once
@@ -114,8 +115,10 @@ inline std::string SmootherScalingProperty(const std::uint8_t* data, std::size_t
     const double d = shift_raw / 4.0;
     const MapSmootherResult r2 = SolveMapSmoother(ScaledSmootherProblem(base, 1.0, d), o);
     if (r2.status != MapSmootherStatus::kConverged) return "the shifted problem converges as the original does";
-    if (!(std::abs(r2.primal - r0.primal) <= 1e-7 * (1 + std::abs(r0.primal))))
-      return "the shifted problem has the same optimum";
+    // Each primal value is within its own reported gap above the common optimum (the iteration may stop
+    // at the precision limit with a gap above the tolerance).
+    if (!(std::abs(r2.primal - r0.primal) <= std::abs(r0.gap) + std::abs(r2.gap) + 1e-9 * (1 + std::abs(r0.primal))))
+      return "the shifted problem has the same optimum, within the reported gaps";
   }
   return {};
 }
