@@ -11,6 +11,7 @@
 
 #include "common/error.h"
 #include "ident/linalg/work_arena.h"
+#include "ident/smoothing/internal/map_smoother_result.h"
 
 namespace ident::internal {
 namespace {
