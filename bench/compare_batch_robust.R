@@ -1,4 +1,4 @@
-# Reference values for ident's batch robust regressions (ident/regression/batch_regression.h, tests/batch/):
+# Reference values for ident's batch robust regressions (ident/regression/batch_regression.h, tests/regression/batch_regression_test.cc):
 # MASS::rlm (Huber M, k = 1.345, MAD scale, LS start) at its defaults (acc = 1e-4, maxit = 20) and converged
 # tightly (acc = 1e-13, maxit = 1000), with summary.rlm's standard errors, and the Cauchy maximum likelihood in
 # (beta, gamma) jointly, NLL = sum log(gamma^2 + r^2) - n log gamma + n log pi, minimised by optim (BFGS on

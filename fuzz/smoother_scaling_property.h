@@ -12,7 +12,7 @@
 //     residual's penalty unchanged: the same status and the same optimum, the two primal values apart
 //     by at most the sum of their reported duality gaps.
 // Holds if both hold whenever P converges; non-convergence of P itself is another property's business
-// (tests/duality/feasible_problem_test.cc).
+// (tests/smoothing/feasible_problem_test.cc).
 #pragma once
 
 #include <cmath>

@@ -1,7 +1,7 @@
 // The shared spec vectors reproduced column by column through the library [spec §10.11, §10.12].
 #include <gtest/gtest.h>
 
-#include "tests/kh/spec_vectors.h"
+#include "tests/regression/spec_vectors.h"
 
 namespace ident {
 namespace {

@@ -1,14 +1,14 @@
 // The lock-in safeguard through the command line (issue 3 item 6): `ident fit` reports the monitor's
 // state under "lock_in" in --json (null for RLS and with --exact) and a line in the report, and
 // --lock-in-window / --lock-in-threshold / --no-lock-in-restart reach the estimator. Checked on the seeded
-// ARX record on which the Cauchy estimator locks in (tests/kh/lock_in_data.h): against the true Θ, and
+// ARX record on which the Cauchy estimator locks in (tests/regression/lock_in_data.h): against the true Θ, and
 // against SafeStudentRegression run directly on the same samples with the same options.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "ident/regression/safe_student_regression.h"
-#include "tests/kh/lock_in_data.h"
+#include "tests/regression/lock_in_data.h"
 #include "tests/support/cli.h"
 
 namespace ident {

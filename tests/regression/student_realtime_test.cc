@@ -14,7 +14,7 @@
 
 #include "approx/weighting_polynomial.h"
 #include "ident/regression/student_regression.h"
-#include "tests/realtime/arx_stream.h"
+#include "tests/regression/arx_stream.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {

@@ -32,7 +32,7 @@ struct ArxStream {
   double y1 = 0, y2 = 0, u1 = 1, u2 = -1;
 };
 
-double MaxRelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+double RlsMaxRelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return ((a - b).cwiseAbs().array() / b.cwiseAbs().array().max(1e-300)).maxCoeff();
 }
 
@@ -51,7 +51,7 @@ TEST(RecursiveLeastSquares, LdFormEqualsDenseOracleOver100kUpdatesWithForgetting
     ASSERT_TRUE(rls.Update(y, z).updated());
     dense.Update(y, z);
     if (t % 97 == 0 || t == 99999) {
-      worst_theta = std::max(worst_theta, MaxRelativeDifference(rls.parameters(), dense.parameters()));
+      worst_theta = std::max(worst_theta, RlsMaxRelativeDifference(rls.parameters(), dense.parameters()));
       worst_dy = std::max(worst_dy, std::abs(rls.Dy() - dense.Dy()) / dense.Dy());
       ASSERT_GT(rls.statistics().factor().d().minCoeff(), 0) << "V lost positive definiteness at t=" << t;
     }

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "ident/regression/rls.h"
-#include "tests/realtime/arx_stream.h"
+#include "tests/regression/arx_stream.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {

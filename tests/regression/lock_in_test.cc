@@ -16,7 +16,7 @@
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 #include "ident/regression/student_regression.h"
-#include "tests/kh/lock_in_data.h"
+#include "tests/regression/lock_in_data.h"
 #include "tests/support/alloc_counter.h"
 
 namespace ident {

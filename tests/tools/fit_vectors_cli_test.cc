@@ -4,7 +4,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "tests/kh/spec_vectors.h"
+#include "tests/regression/spec_vectors.h"
 #include "tests/support/cli.h"
 
 namespace ident {

@@ -11,9 +11,9 @@
 namespace ident::testing {
 namespace {
 
-const std::string kData = std::string(IDENT_SOURCE_DIR) + "/tests/duality/data/";
+const std::string kData = std::string(IDENT_SOURCE_DIR) + "/tests/density/data/";
 
-void ExpectBadInput(const std::string& args, const std::string& needle) {
+void ExpectSmoothBadInput(const std::string& args, const std::string& needle) {
   const CliResult r = RunCli(args);
   EXPECT_EQ(r.exit_code, 1) << args << "\nstderr: " << r.err;
   EXPECT_NE(r.err.find(needle), std::string::npos) << args << "\nstderr: " << r.err;
@@ -39,10 +39,10 @@ TEST(LogcondensCommand, PicksAColumnAndRejectsBadInput) {
   const CliResult r = RunCli("logcondens '" + two + "' --column b --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(nlohmann::json::parse(r.out)["knots"].size(), 2u);
-  ExpectBadInput("logcondens '" + two + "'", "pass --column");
-  ExpectBadInput("logcondens '" + two + "' --column q", "no column 'q'");
-  ExpectBadInput("logcondens '" + WriteFile("same.csv", "x\n2\n2\n") + "'", "at least 2 distinct");
-  ExpectBadInput("logcondens /nonexistent.csv", "cannot open");
+  ExpectSmoothBadInput("logcondens '" + two + "'", "pass --column");
+  ExpectSmoothBadInput("logcondens '" + two + "' --column q", "no column 'q'");
+  ExpectSmoothBadInput("logcondens '" + WriteFile("same.csv", "x\n2\n2\n") + "'", "at least 2 distinct");
+  ExpectSmoothBadInput("logcondens /nonexistent.csv", "cannot open");
 }
 
 const char* kModel = R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]],
@@ -51,7 +51,7 @@ const char* kModel = R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]],
   "measurement": {"penalty": "huber", "kappa": 1}})";
 
 TEST(SmoothCommand, ReportsTheStepsWhereTheDualDoesNotDetermineTheStates) {
-  // Total-variation smoothing of a step (tests/duality/dual_reconstruction_test.cc solves it by hand):
+  // Total-variation smoothing of a step (tests/smoothing/dual_reconstruction_test.cc solves it by hand):
   // y_t = 1 on the boundary of dom f* = [-1, 1] for t = 0..3, inside for t = 4, 5.
   const std::string model = WriteFile("tv.json", R"({"F": [[1]], "H": [[1]], "initial": {"penalty": "l1"},
     "process": {"penalty": "l1"}, "measurement": {"penalty": "quadratic", "covariance": 1}})");
@@ -116,23 +116,23 @@ TEST(SmoothCommand, BadModelsAndDataExitWithOneLine) {
   const std::string data = WriteFile("d.csv", "z\n0.5\n1.2\n3.1\n");
   auto model = [](const std::string& text) { return "'" + WriteFile("m.json", text) + "' "; };
   const std::string tail = R"(, "initial": {"penalty": "l1"}, "process": {"penalty": "l1"}, "measurement": {"penalty": "l1"}})";
-  ExpectBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1, 0]])" + tail) + "'" + data + "'",
+  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1, 0]])" + tail) + "'" + data + "'",
                  "F[0] is 2x2 but H has 3 columns");
-  ExpectBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1], [1, 0]])" + tail) + "'" + data + "'",
+  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1], [1, 0]])" + tail) + "'" + data + "'",
                  "H has 2 rows but the data have 1 measurement columns");
-  ExpectBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "huber"}, "process": {"penalty": "l1"}, "measurement": {"penalty": "l1"}})") + "'" + data + "'",
+  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "huber"}, "process": {"penalty": "l1"}, "measurement": {"penalty": "l1"}})") + "'" + data + "'",
                  "initial: missing \"kappa\"");
-  ExpectBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "l1"}, "process": {"penalty": "cauchy"}, "measurement": {"penalty": "l1"}})") + "'" + data + "'",
+  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "l1"}, "process": {"penalty": "cauchy"}, "measurement": {"penalty": "l1"}})") + "'" + data + "'",
                  "unknown penalty 'cauchy'");
-  ExpectBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]]})") + "'" + data + "'",
+  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]]})") + "'" + data + "'",
                  "missing \"initial\"");
-  ExpectBadInput("smooth --model " + model("{\"F\": [[1]") + "'" + data + "'", "not valid JSON");
-  ExpectBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]])" + tail) + "'" +
+  ExpectSmoothBadInput("smooth --model " + model("{\"F\": [[1]") + "'" + data + "'", "not valid JSON");
+  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]])" + tail) + "'" +
                      WriteFile("y.csv", "y\n1\n2\n") + "'",
                  "no measurement column");
   // Infeasible: |w_t| <= 0.1 and |z_t - x_t| <= 0.1 cannot hold when z jumps by 3.
   const std::string box = R"({"penalty": "piecewise_linear", "knots": [-0.1, 0.1], "values": [0, 0]})";
-  ExpectBadInput("smooth --model " + model("{\"F\": [[1]], \"H\": [[1]], \"initial\": " + box + ", \"process\": " + box +
+  ExpectSmoothBadInput("smooth --model " + model("{\"F\": [[1]], \"H\": [[1]], \"initial\": " + box + ", \"process\": " + box +
                                            ", \"measurement\": " + box + "}") + "'" + data + "'",
                  "no state sequence keeps every residual inside");
 }

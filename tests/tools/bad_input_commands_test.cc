@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "tests/reliability/scaled_dryer.h"
+#include "tests/tools/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "ident/smoothing/map_smoother.h"
-#include "tests/duality/random_matrices.h"
+#include "tests/smoothing/random_matrices.h"
 
 namespace ident {
 namespace {

@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ident/regression/safe_student_regression.h"
-#include "tests/kh/lock_in_data.h"
+#include "tests/regression/lock_in_data.h"
 #include "tests/support/cli.h"
 #include "tests/support/sanitizer.h"
 #include "tests/support/test_data.h"

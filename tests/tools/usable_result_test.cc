@@ -16,7 +16,7 @@
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 #include "ident/regression/student_regression.h"
-#include "tests/reliability/scaled_dryer.h"
+#include "tests/tools/scaled_dryer.h"
 #include "tests/support/cli.h"
 
 namespace ident::testing {

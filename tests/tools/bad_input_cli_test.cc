@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "tests/reliability/scaled_dryer.h"
+#include "tests/tools/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 

@@ -1,4 +1,4 @@
-# Golden values for tests/duality/logconcave_mle_test.cc from R's logcondens (Debian r-cran-logcondens).
+# Golden values for tests/density/logconcave_mle_test.cc from R's logcondens (Debian r-cran-logcondens).
 # Run from this directory:  Rscript logcondens_golden.R
 # Writes, per case, <name>_samples.csv (the samples, 17 digits), <name>_knots.csv (knots and log-density
 # phi at the knots), <name>_cdf.csv (distinct sorted x and the fitted CDF Fhat; every 50th x when there are more than 1000), and summary.csv with

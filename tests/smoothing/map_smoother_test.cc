@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.h"
-#include "tests/duality/random_matrices.h"
+#include "tests/smoothing/random_matrices.h"
 
 namespace ident {
 namespace {

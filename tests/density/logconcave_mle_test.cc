@@ -1,6 +1,6 @@
 // Log-concave density MLE (ident/density/logconcave_mle.h): the characterisation (KKT) conditions of
 // Dümbgen, Hüsler & Rufibach, closed-form cases, and golden values from R's logcondens produced by
-// tests/duality/data/logcondens_golden.R (committed beside its output; R is not needed to run this test).
+// tests/density/data/logcondens_golden.R (committed beside its output; R is not needed to run this test).
 #include "ident/density/logconcave_mle.h"
 
 #include <cmath>
@@ -17,7 +17,7 @@
 namespace ident::approx {
 namespace {
 
-const std::string kData = std::string(IDENT_SOURCE_DIR) + "/tests/duality/data/";
+const std::string kData = std::string(IDENT_SOURCE_DIR) + "/tests/density/data/";
 
 void ExpectKkt(const LogConcaveMle& mle, const std::string& label) {
   const LogConcaveKkt k = CheckKkt(mle);
