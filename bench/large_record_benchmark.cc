@@ -4,7 +4,7 @@
 //   IDENT_LARGE_CSV=/tmp/ident_large.csv build/bench/large_record_benchmark
 //
 //   BM_ParseOnly      CsvReader::Next over every row (the floor for any streaming pass)
-//   BM_FitStreaming   tools::FitCsvFile: ARX(2,2,1), RLS, split 0.5, mean detrending (count pass,
+//   BM_FitStreaming   workflow::FitCsvFile: ARX(2,2,1), RLS, split 0.5, mean detrending (count pass,
 //                     mean pass over the estimation half, estimate + score pass)
 // Items/s = data rows per second; the ratio table prints fit time / parse time.
 // Peak memory is measured on the `ident` program: /usr/bin/time -v build/bin/ident fit ... .
@@ -17,8 +17,8 @@
 #include "ident/regression/estimator_registry.h"
 #include "ident/io/csv.h"
 #include "models/arx.h"
-#include "tools/data_source.h"
-#include "tools/fit.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
 
 namespace {
 
@@ -43,9 +43,9 @@ void BM_FitStreaming(benchmark::State& state) {
   long rows = 0;
   for (auto _ : state) {
     const ident::models::ArxStructure arx(2, {2}, {1});
-    auto source = ident::tools::MakeArxSource(ident::io::CsvReader(path).names(), "y", {"u"}, arx, path);
+    auto source = ident::workflow::MakeArxSource(ident::io::CsvReader(path).names(), "y", {"u"}, arx, path);
     auto estimator = ident::MakeRegressionEstimator(ident::EstimatorSettings{}, source->num_parameters());
-    const ident::tools::FitResult r = ident::tools::FitCsvFile(path, {}, *source, *estimator, {});
+    const ident::workflow::FitResult r = ident::workflow::FitCsvFile(path, {}, *source, *estimator, {});
     benchmark::DoNotOptimize(r.theta.data());
     rows = r.samples_estimation + r.samples_validation;
   }

@@ -12,7 +12,7 @@ include(CMakePackageConfigHelpers)
 set(IDENT_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/Ident")
 
 set(ident_installed_targets ident_common ident_models ident_approx ident_linalg ident_regression ident_observers
-                            ident_smoothing ident_density ident_control ident_io ident_core)
+                            ident_smoothing ident_density ident_control ident_io ident_workflow ident_core)
 install(TARGETS ${ident_installed_targets}
         EXPORT IdentTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT ident_development

@@ -1,4 +1,4 @@
-// libFuzzer target: tools::Fit against tools::FitCsvFile, and a record against the same record in other
+// libFuzzer target: workflow::Fit against workflow::FitCsvFile, and a record against the same record in other
 // units, for every registered estimator (properties in fuzz/fit_differential_property.h).
 #include "fuzz/fit_differential_property.h"
 #include "fuzz/fuzz_util.h"

@@ -1,4 +1,4 @@
-// Differential properties of `ident fit`'s computation (tools::Fit, tools::FitCsvFile, with the command's
+// Differential properties of `ident fit`'s computation (workflow::Fit, workflow::FitCsvFile, with the command's
 // default priors) on a small ARX record built from the fuzzer's bytes, for every registered estimator:
 //   - streamed vs in memory: FitCsvFile on the CSV file and Fit on the table read from it end alike —
 //     both with the same error message, or both with bit-for-bit the same θ, updates and fit %;
@@ -27,8 +27,8 @@
 #include "ident/io/csv.h"
 #include "ident/regression/regression_prior.h"
 #include "models/arx.h"
-#include "tools/data_source.h"
-#include "tools/fit.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
 
 namespace ident::fuzz {
 
@@ -37,27 +37,27 @@ namespace fit_differential_internal {
 struct Outcome {
   bool ok = false;
   std::string error;
-  tools::FitResult result;
+  workflow::FitResult result;
 };
 
 inline Outcome Run(const std::string& path, bool streamed, const EstimatorSettings& settings,
-                   const models::ArxStructure& arx, const tools::FitOptions& options) {
+                   const models::ArxStructure& arx, const workflow::FitOptions& options) {
   Outcome o;
   try {
     // The default priors of `ident fit` (tools/fit_command.cc): in the data's own scale — RLS the flat
     // prior of the estimation part's mean squares, the others their scale-invariant start-up prior —
     // without the absolute small-information check.
-    tools::FitOptions fit = options;
+    workflow::FitOptions fit = options;
     fit.min_regressor_information = 0;
     EstimatorSettings chosen = settings;
-    auto source = tools::MakeArxSource(io::CsvReader(path).names(), "y", {"u"}, arx, path);
+    auto source = workflow::MakeArxSource(io::CsvReader(path).names(), "y", {"u"}, arx, path);
     if (chosen.name == "rls") {
       Eigen::VectorXd mean_squares;
       if (streamed) {
-        mean_squares = tools::CsvEstimationMeanSquares(path, {}, *source, fit);
+        mean_squares = workflow::CsvEstimationMeanSquares(path, {}, *source, fit);
       } else {
         io::DataTable table = io::ReadCsv(path);
-        mean_squares = tools::EstimationMeanSquares(table, tools::PrepareData(table, *source, fit).first, *source);
+        mean_squares = workflow::EstimationMeanSquares(table, workflow::PrepareData(table, *source, fit).first, *source);
       }
       if ((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all())
         chosen.prior = RegressionPrior::Flat(mean_squares);
@@ -65,8 +65,8 @@ inline Outcome Run(const std::string& path, bool streamed, const EstimatorSettin
         fit.min_regressor_information = options.min_regressor_information;
     }
     auto estimator = MakeRegressionEstimator(chosen, source->num_parameters());
-    o.result = streamed ? tools::FitCsvFile(path, {}, *source, *estimator, fit)
-                        : tools::Fit(io::ReadCsv(path), *source, *estimator, fit);
+    o.result = streamed ? workflow::FitCsvFile(path, {}, *source, *estimator, fit)
+                        : workflow::Fit(io::ReadCsv(path), *source, *estimator, fit);
     o.ok = true;
   } catch (const InvalidArgument& e) {
     o.error = e.what();
@@ -93,7 +93,7 @@ inline std::string FitDifferentialProperty(const std::uint8_t* data, std::size_t
   static const char* const kEstimators[] = {"rls", "cauchy", "student:3", "huber", "cauchy-ml"};
   const std::string name = kEstimators[in.Byte() % 5];
   const int na = in.Byte() % 3, nb = 1 + in.Byte() % 2, nk = in.Byte() % 3;
-  tools::FitOptions options;
+  workflow::FitOptions options;
   options.split = in.Byte() % 2 ? 1.0 : 0.5;
   const int k = static_cast<int>(in.Byte() % 81) - 40;
   const int rows = 12 + in.Byte() % 90;
@@ -124,7 +124,7 @@ inline std::string FitDifferentialProperty(const std::uint8_t* data, std::size_t
     if (memory.error != streamed.error)
       return fmt::format("streamed and in-memory errors differ ({}): '{}' vs '{}'", what, memory.error, streamed.error);
   } else {
-    const tools::FitResult &a = memory.result, &b = streamed.result;
+    const workflow::FitResult &a = memory.result, &b = streamed.result;
     if (a.theta != b.theta || a.updates != b.updates ||
         !(a.validation.one_step == b.validation.one_step ||
           (std::isnan(a.validation.one_step) && std::isnan(b.validation.one_step))))
@@ -136,7 +136,7 @@ inline std::string FitDifferentialProperty(const std::uint8_t* data, std::size_t
     return "";
   }
   if (!in_units.ok) return fmt::format("accepted, but refused × 2^{} ({}): '{}'", k, what, in_units.error);
-  const tools::FitResult &a = memory.result, &s = in_units.result;
+  const workflow::FitResult &a = memory.result, &s = in_units.result;
   for (int i = 0; i < a.theta.size(); ++i)
     if (!(std::abs(s.theta(i) - a.theta(i)) <= 1e-7 * (1 + std::abs(a.theta(i)))))
       return fmt::format("theta {} differs × 2^{} ({}): {} vs {}", i, k, what, s.theta(i), a.theta(i));

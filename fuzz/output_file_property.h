@@ -1,5 +1,5 @@
 // Property of the output-file writer (ident::tools::OutputFile) and the trace row writer of `ident fit`
-// (ident::tools::WriteTraceRow), on arbitrary content, chunking and failure points.
+// (ident::workflow::WriteTraceRow), on arbitrary content, chunking and failure points.
 // Input:
 //   1 byte flags: bit 0 the target exists before (old content), bit 1 the target is a symbolic link to
 //     the file, bits 2-3 the failure (0 none, 1 abandoned before Commit at the failure point, 2 the
@@ -41,7 +41,7 @@
 #include "fuzz/fuzz_util.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
-#include "tools/fit.h"
+#include "ident/workflow/fit.h"
 #include "tools/output_file.h"
 
 namespace ident::fuzz {
@@ -122,11 +122,11 @@ inline std::string OutputFileProperty(const std::uint8_t* data, std::size_t size
     std::size_t buffer_size = 0;
     std::FILE* memory = open_memstream(&buffer, &buffer_size);
     if (!memory) return {};  // out of memory: nothing to check
-    tools::WriteTraceHeader(memory, rho);
+    workflow::WriteTraceHeader(memory, rho);
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const std::vector<double>& r = rows[k];
       const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(r.data() + 3, rho);
-      tools::WriteTraceRow(memory, {.t = static_cast<long>(k + 1), .nu = r[0], .beta = r[1], .pred_err = r[2],
+      workflow::WriteTraceRow(memory, {.t = static_cast<long>(k + 1), .nu = r[0], .beta = r[1], .pred_err = r[2],
                                     .theta = &theta, .Dy = r[static_cast<std::size_t>(rho) + 3]});
     }
     std::fclose(memory);
@@ -163,12 +163,12 @@ inline std::string OutputFileProperty(const std::uint8_t* data, std::size_t size
         written += chunk.size();
       }
     } else {
-      tools::WriteTraceHeader(out.stream(), rho);
+      workflow::WriteTraceHeader(out.stream(), rho);
       for (std::size_t k = 0; k < rows.size(); ++k) {
         if (failure == 1 && k >= fail_at % 64) throw Abandon{};
         const std::vector<double>& r = rows[k];
         const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(r.data() + 3, rho);
-        tools::WriteTraceRow(out.stream(), {.t = static_cast<long>(k + 1), .nu = r[0], .beta = r[1],
+        workflow::WriteTraceRow(out.stream(), {.t = static_cast<long>(k + 1), .nu = r[0], .beta = r[1],
                                             .pred_err = r[2], .theta = &theta, .Dy = r[static_cast<std::size_t>(rho) + 3]});
       }
     }

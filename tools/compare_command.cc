@@ -15,7 +15,7 @@
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "tools/commands.h"
-#include "tools/compare.h"
+#include "ident/workflow/compare.h"
 #include "tools/dataset_index.h"
 #include "tools/estimator_options.h"
 #include "tools/gnuplot.h"
@@ -41,14 +41,14 @@ struct CompareCommandOptions {
 };
 
 // One-step validation fit per trial seed, one line per estimator, and the clean LS level.
-void PlotCompare(OutputFile& out, const CompareResult& r, const OutlierSpec& spec) {
+void PlotCompare(OutputFile& out, const workflow::CompareResult& r, const workflow::OutlierSpec& spec) {
   PlotPanel panel{fmt::format("{}: one-step validation fit per outlier seed", r.structure), "seed", "fit %", {}};
   std::vector<double> seeds;
   const std::size_t trials = r.scores.empty() ? 0 : r.scores[0].one_step_per_trial.size();
   for (std::size_t i = 0; i < trials; ++i) seeds.push_back(static_cast<double>(spec.seed + i));
   if (trials == 1) seeds.push_back(static_cast<double>(spec.seed) + 1);  // a visible segment for one trial
   panel.series.push_back({"clean-data least squares", seeds, std::vector<double>(seeds.size(), r.reference.one_step)});
-  for (const EstimatorScore& s : r.scores) {
+  for (const workflow::EstimatorScore& s : r.scores) {
     std::vector<double> fit = s.one_step_per_trial;
     if (trials == 1) fit.push_back(fit[0]);
     panel.series.push_back({s.estimator, seeds, fit});
@@ -58,14 +58,14 @@ void PlotCompare(OutputFile& out, const CompareResult& r, const OutlierSpec& spe
 
 nlohmann::ordered_json Number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); }
 
-nlohmann::ordered_json SpreadJson(const Spread& s) {
+nlohmann::ordered_json SpreadJson(const workflow::Spread& s) {
   return {{"mean", Number(s.mean)}, {"std", Number(s.std)}, {"min", Number(s.min)}, {"median", Number(s.median)},
           {"p90", Number(s.p90)}, {"max", Number(s.max)}};
 }
 
 std::vector<double> ToStd(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
-nlohmann::ordered_json ToJson(const CompareResult& r, const std::string& path, const OutlierSpec& spec, int trials,
+nlohmann::ordered_json ToJson(const workflow::CompareResult& r, const std::string& path, const workflow::OutlierSpec& spec, int trials,
                               const std::string& cleaning) {
   nlohmann::ordered_json j;
   j["data"] = path;
@@ -83,7 +83,7 @@ nlohmann::ordered_json ToJson(const CompareResult& r, const std::string& path, c
                      {{"one_step", r.reference.one_step},
                       {"simulation", r.reference.simulation ? Number(*r.reference.simulation) : nullptr}}}};
   auto& list = j["estimators"] = nlohmann::ordered_json::array();
-  for (const EstimatorScore& s : r.scores) {
+  for (const workflow::EstimatorScore& s : r.scores) {
     nlohmann::ordered_json e;
     e["estimator"] = s.estimator;
     e["kind"] = s.kind;
@@ -104,12 +104,12 @@ nlohmann::ordered_json ToJson(const CompareResult& r, const std::string& path, c
   return j;
 }
 
-void PrintCsv(const CompareResult& r) {
+void PrintCsv(const workflow::CompareResult& r) {
   fmt::print("estimator,fit_one_step,fit_one_step_std,fit_one_step_min,fit_one_step_median,fit_one_step_max,"
              "fit_simulation,fit_simulation_std,theta_distance,theta_distance_std,ns_per_update");
   for (const auto& name : r.parameter_names) fmt::print(",{}", name);
   fmt::print("\n");
-  for (const EstimatorScore& s : r.scores) {
+  for (const workflow::EstimatorScore& s : r.scores) {
     auto sim = [&](double v) { return s.has_simulation ? fmt::format("{:.6g}", v) : std::string(); };
     fmt::print("{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{},{:.6g},{:.6g},{:.4g}", s.estimator, s.one_step.mean,
                s.one_step.std, s.one_step.min, s.one_step.median, s.one_step.max, sim(s.simulation.mean),
@@ -119,13 +119,13 @@ void PrintCsv(const CompareResult& r) {
   }
 }
 
-std::string Cell(const Spread& s, int trials, const char* format) {
+std::string Cell(const workflow::Spread& s, int trials, const char* format) {
   if (std::isnan(s.mean)) return "failed";
   const std::string mean = fmt::format(fmt::runtime(format), s.mean);
   return trials > 1 ? mean + " ± " + fmt::format(fmt::runtime(format), s.std) : mean;
 }
 
-void PrintTable(const CompareResult& r, const std::string& name, const OutlierSpec& spec, int trials,
+void PrintTable(const workflow::CompareResult& r, const std::string& name, const workflow::OutlierSpec& spec, int trials,
                 const std::string& cleaning) {
   fmt::print("{}: {}, estimation rows {}-{}, validation rows {}-{}\n", name, r.structure, r.estimation.first + 1,
              r.estimation.first + r.estimation.count, r.validation.first + 1, r.validation.first + r.validation.count);
@@ -143,12 +143,12 @@ void PrintTable(const CompareResult& r, const std::string& name, const OutlierSp
   const int w = trials > 1 ? 16 : 10;
   fmt::print("  {:<14} {:<9} {:>{}} {:>{}} {:>{}} {:>11}\n", "estimator", "kind", "one-step %", w, "simulation %", w,
              "θ distance", w, "ns/update");
-  for (const EstimatorScore& s : r.scores) {
+  for (const workflow::EstimatorScore& s : r.scores) {
     fmt::print("  {:<14} {:<9} {:>{}} {:>{}} {:>{}} {:>11.0f}\n", s.estimator, s.kind,
                Cell(s.one_step, trials, "{:.2f}"), w, s.has_simulation ? Cell(s.simulation, trials, "{:.2f}") : "-", w,
                Cell(s.theta_distance, trials, "{:.3f}"), w, s.ns_per_update);
   }
-  for (const EstimatorScore& s : r.scores)
+  for (const workflow::EstimatorScore& s : r.scores)
     if (s.failed_trials > 0)
       fmt::print("\n  {} failed in {} of {} trials (left out of its figures); first, {}\n", s.estimator,
                  s.failed_trials, trials, s.failure);
@@ -176,7 +176,7 @@ void RunCompare(CompareCommandOptions& o) {
   const double split = o.split.value_or(dataset && !o.structure.Given() ? dataset->split : 0.5);
   IDENT_REQUIRE(!structure.output.empty(), "give --output (the output column)");
   const std::string detrend = !o.detrend.empty() ? o.detrend : structure.intercept ? "none" : "mean";
-  const OutlierSpec spec = OutlierSpec::Parse(o.outliers);
+  const workflow::OutlierSpec spec = workflow::OutlierSpec::Parse(o.outliers);
   CheckOutputPaths({{"--plot", o.plot}}, {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
   std::optional<OutputFile> plot;  // renamed onto --plot only when the comparison and the plot succeed
   if (!o.plot.empty()) {
@@ -185,7 +185,7 @@ void RunCompare(CompareCommandOptions& o) {
   }
 
   io::DataTable table = io::ReadCsv(path);
-  std::unique_ptr<DataSource> source = structure.MakeSource(table.names, path);
+  std::unique_ptr<workflow::DataSource> source = structure.MakeSource(table.names, path);
   // Each --estimators value is a comma-separated list; an empty name (as in "rls,,cauchy") is refused.
   std::vector<std::string> names;
   for (const std::string& list : o.estimators) {
@@ -198,7 +198,7 @@ void RunCompare(CompareCommandOptions& o) {
       start = comma + 1;
     }
   }
-  // The estimation part's rows as tools::Fit splits (0 = unknown for a split that Fit refuses).
+  // The estimation part's rows as workflow::Fit splits them (0 = unknown for a split that Fit refuses).
   const int n = table.num_rows();
   const bool valid_split = std::isfinite(split) && split > 0 && split <= 1;
   const long estimation_rows = !valid_split ? 0 : split == 1 ? n : static_cast<long>(std::floor(split * n));
@@ -211,15 +211,15 @@ void RunCompare(CompareCommandOptions& o) {
     if (settings.back().name != "cauchy" && settings.back().name != "student") settings.back().delta.reset();
   }
 
-  CompareOptions options;
+  workflow::CompareOptions options;
   options.fit.split = split;
   options.fit.passes = o.passes;
-  options.fit.detrend = detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  options.fit.detrend = detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
   options.fit.decision = structure.Decision();
   options.outliers = spec;
   options.trials = o.trials;
   if (isatty(STDERR_FILENO)) options.progress = ProgressBar;
-  const CompareResult result = Compare(std::move(table), *source, settings, names, options);
+  const workflow::CompareResult result = workflow::Compare(std::move(table), *source, settings, names, options);
   const std::string name = dataset ? dataset->name : path;
   if (plot) {
     PlotCompare(*plot, result, spec);

@@ -14,12 +14,12 @@
 #include "ident/io/csv.h"
 #include "tools/commands.h"
 #include "tools/estimator_options.h"
-#include "tools/fit.h"
+#include "ident/workflow/fit.h"
 #include "tools/fit_plot.h"
 #include "tools/gnuplot.h"
 #include "tools/output_file.h"
 #include "tools/output_paths.h"
-#include "tools/residual_analysis.h"
+#include "ident/workflow/residual_analysis.h"
 #include "tools/structure_options.h"
 
 namespace ident::tools {
@@ -53,7 +53,7 @@ nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events
   return list;
 }
 
-nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, double split, const std::string& detrend) {
+nlohmann::ordered_json ToJson(const workflow::FitResult& r, const std::string& data, double split, const std::string& detrend) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
   nlohmann::ordered_json j;
   j["data"] = data;
@@ -98,7 +98,7 @@ nlohmann::ordered_json ToJson(const FitResult& r, const std::string& data, doubl
   return j;
 }
 
-void PrintResiduals(const ResidualAnalysis& a) {
+void PrintResiduals(const workflow::ResidualAnalysis& a) {
   auto worst = [](const std::vector<double>& r, int first_lag) {
     std::size_t k = 0;
     for (std::size_t i = 1; i < r.size(); ++i)
@@ -118,7 +118,7 @@ void PrintResiduals(const ResidualAnalysis& a) {
   fmt::print("  {}\n", a.Verdict());
 }
 
-nlohmann::ordered_json ResidualJson(const ResidualAnalysis& a) {
+nlohmann::ordered_json ResidualJson(const workflow::ResidualAnalysis& a) {
   nlohmann::ordered_json j;
   j["samples"] = a.samples;
   j["band"] = a.band;
@@ -132,7 +132,7 @@ nlohmann::ordered_json ResidualJson(const ResidualAnalysis& a) {
   return j;
 }
 
-void PrintReport(const FitResult& r, const std::string& data, const FitCommandOptions& o) {
+void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o) {
   fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
              r.passes > 1 ? fmt::format(", {} passes", r.passes) : "", o.detrend);
   if (o.split == 1)
@@ -178,18 +178,18 @@ void RunFit(const FitCommandOptions& o) {
                    {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing};
-  std::unique_ptr<DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
+  std::unique_ptr<workflow::DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
   // The record's length first: building an estimator costs O(rho^3) for large orders.
-  FitOptions length_check;
+  workflow::FitOptions length_check;
   length_check.split = o.split;
-  const int estimation_rows = CheckCsvRecordLength(path, csv, *source, length_check);
+  const int estimation_rows = workflow::CheckCsvRecordLength(path, csv, *source, length_check);
   const int rho = source->num_parameters();
   EstimatorSettings settings = o.estimator.Resolve(rho, "", estimation_rows);
   std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, rho);  // checks the options
-  FitOptions options;
+  workflow::FitOptions options;
   options.split = o.split;
   options.passes = o.passes;
-  options.detrend = o.detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
   options.decision = o.structure.Decision();
   if (settings.prior) options.min_regressor_information = 0;  // the user's prior, the user's scale
   // Default priors in the data's own scale, so that a record in small or large units fits as it does in
@@ -224,9 +224,9 @@ void RunFit(const FitCommandOptions& o) {
   };
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
-  if (o.plot.empty() && CountCsvDataRows(path) > kInMemoryRows) {
-    if (scaled_rls) use_scaled_flat_prior(CsvEstimationMeanSquares(path, csv, *source, options));
-    const FitResult result = FitCsvFile(path, csv, *source, *estimator, options);
+  if (o.plot.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
+    if (scaled_rls) use_scaled_flat_prior(workflow::CsvEstimationMeanSquares(path, csv, *source, options));
+    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *estimator, options);
     commit_outputs();
     if (o.json) {
       nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
@@ -250,12 +250,12 @@ void RunFit(const FitCommandOptions& o) {
   }
   // The split and detrended table, for the prior's scale and the residual analysis on the validation part.
   io::DataTable prepared = table;
-  const auto [estimation, validation] = PrepareData(prepared, *source, options);
-  if (scaled_rls) use_scaled_flat_prior(EstimationMeanSquares(prepared, estimation, *source));
-  const FitResult result = Fit(std::move(table), *source, *estimator, options);
-  std::optional<ResidualAnalysis> residuals;
+  const auto [estimation, validation] = workflow::PrepareData(prepared, *source, options);
+  if (scaled_rls) use_scaled_flat_prior(workflow::EstimationMeanSquares(prepared, estimation, *source));
+  const workflow::FitResult result = workflow::Fit(std::move(table), *source, *estimator, options);
+  std::optional<workflow::ResidualAnalysis> residuals;
   if (validation.count - source->first_regression_index() > kResidualLags + 1)
-    residuals = AnalyseResiduals(prepared, validation, *source, result.theta, kResidualLags);
+    residuals = workflow::AnalyseResiduals(prepared, validation, *source, result.theta, kResidualLags);
   if (plot) PlotFit(*plot, prepared, validation, *source, result.theta, history);
   commit_outputs();
   if (o.json) {

@@ -6,12 +6,12 @@
 
 namespace ident::tools {
 
-void PlotFit(OutputFile& out, const io::DataTable& data, Segment validation, DataSource& source,
+void PlotFit(OutputFile& out, const io::DataTable& data, workflow::Segment validation, workflow::DataSource& source,
              const Eigen::VectorXd& theta, const ParameterHistory& history) {
   const int rho = source.num_parameters();
   Eigen::VectorXd z(rho);
   PlotSeries measured{"measured", {}, {}}, one_step{"one-step prediction", {}, {}}, simulated{"simulation", {}, {}};
-  // One-step: measured past outputs (as in Score).
+  // One-step: measured past outputs (as in workflow::Score).
   source.Reset();
   for (int r = validation.first; r < validation.first + validation.count; ++r) {
     const Eigen::VectorXd row = data.values.row(r).transpose();
@@ -27,7 +27,7 @@ void PlotFit(OutputFile& out, const io::DataTable& data, Segment validation, Dat
   output.series.push_back(measured);
   output.series.push_back(one_step);
   if (source.dynamic()) {
-    // Simulation: the model's own past outputs after the first t0 measured samples (as in Score).
+    // Simulation: the model's own past outputs after the first t0 measured samples (as in workflow::Score).
     source.Reset();
     const int t0 = source.first_regression_index();
     for (int r = validation.first; r < validation.first + validation.count; ++r) {

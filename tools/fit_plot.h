@@ -2,7 +2,7 @@
 // validation part, and the parameter trajectories θ̂(t) during estimation (tools/gnuplot.h renders it).
 //
 // Example:
-//   ParameterHistory history;        // filled from FitOptions::on_update
+//   ParameterHistory history;        // filled from workflow::FitOptions::on_update
 //   OutputFile out("fit.png", "--plot file");
 //   PlotFit(out, prepared_table, validation, *source, theta, history);
 //   out.Commit();
@@ -14,8 +14,8 @@
 #include <Eigen/Core>
 
 #include "ident/io/csv.h"
-#include "tools/data_source.h"
-#include "tools/fit.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
 #include "tools/output_file.h"
 
 namespace ident::tools {
@@ -27,7 +27,7 @@ struct ParameterHistory {
 
 // Renders into `out`'s temporary file (the caller commits it). Throws InvalidArgument (bad extension,
 // gnuplot failing) naming the file.
-void PlotFit(OutputFile& out, const io::DataTable& data, Segment validation, DataSource& source,
+void PlotFit(OutputFile& out, const io::DataTable& data, workflow::Segment validation, workflow::DataSource& source,
              const Eigen::VectorXd& theta, const ParameterHistory& history);
 
 }  // namespace ident::tools

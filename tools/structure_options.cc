@@ -49,7 +49,7 @@ bool StructureCliOptions::Given() const {
   return false;
 }
 
-std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<std::string>& columns,
+std::unique_ptr<workflow::DataSource> StructureCliOptions::MakeSource(const std::vector<std::string>& columns,
                                                             const std::string& source) const {
   // The cleaning options are checked whatever the structure: a bad value is an error, not ignored.
   models::OutputCleaningOptions clean = cleaning;
@@ -58,7 +58,7 @@ std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<st
   IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
   if (!regressors.empty()) {
     models::StaticRegression regression{regressors, intercept};
-    return MakeStaticSource(columns, output, regression, source);
+    return workflow::MakeStaticSource(columns, output, regression, source);
   }
   IDENT_REQUIRE(!inputs.empty(), "give --input (ARX/FIR model) or --regressors (static regression)");
   const std::size_t m = inputs.size();
@@ -68,7 +68,7 @@ std::unique_ptr<DataSource> StructureCliOptions::MakeSource(const std::vector<st
     return v.size() == m ? v : std::vector<int>(m, v[0]);
   };
   models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
-  return MakeArxSource(columns, output, inputs, arx, source, clean);
+  return workflow::MakeArxSource(columns, output, inputs, arx, source, clean);
 }
 
 }  // namespace ident::tools

@@ -10,7 +10,7 @@
 
 #include "ident/regression/outlier_decision.h"
 #include "models/output_cleaner.h"
-#include "tools/data_source.h"
+#include "ident/workflow/data_source.h"
 
 namespace ident::tools {
 
@@ -40,7 +40,7 @@ struct StructureCliOptions {
   // The estimator-side decision that goes with `cleaning`. Throws InvalidArgument if invalid.
   OutlierDecision Decision() const;
   // Throws InvalidArgument (inconsistent options) or DataError (unknown column).
-  std::unique_ptr<DataSource> MakeSource(const std::vector<std::string>& columns, const std::string& source) const;
+  std::unique_ptr<workflow::DataSource> MakeSource(const std::vector<std::string>& columns, const std::string& source) const;
 
  private:
   std::vector<const CLI::Option*> options_;  // set by AddTo, read by Given()

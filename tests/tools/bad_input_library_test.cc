@@ -25,8 +25,8 @@
 #include "models/measurement.h"
 #include "models/penalties.h"
 #include "models/state_space.h"
-#include "tools/data_source.h"
-#include "tools/fit.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
 
 namespace ident {
 namespace {
@@ -105,14 +105,14 @@ TEST(BadInputLibrary, ArxOrdersAreCheckedByName) {
 TEST(BadInputLibrary, FitWorkflowChecksSplitAndRecordLength) {
   io::DataTable table = io::ParseCsv("u,y\n1,2\n2,3\n3,5\n4,4\n5,1\n6,0\n", "<t>");
   const models::ArxStructure arx(1, {1}, {1});
-  auto source = tools::MakeArxSource(table.names, "y", {"u"}, arx, "<t>");
+  auto source = workflow::MakeArxSource(table.names, "y", {"u"}, arx, "<t>");
   auto estimator = MakeRegressionEstimator({}, source->num_parameters());
-  tools::FitOptions options;
+  workflow::FitOptions options;
   options.split = 1.5;
-  EXPECT_INVALID(tools::Fit(table, *source, *estimator, options), "split = 1.5; need 0 < split <= 1");
+  EXPECT_INVALID(workflow::Fit(table, *source, *estimator, options), "split = 1.5; need 0 < split <= 1");
   options.split = 0.5;
-  EXPECT_INVALID(tools::Fit(table, *source, *estimator, options), "<t>: the estimation part has 3 rows");
-  EXPECT_INVALID(tools::MakeArxSource(table.names, "y", {"y"}, arx, "<t>"), "column 'y' is both the output and an input");
+  EXPECT_INVALID(workflow::Fit(table, *source, *estimator, options), "<t>: the estimation part has 3 rows");
+  EXPECT_INVALID(workflow::MakeArxSource(table.names, "y", {"y"}, arx, "<t>"), "column 'y' is both the output and an input");
 }
 
 TEST(BadInputLibrary, CsvTextErrorsAreDataErrorsNamingLineAndColumn) {
@@ -137,13 +137,13 @@ TEST(StreamingFit, EqualsTheInMemoryFitOnTheDryerRecord) {
   const std::string path = "datasets/dryer.csv";
   const models::ArxStructure arx(2, {2}, {3});
   for (const double split : {0.5, 1.0}) {
-    auto s1 = tools::MakeArxSource(io::CsvReader(path).names(), "y", {"u"}, arx, path);
+    auto s1 = workflow::MakeArxSource(io::CsvReader(path).names(), "y", {"u"}, arx, path);
     auto s2 = s1->Clone();
     auto e1 = MakeRegressionEstimator({}, 4), e2 = MakeRegressionEstimator({}, 4);
-    tools::FitOptions options;
+    workflow::FitOptions options;
     options.split = split;
-    const tools::FitResult a = tools::Fit(io::ReadCsv(path), *s1, *e1, options);
-    const tools::FitResult b = tools::FitCsvFile(path, {}, *s2, *e2, options);
+    const workflow::FitResult a = workflow::Fit(io::ReadCsv(path), *s1, *e1, options);
+    const workflow::FitResult b = workflow::FitCsvFile(path, {}, *s2, *e2, options);
     EXPECT_EQ(a.theta, b.theta) << split;  // same arithmetic, bit for bit
     EXPECT_EQ(a.updates, b.updates);
     EXPECT_EQ(a.samples_estimation, b.samples_estimation);
@@ -162,7 +162,7 @@ TEST(StreamingFit, CountsDataRowsLikeTheReader) {
     std::fputs("\n  \n\xEF\xBB\xBFu,y\r\n\n \t\r\n1,2\r\n3,4\r5,6\n7,8\r\n9,10", f);  // blank lines, CRLF, CR, no final newline
     std::fclose(f);
   }
-  EXPECT_EQ(tools::CountCsvDataRows(path), 5);
+  EXPECT_EQ(workflow::CountCsvDataRows(path), 5);
   const io::DataTable table = io::ReadCsv(path);
   ASSERT_EQ(table.num_rows(), 5);
   EXPECT_EQ(table.values(4, 1), 10);
@@ -180,20 +180,20 @@ TEST(BadInputLibrary, RecordLengthIsCheckedFromTheRowCountAlone) {
     return path;
   };
   const std::string path = write("short.csv", "u,y\n1,2\n2,3\n3,5\n4,4\n5,1\n6,0\n");
-  auto source = tools::MakeArxSource({"u", "y"}, "y", {"u"}, models::ArxStructure(2000, {2}, {1}), path);
-  tools::FitOptions options;
-  EXPECT_INVALID(tools::CheckCsvRecordLength(path, {}, *source, options),
+  auto source = workflow::MakeArxSource({"u", "y"}, "y", {"u"}, models::ArxStructure(2000, {2}, {1}), path);
+  workflow::FitOptions options;
+  EXPECT_INVALID(workflow::CheckCsvRecordLength(path, {}, *source, options),
                  "the estimation part has 3 rows; ARX(2000,2,1) with 2002 parameters needs at least 4003");
-  auto small = tools::MakeArxSource({"u", "y"}, "y", {"u"}, models::ArxStructure(1, {1}, {1}), path);
-  EXPECT_INVALID(tools::CheckCsvRecordLength(path, {}, *small, options),
+  auto small = workflow::MakeArxSource({"u", "y"}, "y", {"u"}, models::ArxStructure(1, {1}, {1}), path);
+  EXPECT_INVALID(workflow::CheckCsvRecordLength(path, {}, *small, options),
                  "the estimation part has 3 rows; ARX(1,1,1) with 2 parameters needs at least 4");
   options.split = 1;  // 6 rows
-  EXPECT_NO_THROW(tools::CheckCsvRecordLength(path, {}, *small, options));
+  EXPECT_NO_THROW(workflow::CheckCsvRecordLength(path, {}, *small, options));
   options.split = 0.1;  // 0 estimation rows
-  EXPECT_INVALID(tools::CheckCsvRecordLength(path, {}, *small, options), "the estimation part has 0 rows");
+  EXPECT_INVALID(workflow::CheckCsvRecordLength(path, {}, *small, options), "the estimation part has 0 rows");
   const std::string ragged = write("short_ragged.csv", "u,y\n1,2\n2,3,4\n");
   try {
-    tools::CheckCsvRecordLength(ragged, {}, *source, {});
+    workflow::CheckCsvRecordLength(ragged, {}, *source, {});
     ADD_FAILURE() << "no error";
   } catch (const DataError& e) {
     EXPECT_NE(std::string(e.what()).find("short_ragged.csv:3: row has 3 fields; the header has 2"), std::string::npos)

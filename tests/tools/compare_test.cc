@@ -10,15 +10,15 @@
 #include "ident/regression/estimator_registry.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
-#include "tools/compare.h"
+#include "ident/workflow/compare.h"
 
 namespace ident::testing {
 namespace {
 
-using tools::InjectOutliers;
-using tools::OutlierSpec;
-using tools::Segment;
-using tools::Spread;
+using workflow::InjectOutliers;
+using workflow::OutlierSpec;
+using workflow::Segment;
+using workflow::Spread;
 
 TEST(InjectOutliers, IsReproducibleFromItsSeedAndDiffersBetweenSeeds) {
   const Eigen::VectorXd base = Eigen::VectorXd::LinSpaced(600, -1, 1);

@@ -1,4 +1,4 @@
-// Residual analysis (tools/residual_analysis.h) against closed forms, and the --plot options.
+// Residual analysis (ident/workflow/residual_analysis.h) against closed forms, and the --plot options.
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support/cli.h"
-#include "tools/residual_analysis.h"
+#include "ident/workflow/residual_analysis.h"
 
 namespace ident::testing {
 namespace {
@@ -16,10 +16,10 @@ namespace {
 TEST(ResidualAnalysis, CorrelationsMatchTheirDefinitionOnAHandExample) {
   // e = [1, −1, 2, 0] (mean 0.5): centred c = [0.5, −1.5, 1.5, −0.5], Σc² = 5;
   // r(1) = (0.5·−1.5 + −1.5·1.5 + 1.5·−0.5)/5 = −3.75/5 = −0.75.
-  const std::vector<double> r = tools::Autocorrelation({1, -1, 2, 0}, 2);
+  const std::vector<double> r = workflow::Autocorrelation({1, -1, 2, 0}, 2);
   EXPECT_DOUBLE_EQ(r[0], -0.75);
   EXPECT_DOUBLE_EQ(r[1], (0.5 * 1.5 + -1.5 * -0.5) / 5);
-  const std::vector<double> x = tools::CrossCorrelation({1, -1, 2, 0}, {1, -1, 2, 0}, 0);
+  const std::vector<double> x = workflow::CrossCorrelation({1, -1, 2, 0}, {1, -1, 2, 0}, 0);
   EXPECT_DOUBLE_EQ(x[0], 1.0);
 }
 
@@ -29,7 +29,7 @@ TEST(ResidualAnalysis, AnAr1SequenceHasLagOneCorrelationNearItsCoefficient) {
   std::normal_distribution<double> w(0, 1);
   std::vector<double> e{0};
   for (int t = 1; t < 20000; ++t) e.push_back(0.6 * e.back() + w(rng));
-  const std::vector<double> r = tools::Autocorrelation(e, 3);
+  const std::vector<double> r = workflow::Autocorrelation(e, 3);
   EXPECT_NEAR(r[0], 0.6, 0.03);
   EXPECT_NEAR(r[1], 0.36, 0.03);
   EXPECT_NEAR(r[2], 0.216, 0.03);
@@ -41,7 +41,7 @@ TEST(ResidualAnalysis, CrossCorrelationPeaksAtTheDelay) {
   std::vector<double> u, e;
   for (int t = 0; t < 5000; ++t) u.push_back(w(rng));
   for (int t = 0; t < 5000; ++t) e.push_back(t >= 3 ? u[static_cast<std::size_t>(t - 3)] : 0.0);
-  const std::vector<double> r = tools::CrossCorrelation(e, u, 6);
+  const std::vector<double> r = workflow::CrossCorrelation(e, u, 6);
   EXPECT_NEAR(r[3], 1.0, 0.01);
   for (int k : {0, 1, 2, 4, 5, 6}) EXPECT_LT(std::abs(r[static_cast<std::size_t>(k)]), 0.06) << k;
 }
@@ -57,7 +57,7 @@ TEST(ResidualAnalysis, WhiteNoiseFailsTheWhitenessTestAtAboutTheNominalRate) {
     std::vector<double> e;
     for (int t = 0; t < 500; ++t) e.push_back(w(rng));
     double q = 0;
-    for (double r : tools::Autocorrelation(e, 20)) q += 500 * r * r;
+    for (double r : workflow::Autocorrelation(e, 20)) q += 500 * r * r;
     rejected += q > limit;
   }
   EXPECT_LE(rejected, 14);

@@ -20,10 +20,10 @@
 #include <Eigen/Core>
 
 #include "ident/io/csv.h"
-#include "tools/data_source.h"
-#include "tools/fit.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 
 struct ResidualAnalysis {
   int samples = 0;                       // N
@@ -50,4 +50,4 @@ std::vector<double> CrossCorrelation(const std::vector<double>& e, const std::ve
 ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, DataSource& source,
                                   const Eigen::VectorXd& theta, int max_lag = 20);
 
-}  // namespace ident::tools
+}  // namespace ident::workflow

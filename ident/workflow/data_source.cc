@@ -1,11 +1,11 @@
-#include "tools/data_source.h"
+#include "ident/workflow/data_source.h"
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
 #include "common/error.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 namespace {
 
 int Find(const std::vector<std::string>& columns, const std::string& name, const std::string& source) {
@@ -113,4 +113,4 @@ std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& col
   return std::make_unique<StaticSource>(Find(columns, output, source), std::move(x), regression);
 }
 
-}  // namespace ident::tools
+}  // namespace ident::workflow

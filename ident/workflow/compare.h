@@ -1,7 +1,7 @@
 // `ident compare` as a library: seeded outlier injection and the scoring of several estimators on
 // the same corrupted record.
 //
-// Protocol (issue 6, item 4): split and detrend as `ident fit` (tools/fit.h). A clean least-squares
+// Protocol (issue 6, item 4): split and detrend as `ident fit` (ident/workflow/fit.h). A clean least-squares
 // fit (RLS with the flat prior = batch LS) on the estimation part gives θ_LS and the residual std σ.
 // Each trial adds ±SIZE·σ (random sign) to y at ⌊RATE·N_est + ½⌋ distinct estimation rows drawn with
 // seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the
@@ -23,9 +23,9 @@
 
 #include "ident/regression/estimator_registry.h"
 #include "ident/io/csv.h"
-#include "tools/fit.h"
+#include "ident/workflow/fit.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 
 struct OutlierSpec {
   double rate = 0.05;        // fraction of estimation samples, in [0, 1)
@@ -87,4 +87,4 @@ struct CompareResult {
 CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<EstimatorSettings>& estimators,
                       const std::vector<std::string>& labels, const CompareOptions& options);
 
-}  // namespace ident::tools
+}  // namespace ident::workflow

@@ -1,4 +1,4 @@
-#include "tools/compare.h"
+#include "ident/workflow/compare.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,7 +10,7 @@
 
 #include "common/error.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 namespace {
 
 // Forwards to an estimator and records every (y, z) it was given, so the exact update sequence
@@ -291,4 +291,4 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   return result;
 }
 
-}  // namespace ident::tools
+}  // namespace ident::workflow

@@ -1,4 +1,4 @@
-#include "tools/fit.h"
+#include "ident/workflow/fit.h"
 
 #include <cerrno>
 #include <cmath>
@@ -12,7 +12,7 @@
 
 #include "common/error.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 namespace {
 
 // The estimation and validation segments of an n-row record; checks they are long enough.
@@ -645,4 +645,4 @@ int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, con
   return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options).estimation.count; });
 }
 
-}  // namespace ident::tools
+}  // namespace ident::workflow

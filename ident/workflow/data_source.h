@@ -17,7 +17,7 @@
 #include "ident/io/csv.h"
 #include "models/arx.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 
 class DataSource {
  public:
@@ -57,4 +57,4 @@ std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& column
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,
                                              const models::StaticRegression& regression, const std::string& source);
 
-}  // namespace ident::tools
+}  // namespace ident::workflow

@@ -1,4 +1,4 @@
-#include "tools/residual_analysis.h"
+#include "ident/workflow/residual_analysis.h"
 
 #include <cmath>
 
@@ -7,7 +7,7 @@
 
 #include "common/error.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 namespace {
 
 std::vector<double> Centred(const std::vector<double>& v) {
@@ -127,4 +127,4 @@ ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, Da
   return a;
 }
 
-}  // namespace ident::tools
+}  // namespace ident::workflow

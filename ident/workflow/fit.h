@@ -27,9 +27,9 @@
 #include "ident/io/csv.h"
 #include "ident/regression/outlier_decision.h"
 #include "ident/regression/regression_estimator.h"
-#include "tools/data_source.h"
+#include "ident/workflow/data_source.h"
 
-namespace ident::tools {
+namespace ident::workflow {
 
 enum class Detrend { kMean, kNone };
 
@@ -155,4 +155,4 @@ struct TraceRow {
 };
 void WriteTraceRow(std::FILE* trace, const TraceRow& row);
 
-}  // namespace ident::tools
+}  // namespace ident::workflow
