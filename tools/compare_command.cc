@@ -207,8 +207,10 @@ void RunCompare(CompareCommandOptions& o) {
     settings.push_back(o.estimator.Resolve(source->num_parameters(), name, estimation_rows));
     // The lock-in options and delta are for the Kárný–Hangos estimators of the comparison (cauchy,
     // student); the others have no such safeguard or convention.
-    if (settings.back().name == "rls") settings.back().lock_in = {};
-    if (settings.back().name != "cauchy" && settings.back().name != "student") settings.back().delta.reset();
+    if (!RegressionEstimatorTraits(settings.back().name).lock_in) {
+      settings.back().lock_in = {};
+      settings.back().delta.reset();
+    }
   }
 
   workflow::CompareOptions options;

@@ -197,12 +197,12 @@ void RunFit(const FitCommandOptions& o) {
   // the absolute flat prior of the recursion and with it the small-information check); the Kárný–Hangos
   // estimators' data-driven start-up prior is scale-invariant already (ident/regression/student_regression.h).
   const bool default_prior = !settings.prior && !settings.exact;
-  const bool scaled_rls = default_prior && settings.name == "rls";
-  if (default_prior && !scaled_rls) options.min_regressor_information = 0;
-  auto use_scaled_flat_prior = [&](const Eigen::VectorXd& mean_squares) {
-    if (!((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all()))
-      return;  // out of range (or no usable sample): the absolute flat prior, whose check names the problem
-    settings.prior = RegressionPrior::Flat(mean_squares);
+  const bool scaled_prior = default_prior && RegressionEstimatorTraits(settings.name).data_scaled_prior;
+  if (default_prior && !scaled_prior) options.min_regressor_information = 0;
+  auto use_scaled_prior = [&](const Eigen::VectorXd& mean_squares) {
+    const std::optional<RegressionPrior> prior = DataScaledDefaultPrior(settings, mean_squares);
+    if (!prior) return;  // out of range (or no usable sample): the absolute flat prior, whose check names the problem
+    settings.prior = prior;
     estimator = MakeRegressionEstimator(settings, rho);
     options.min_regressor_information = 0;
   };
@@ -225,7 +225,7 @@ void RunFit(const FitCommandOptions& o) {
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
   if (o.plot.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
-    if (scaled_rls) use_scaled_flat_prior(workflow::CsvEstimationMeanSquares(path, csv, *source, options));
+    if (scaled_prior) use_scaled_prior(workflow::CsvEstimationMeanSquares(path, csv, *source, options));
     const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *estimator, options);
     commit_outputs();
     if (o.json) {
@@ -251,7 +251,7 @@ void RunFit(const FitCommandOptions& o) {
   // The split and detrended table, for the prior's scale and the residual analysis on the validation part.
   io::DataTable prepared = table;
   const auto [estimation, validation] = workflow::PrepareData(prepared, *source, options);
-  if (scaled_rls) use_scaled_flat_prior(workflow::EstimationMeanSquares(prepared, estimation, *source));
+  if (scaled_prior) use_scaled_prior(workflow::EstimationMeanSquares(prepared, estimation, *source));
   const workflow::FitResult result = workflow::Fit(std::move(table), *source, *estimator, options);
   std::optional<workflow::ResidualAnalysis> residuals;
   if (validation.count - source->first_regression_index() > kResidualLags + 1)

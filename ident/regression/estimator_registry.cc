@@ -86,16 +86,31 @@ std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, in
   return std::make_unique<RegressionEstimatorModel<BatchRegressionEstimator>>(name, rho, options);
 }
 
-const std::vector<std::pair<std::string, Factory>>& Registry() {
-  static const std::vector<std::pair<std::string, Factory>> registry = {
-      {"rls", MakeRls},
-      {"cauchy", MakeCauchy},
-      {"student", MakeStudentT},
-      {"huber", [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); }},
+struct Entry {
+  std::string name;
+  Factory factory;
+  EstimatorTraits traits;
+};
+
+const std::vector<Entry>& Registry() {
+  static const std::vector<Entry> registry = {
+      {"rls", MakeRls, {.data_scaled_prior = true}},
+      {"cauchy", MakeCauchy, {.lock_in = true}},
+      {"student", MakeStudentT, {.lock_in = true}},
+      {"huber", [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); },
+       {}},
       {"cauchy-ml",
-       [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); }},
+       [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); },
+       {}},
   };
   return registry;
+}
+
+const Entry& Find(std::string_view name) {
+  for (const Entry& entry : Registry())
+    if (entry.name == name) return entry;
+  throw InvalidArgument(fmt::format("unknown estimator '{}' (known: {})", name,
+                                    fmt::join(RegressionEstimatorNames(), ", ")));
 }
 
 }  // namespace
@@ -118,16 +133,22 @@ EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings ba
 
 std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings,
                                                                 int num_parameters) {
-  for (const auto& [name, factory] : Registry())
-    if (name == settings.name) return factory(settings, num_parameters);
-  throw InvalidArgument(fmt::format("unknown estimator '{}' (known: {})", settings.name,
-                                    fmt::join(RegressionEstimatorNames(), ", ")));
+  return Find(settings.name).factory(settings, num_parameters);
 }
 
 std::vector<std::string> RegressionEstimatorNames() {
   std::vector<std::string> names;
-  for (const auto& entry : Registry()) names.push_back(entry.first);
+  for (const Entry& entry : Registry()) names.push_back(entry.name);
   return names;
+}
+
+EstimatorTraits RegressionEstimatorTraits(std::string_view name) { return Find(name).traits; }
+
+std::optional<RegressionPrior> DataScaledDefaultPrior(const EstimatorSettings& settings,
+                                                      const Eigen::VectorXd& mean_squares) {
+  if (!RegressionEstimatorTraits(settings.name).data_scaled_prior || settings.prior || settings.exact) return {};
+  if (!((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all())) return {};
+  return RegressionPrior::Flat(mean_squares);
 }
 
 }  // namespace ident

@@ -58,4 +58,22 @@ std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorS
 // The registered names, in the order they are documented.
 std::vector<std::string> RegressionEstimatorNames();
 
+// What a workflow needs to know of a registered estimator before it builds one.
+struct EstimatorTraits {
+  // Its default prior is flat with the data's own scale, RegressionPrior::Flat(mean squares of the
+  // regressors) (RLS); the Kárný–Hangos start-up prior is scale-invariant already, the batch ones have none.
+  bool data_scaled_prior = false;
+  // It has the lock-in safeguard and the ω-exponent convention δ (the Kárný–Hangos estimators).
+  bool lock_in = false;
+};
+// Throws InvalidArgument for an unknown name.
+EstimatorTraits RegressionEstimatorTraits(std::string_view name);
+
+// The default prior in the data's own scale for `settings` — set when the estimator has one
+// (EstimatorTraits::data_scaled_prior), the settings leave the prior to it (no prior, not exact), and every
+// mean square is in [1e-280, 1e280]; otherwise empty (the estimator's absolute default, whose checks then
+// name a problem of scale).
+std::optional<RegressionPrior> DataScaledDefaultPrior(const EstimatorSettings& settings,
+                                                      const Eigen::VectorXd& mean_squares);
+
 }  // namespace ident

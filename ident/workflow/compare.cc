@@ -179,16 +179,15 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   result.structure = source.structure();
   result.parameter_names = source.parameter_names();
 
-  // Default priors in the data's own scale, as `ident fit` sets them (tools/fit_command.cc): RLS's flat prior
-  // from the clean estimation part's mean squares; the Kárný–Hangos start-up prior is scale-invariant.
+  // Default priors in the data's own scale (DataScaledDefaultPrior, ident/regression/estimator_registry.h), from
+  // the clean estimation part's mean squares.
   std::vector<EstimatorSettings> settings = estimators;
   EstimatorSettings ls_settings;
   FitOptions fit = options.fit;
   const Eigen::VectorXd mean_squares = EstimationMeanSquares(data, result.estimation, source);
-  if ((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all()) {
-    ls_settings.prior = RegressionPrior::Flat(mean_squares);
+  if ((ls_settings.prior = DataScaledDefaultPrior(ls_settings, mean_squares))) {
     for (auto& s : settings)
-      if (!s.prior && !s.exact && s.name == "rls") s.prior = ls_settings.prior;
+      if (std::optional<RegressionPrior> prior = DataScaledDefaultPrior(s, mean_squares)) s.prior = prior;
     bool absolute_prior = false;  // an --exact estimator keeps the unit-free flat prior and its check
     for (const auto& s : settings) absolute_prior = absolute_prior || (!s.prior && s.exact);
     if (!absolute_prior) fit.min_regressor_information = 0;

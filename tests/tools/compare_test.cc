@@ -112,6 +112,23 @@ TEST(CompareCommand, WithoutOutliersRlsIsTheCleanLeastSquaresBaseline) {
   EXPECT_EQ(j["outliers"]["per_trial"], 0);
 }
 
+// The lock-in options and δ belong to the Kárný–Hangos estimators (EstimatorTraits::lock_in): in a comparison
+// they reach those and leave the others (recursive or batch) as they are, which refuse them on their own.
+TEST(CompareCommand, LockInOptionsReachOnlyTheEstimatorsThatHaveTheSafeguard) {
+  auto theta = [](const nlohmann::json& j, const std::string& name) {
+    for (const auto& e : j["estimators"])
+      if (e["estimator"] == name) return e["theta"].get<std::vector<double>>();
+    ADD_FAILURE() << "no row " << name;
+    return std::vector<double>{};
+  };
+  const std::string options = " --delta 0 --lock-in-window 50 --trials 1";
+  const nlohmann::json mixed = CompareJson("dryer --estimators huber,rls,cauchy" + options);
+  EXPECT_EQ(theta(mixed, "cauchy"), theta(CompareJson("dryer --estimators cauchy" + options), "cauchy"));
+  EXPECT_NE(theta(mixed, "cauchy"), theta(CompareJson("dryer --estimators cauchy --trials 1"), "cauchy"));
+  EXPECT_EQ(theta(mixed, "huber"), theta(CompareJson("dryer --estimators huber --trials 1"), "huber"));
+  EXPECT_EQ(theta(mixed, "rls"), theta(CompareJson("dryer --estimators rls --trials 1"), "rls"));
+}
+
 TEST(CompareCommand, DryerDefaultsAreArx223WithFivePercentOutliersOfTwentySigma) {
   const nlohmann::json j = CompareJson("dryer --estimators rls");
   EXPECT_EQ(j["structure"], "ARX(2,2,3)");
