@@ -61,8 +61,10 @@ double NelderMead(const F& f, Eigen::VectorXd x0, double step, int iterations) {
     if (fr < fx[best]) {
       xe = c + 2 * (c - x[worst]);
       const double fe = f(xe);
-      if (fe < fr) x[worst] = xe, fx[worst] = fe;
-      else x[worst] = xr, fx[worst] = fr;
+      if (fe < fr)
+        x[worst] = xe, fx[worst] = fe;
+      else
+        x[worst] = xr, fx[worst] = fr;
     } else if (fr < fx[second]) {
       x[worst] = xr, fx[worst] = fr;
     } else {
@@ -109,11 +111,21 @@ double LogIntegral(double nu, const Eigen::MatrixXd& V, const LogShapeFn& log_sh
   auto inner = [&](double sigma) {
     Eigen::VectorXd u(rho);
     if (rho == 1) {
-      return q.integrate([&](double a) { u << a; return f(sigma, u); }, tol);
+      return q.integrate(
+          [&](double a) {
+            u << a;
+            return f(sigma, u);
+          },
+          tol);
     }
     return q.integrate(
         [&](double a) {
-          return q.integrate([&](double b) { u << a, b; return f(sigma, u); }, tol);
+          return q.integrate(
+              [&](double b) {
+                u << a, b;
+                return f(sigma, u);
+              },
+              tol);
         },
         tol);
   };
@@ -123,8 +135,7 @@ double LogIntegral(double nu, const Eigen::MatrixXd& V, const LogShapeFn& log_sh
 
 }  // namespace
 
-double StudentShape::operator()(double nu, const Eigen::MatrixXd& V, const Eigen::VectorXd& theta,
-                                double omega) const {
+double StudentShape::operator()(double nu, const Eigen::MatrixXd& V, const Eigen::VectorXd& theta, double omega) const {
   return nu / 2 * std::log(omega) - (k + 1) / 2 * nu * std::log1p(omega * QuadForm(V, theta));
 }
 
@@ -143,7 +154,7 @@ OneSidedStepResult NumericalEvaluate(const NormalisedStatistics& s, const Eigen:
   OneSidedStepResult r{RankOneCandidate(s, h, beta), beta, 0, 0};
   // essinf over w = (Θ, log ω) of the ratio m·l(t−1)/s(t), in the prior's frame.
   const Frame fr = FrameOf(s.V);
-  Eigen::VectorXd u(rho), theta(rho);  // work vectors of F
+  Eigen::VectorXd u(rho), theta(rho);       // work vectors of F
   auto F = [&](const Eigen::VectorXd& x) {  // x = (u, σ)
     u = x.head(rho).cwiseMax(-30).cwiseMin(30);
     const double sigma = std::clamp(x(rho), -40.0, 40.0);
@@ -172,8 +183,8 @@ OneSidedStepResult NumericalEvaluate(const NormalisedStatistics& s, const Eigen:
   return r;
 }
 
-OneSidedStepResult NumericalStep(const NormalisedStatistics& s, const Eigen::VectorXd& h,
-                                 const LogModelFn& log_model, const LogShapeFn& log_shape, int delta) {
+OneSidedStepResult NumericalStep(const NormalisedStatistics& s, const Eigen::VectorXd& h, const LogModelFn& log_model,
+                                 const LogShapeFn& log_shape, int delta) {
   auto g = [&](double log_beta) {
     return -NumericalEvaluate(s, h, std::exp(log_beta), log_model, log_shape, delta).objective();
   };

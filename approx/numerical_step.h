@@ -46,7 +46,7 @@ OneSidedStepResult NumericalEvaluate(const NormalisedStatistics& s, const Eigen:
                                      const LogModelFn& log_model, const LogShapeFn& log_shape, int delta);
 
 // The maximin step, numerically.
-OneSidedStepResult NumericalStep(const NormalisedStatistics& s, const Eigen::VectorXd& h,
-                                 const LogModelFn& log_model, const LogShapeFn& log_shape, int delta);
+OneSidedStepResult NumericalStep(const NormalisedStatistics& s, const Eigen::VectorXd& h, const LogModelFn& log_model,
+                                 const LogShapeFn& log_shape, int delta);
 
 }  // namespace ident::approx

@@ -35,8 +35,8 @@
 namespace ident::approx {
 
 struct NormalisedStatistics {
-  double nu = 0;       // ν: sample count including the prior weight
-  Eigen::MatrixXd V;   // normalised extended information matrix, SPD, y first
+  double nu = 0;      // ν: sample count including the prior weight
+  Eigen::MatrixXd V;  // normalised extended information matrix, SPD, y first
 };
 
 struct OneSidedStepResult {
@@ -48,11 +48,11 @@ struct OneSidedStepResult {
 };
 
 template <class A>
-concept OneSidedApproximant =
-    requires(const A& a, const NormalisedStatistics& s, const Eigen::VectorXd& h, double beta) {
-      { a.Evaluate(s, h, beta) } -> std::same_as<OneSidedStepResult>;
-      { a.Step(s, h) } -> std::same_as<OneSidedStepResult>;
-    };
+concept OneSidedApproximant = requires(const A& a, const NormalisedStatistics& s, const Eigen::VectorXd& h,
+                                       double beta) {
+  { a.Evaluate(s, h, beta) } -> std::same_as<OneSidedStepResult>;
+  { a.Step(s, h) } -> std::same_as<OneSidedStepResult>;
+};
 
 // ξ = 1 − h'V⁻¹h and ξ_z = 1 − z'V_z⁻¹z by dense solves [spec §3].
 struct DenseInnovation {

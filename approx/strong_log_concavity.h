@@ -41,22 +41,27 @@ class LcBound {
 
   // Thm 1, affine: density of A x + b.
   void Affine(const Eigen::Ref<const Eigen::MatrixXd>& A) {
-    IDENT_REQUIRE(A.rows() == dim() && A.cols() == dim(), "A is {}×{}; bound has dimension {}", A.rows(), A.cols(), dim());
+    IDENT_REQUIRE(A.rows() == dim() && A.cols() == dim(), "A is {}×{}; bound has dimension {}", A.rows(), A.cols(),
+                  dim());
     P_ = (A * P_ * A.transpose()).eval();
     Symmetrize();
   }
   // Thm 1, convolution with a density in LC(G⁻¹).
   void Convolve(const Eigen::Ref<const Eigen::MatrixXd>& G) {
-    IDENT_REQUIRE(G.rows() == dim() && G.cols() == dim(), "G is {}×{}; bound has dimension {}", G.rows(), G.cols(), dim());
+    IDENT_REQUIRE(G.rows() == dim() && G.cols() == dim(), "G is {}×{}; bound has dimension {}", G.rows(), G.cols(),
+                  dim());
     P_ += G;
     Symmetrize();
   }
   // Thm 1, product with a function in LC(Q), Q ≥ 0 (possibly singular).
   void Multiply(const Eigen::Ref<const Eigen::MatrixXd>& Q) {
-    IDENT_REQUIRE(Q.rows() == dim() && Q.cols() == dim(), "Q is {}×{}; bound has dimension {}", Q.rows(), Q.cols(), dim());
+    IDENT_REQUIRE(Q.rows() == dim() && Q.cols() == dim(), "Q is {}×{}; bound has dimension {}", Q.rows(), Q.cols(),
+                  dim());
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Q);
-    IDENT_REQUIRE(eig.eigenvalues().minCoeff() >= -1e-12 * (1 + Q.cwiseAbs().maxCoeff()), "Q must be positive semidefinite");
-    const Eigen::MatrixXd S = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();  // Q = S S'
+    IDENT_REQUIRE(eig.eigenvalues().minCoeff() >= -1e-12 * (1 + Q.cwiseAbs().maxCoeff()),
+                  "Q must be positive semidefinite");
+    const Eigen::MatrixXd S =
+        eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();  // Q = S S'
     const Eigen::MatrixXd PS = P_ * S;
     const Eigen::MatrixXd M = Eigen::MatrixXd::Identity(dim(), dim()) + S.transpose() * PS;
     P_ -= PS * M.llt().solve(PS.transpose());
@@ -64,7 +69,8 @@ class LcBound {
   }
   // Rank-one product: a function of c'x in LC(q) (Q = q c c').
   void MultiplyRankOne(const Eigen::Ref<const Eigen::VectorXd>& c, double q) {
-    IDENT_REQUIRE(c.size() == dim() && q >= 0 && std::isfinite(q), "rank-one strength needs c of size {} and q >= 0", dim());
+    IDENT_REQUIRE(c.size() == dim() && q >= 0 && std::isfinite(q), "rank-one strength needs c of size {} and q >= 0",
+                  dim());
     if (q == 0) return;
     const Eigen::VectorXd Pc = P_ * c;
     P_ -= Pc * Pc.transpose() * (q / (1 + q * c.dot(Pc)));

@@ -41,10 +41,10 @@ inline double BetaHiInline(const WeightingProblem& p) { return (p.k + 1) / (p.k 
 // ν(t) settles at its fixed point, so an estimator forms them once instead of at every step.
 struct WeightConstants {
   double nu = std::numeric_limits<double>::quiet_NaN();  // the ν they were formed for
-  double mu1_0 = 0, mu1_xi = 0, mu1_xz = 0;  // μ1 = −mu1_0 + mu1_xi ξ − mu1_xz ξ_z
-  double mu2_xi = 0, mu2_xz = 0, k = 0;      // μ2 = mu2_xi ξ + mu2_xz ξ_z + k ξ ξ_z
-  double mu3 = 0;                            // μ3 = mu3 ξ ξ_z
-  double beta_hi = 0;                        // (k+1)/(kν+δ−2)
+  double mu1_0 = 0, mu1_xi = 0, mu1_xz = 0;              // μ1 = −mu1_0 + mu1_xi ξ − mu1_xz ξ_z
+  double mu2_xi = 0, mu2_xz = 0, k = 0;                  // μ2 = mu2_xi ξ + mu2_xz ξ_z + k ξ ξ_z
+  double mu3 = 0;                                        // μ3 = mu3 ξ ξ_z
+  double beta_hi = 0;                                    // (k+1)/(kν+δ−2)
 
   WeightConstants() = default;
   explicit WeightConstants(const WeightingProblem& p) { Set(p); }
@@ -97,10 +97,10 @@ inline std::array<double, 4> Coefficients(const WeightingProblem& p, const Weigh
 // μ0..μ3 of spec §4 (unscaled).
 inline std::array<double, 4> Coefficients(const WeightingProblem& p) {
   const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho, xi = p.xi, xz = p.xi_z;
-  return {k + 1,                                                                          // μ0
-          -(k * nu + d - 1) + (nu - d - rho + 1 - k) * xi - (nu - d - rho + 2 + k) * xz,  // μ1
+  return {k + 1,                                                                            // μ0
+          -(k * nu + d - 1) + (nu - d - rho + 1 - k) * xi - (nu - d - rho + 2 + k) * xz,    // μ1
           ((k - 1) * nu + 2 * d + rho - 3) * xi + ((k + 1) * nu - rho) * xz + k * xi * xz,  // μ2
-          (2 - k * nu - d) * xi * xz};                                                    // μ3
+          (2 - k * nu - d) * xi * xz};                                                      // μ3
 }
 
 // Householder's order-3 step from β = 0, where the derivatives are the coefficients themselves
@@ -123,7 +123,8 @@ inline double SmallRootGuess(const std::array<double, 4>& mu) {
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-inline double HouseholderRoot(const std::array<double, 4>& mu, double a, double b, double x, int& iterations) {
+inline double
+HouseholderRoot(const std::array<double, 4>& mu, double a, double b, double x, int& iterations) {
   if (!(x > a && x < b)) x = 0.5 * (a + b);
   const double d3f = 6 * mu[3];
   for (int iter = 0; iter < 400; ++iter) {
@@ -138,7 +139,7 @@ inline double HouseholderRoot(const std::array<double, 4>& mu, double a, double 
     const double ff = f * d2f;
     const double next = x - f * (6 * df * df - 3 * ff) / ((6 * df * df - 6 * ff) * df + f * f * d3f);
     if (std::abs(next - x) <= 1e-16 * x) return next;  // at the root to rounding (x may now be a bracket end)
-    if (!(next > a && next < b)) {  // the step left the bracket (or NaN): bisect
+    if (!(next > a && next < b)) {                     // the step left the bracket (or NaN): bisect
       x = 0.5 * (a + b);
       if (b - a <= 4e-16 * b) break;
       continue;
@@ -159,7 +160,8 @@ inline double HouseholderRoot(const std::array<double, 4>& mu, double a, double 
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-inline bool SolveWeightCommon(const WeightingProblem& p, const WeightConstants& c, WeightSolution& s) {
+inline bool
+SolveWeightCommon(const WeightingProblem& p, const WeightConstants& c, WeightSolution& s) {
   const double a = Beta0Inline(p), b = c.beta_hi;
   s.beta0 = a;
   s.beta_hi = b;
@@ -192,7 +194,8 @@ inline bool SolveWeightCommon(const WeightingProblem& p, const WeightConstants& 
 #if defined(__GNUC__)
 __attribute__((always_inline))
 #endif
-inline WeightSolution SolveWeightInline(const WeightingProblem& p, const WeightConstants& c) {
+inline WeightSolution
+SolveWeightInline(const WeightingProblem& p, const WeightConstants& c) {
   WeightSolution s;
   if (internal::SolveWeightCommon(p, c, s)) return s;
   return SolveWeight(p);

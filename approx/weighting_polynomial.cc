@@ -25,7 +25,10 @@ double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double
     ++iterations;
     const double fx = EvalP(mu, x);
     if (fx == 0) return x;
-    if (fx > 0) a = x; else b = x;  // keep P(a) > 0 > P(b)
+    if (fx > 0)
+      a = x;
+    else
+      b = x;  // keep P(a) > 0 > P(b)
     const double dfx = EvalDP(mu, x);
     double next = (dfx != 0) ? x - fx / dfx : std::numeric_limits<double>::quiet_NaN();
     if (!(next > a && next < b)) next = 0.5 * (a + b);  // Newton left the bracket (or NaN): bisect

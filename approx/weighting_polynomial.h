@@ -58,13 +58,13 @@ struct WeightingProblem {
 };
 
 struct WeightSolution {
-  double beta = 0;       // the maximin weight β(t)
-  double beta0 = 0;      // lower end of the bracket
-  double beta_hi = 0;    // upper end of the bracket
-  int num_maxima = 0;    // local maxima of H0 found in the bracket (2 = "new information or outlier?")
+  double beta = 0;              // the maximin weight β(t)
+  double beta0 = 0;             // lower end of the bracket
+  double beta_hi = 0;           // upper end of the bracket
+  int num_maxima = 0;           // local maxima of H0 found in the bracket (2 = "new information or outlier?")
   double smallest_maximum = 0;  // when num_maxima > 1: the smallest of their β (the outlier reading)
-  bool ok = true;        // false only if no candidate could be found (not observed for ν > ν_hard)
-  int iterations = 0;    // root-finder iterations (P evaluations inside the pieces), for benchmarks
+  bool ok = true;               // false only if no candidate could be found (not observed for ν > ν_hard)
+  int iterations = 0;           // root-finder iterations (P evaluations inside the pieces), for benchmarks
 };
 
 // ν_hard = max(ρ+δ−1, (k+3−δ)/k, ρ/(k+1)) [spec §5]; every step needs ν(t) > ν_hard.

@@ -2,8 +2,8 @@
 // n rows, ρ = 4, Cauchy noise with 20 % gross outliers. Run: build/bench/batch_regression_benchmark
 #include <random>
 
-#include <Eigen/Dense>
 #include <benchmark/benchmark.h>
+#include <Eigen/Dense>
 
 #include "ident/regression/batch_regression.h"
 

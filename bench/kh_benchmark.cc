@@ -9,15 +9,15 @@
 //   ./build/bench/kh_benchmark --benchmark_min_time=0.2
 //   ./build/bench/kh_benchmark --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true
 //                                 (medians of five repetitions in random order: steadier on a shared machine)
-#include <Eigen/Core>
 #include <benchmark/benchmark.h>
+#include <Eigen/Core>
 
 #include "bench/support/ratio_reporter.h"
 #include "bench/support/regression_stream.h"
 #include "ident/regression/internal/extended_information.h"
+#include "ident/regression/internal/step_driver.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
-#include "ident/regression/internal/step_driver.h"
 #include "ident/regression/student_regression.h"
 
 namespace {
@@ -106,11 +106,12 @@ BENCHMARK(BM_CauchyWithoutRoot)->RangeMultiplier(2)->Range(2, 32);
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  ident::bench::RatioReporter reporter({{"BM_Cauchy", "BM_LdRls", "Cauchy (Kárný–Hangos) vs LD-form RLS"},
-                                        {"BM_Student3", "BM_LdRls", "Student-t k = 3 vs LD-form RLS"},
-                                        {"BM_SafeCauchy", "BM_Cauchy", "Cauchy with the lock-in safeguard (ident fit's default) vs without"},
-                                        {"BM_CauchyWithoutRoot", "BM_LdRls", "Cauchy's step without the root vs LD-form RLS"},
-                                        {"BM_Cauchy", "BM_CauchyWithoutRoot", "Cauchy vs its step without the root"}});
+  ident::bench::RatioReporter reporter(
+      {{"BM_Cauchy", "BM_LdRls", "Cauchy (Kárný–Hangos) vs LD-form RLS"},
+       {"BM_Student3", "BM_LdRls", "Student-t k = 3 vs LD-form RLS"},
+       {"BM_SafeCauchy", "BM_Cauchy", "Cauchy with the lock-in safeguard (ident fit's default) vs without"},
+       {"BM_CauchyWithoutRoot", "BM_LdRls", "Cauchy's step without the root vs LD-form RLS"},
+       {"BM_Cauchy", "BM_CauchyWithoutRoot", "Cauchy vs its step without the root"}});
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
   return 0;

@@ -14,11 +14,11 @@
 #include <benchmark/benchmark.h>
 
 #include "bench/support/ratio_reporter.h"
-#include "ident/regression/estimator_registry.h"
 #include "ident/io/csv.h"
-#include "models/arx.h"
+#include "ident/regression/estimator_registry.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"
+#include "models/arx.h"
 
 namespace {
 

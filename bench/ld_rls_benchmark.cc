@@ -8,13 +8,13 @@
 // At n = 2 and 4 an update takes 100–170 ns, and a single pass swings the ratio between 0.7 and 1.6 on a
 // shared 2-core VM; five repetitions run in random order, compared by their medians (the table uses
 // medians when repetitions are given), put both sides under the same machine states.
-#include <Eigen/Core>
 #include <benchmark/benchmark.h>
+#include <Eigen/Core>
 
 #include "bench/support/ratio_reporter.h"
 #include "bench/support/regression_stream.h"
-#include "tests/support/dense_rls.h"
 #include "ident/regression/rls.h"
+#include "tests/support/dense_rls.h"
 
 namespace {
 

@@ -31,7 +31,8 @@ ident::MapSmootherProblem MakeProblem(int T, bool huber, unsigned seed = 42) {
     p.z(0, t) = x(0) + v;
   }
   using ident::models::Penalty;
-  p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2)), Penalty::Quadratic(0.01 * Eigen::MatrixXd::Identity(2, 2))};
+  p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2)),
+               Penalty::Quadratic(0.01 * Eigen::MatrixXd::Identity(2, 2))};
   p.measurement = {huber ? Penalty::Huber(1.0) : Penalty::L1()};
   return p;
 }
@@ -57,14 +58,24 @@ void BM_MapSmoother(benchmark::State& state, bool huber, bool fast_path = true) 
 }
 
 BENCHMARK_CAPTURE(BM_MapSmoother, L1, false)
-    ->RangeMultiplier(10)->Range(100, 1000000)->Unit(benchmark::kMillisecond)->Complexity(benchmark::oN);
+    ->RangeMultiplier(10)
+    ->Range(100, 1000000)
+    ->Unit(benchmark::kMillisecond)
+    ->Complexity(benchmark::oN);
 BENCHMARK_CAPTURE(BM_MapSmoother, Huber, true)
-    ->RangeMultiplier(10)->Range(100, 1000000)->Unit(benchmark::kMillisecond)->Complexity(benchmark::oN);
+    ->RangeMultiplier(10)
+    ->Range(100, 1000000)
+    ->Unit(benchmark::kMillisecond)
+    ->Complexity(benchmark::oN);
 // The same problems on the general path, for the fast path's speed-up measured in one run.
 BENCHMARK_CAPTURE(BM_MapSmoother, L1General, false, false)
-    ->RangeMultiplier(10)->Range(100, 10000)->Unit(benchmark::kMillisecond);
+    ->RangeMultiplier(10)
+    ->Range(100, 10000)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_MapSmoother, HuberGeneral, true, false)
-    ->RangeMultiplier(10)->Range(100, 10000)->Unit(benchmark::kMillisecond);
+    ->RangeMultiplier(10)
+    ->Range(100, 10000)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

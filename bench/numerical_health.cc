@@ -23,9 +23,9 @@
 #include <limits>
 #include <random>
 
+#include <fmt/core.h>
 #include <Eigen/Core>
 #include <Eigen/Dense>
-#include <fmt/core.h>
 
 #include "ident/linalg/ld_factor.h"
 #include "ident/regression/rls.h"
@@ -38,13 +38,13 @@ using VectorL = Eigen::Matrix<long double, kRho + 1, 1>;
 using MatrixL = Eigen::Matrix<long double, kRho + 1, kRho + 1>;
 
 struct Worst {
-  double min_d = std::numeric_limits<double>::infinity();            // over every step
+  double min_d = std::numeric_limits<double>::infinity();  // over every step
   double min_d_after_burn_in = std::numeric_limits<double>::infinity();
-  double max_param_error = 0;       // ‖θ̂ − θ‖ after the first window
-  double max_v_error = 0;           // ‖L'DL − V_ref‖_F / ‖V_ref‖_F
-  double max_l_error = 0;           // max |L − L_ref|
-  double max_d_error = 0;           // max |d − d_ref| / d_ref
-  double max_theta_ref_error = 0;   // ‖θ̂ − θ_ref‖ / ‖θ_ref‖
+  double max_param_error = 0;      // ‖θ̂ − θ‖ after the first window
+  double max_v_error = 0;          // ‖L'DL − V_ref‖_F / ‖V_ref‖_F
+  double max_l_error = 0;          // max |L − L_ref|
+  double max_d_error = 0;          // max |d − d_ref| / d_ref
+  double max_theta_ref_error = 0;  // ‖θ̂ − θ_ref‖ / ‖θ_ref‖
   long not_updated = 0;
   long checks = 0;
 };
@@ -85,9 +85,10 @@ Worst Run(Estimator& est, long updates, long check_every, unsigned seed, double 
       const Eigen::MatrixXd Vd = V.cast<double>();
       w.max_v_error = std::max(w.max_v_error, static_cast<double>((est.statistics().V() - Vd).norm() / Vd.norm()));
       const ident::LdFactor<> ref(Vd);  // re-factorised from scratch
-      w.max_l_error = std::max(w.max_l_error, (Eigen::MatrixXd(f.L()) - Eigen::MatrixXd(ref.L())).cwiseAbs().maxCoeff());
-      w.max_d_error = std::max(
-          w.max_d_error, ((Eigen::VectorXd(f.d()) - ref.d()).cwiseAbs().cwiseQuotient(ref.d())).maxCoeff());
+      w.max_l_error =
+          std::max(w.max_l_error, (Eigen::MatrixXd(f.L()) - Eigen::MatrixXd(ref.L())).cwiseAbs().maxCoeff());
+      w.max_d_error =
+          std::max(w.max_d_error, ((Eigen::VectorXd(f.d()) - ref.d()).cwiseAbs().cwiseQuotient(ref.d())).maxCoeff());
       const Eigen::Matrix<long double, kRho, 1> theta_ref =
           V.bottomRightCorner(kRho, kRho).ldlt().solve(V.bottomLeftCorner(kRho, 1));
       const Eigen::Matrix<double, kRho, 1> theta_refd = theta_ref.cast<double>();
@@ -99,8 +100,8 @@ Worst Run(Estimator& est, long updates, long check_every, unsigned seed, double 
 }
 
 bool Report(const char* name, const Worst& w, long updates, double seconds) {
-  fmt::print("{}: {} updates in {:.1f} s, {} not taken, {} reference checks\n", name, updates, seconds,
-             w.not_updated, w.checks);
+  fmt::print("{}: {} updates in {:.1f} s, {} not taken, {} reference checks\n", name, updates, seconds, w.not_updated,
+             w.checks);
   fmt::print("  min d_i over all steps                    {:.3e}  (the flat prior's start)\n", w.min_d);
   fmt::print("  min d_i after burn-in (10 windows)        {:.3e}\n", w.min_d_after_burn_in);
   fmt::print("  max ||theta_hat - theta|| after burn-in   {:.3e}\n", w.max_param_error);

@@ -11,15 +11,15 @@
 #include <benchmark/benchmark.h>
 
 #include "ident/observers/covariance_bound.h"
-#include "studies/mems/crossing_reading.h"
-#include "studies/mems/excursion_reading.h"
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "ident/observers/truncated_gaussian_filter.h"
-#include "studies/mems/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
+#include "studies/mems/crossing_reading.h"
+#include "studies/mems/excursion_reading.h"
+#include "studies/mems/window_ep_filter.h"
 
 namespace {
 

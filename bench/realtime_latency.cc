@@ -18,8 +18,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <benchmark/benchmark.h>
+#include <Eigen/Core>
 
 #include "ident/regression/rls.h"
 #if __has_include("ident/regression/student_regression.h")
@@ -193,12 +193,12 @@ class LatencyReporter : public benchmark::ConsoleReporter {
   void Finalize() override {
     ConsoleReporter::Finalize();
     std::printf("\nUpdate latency over %d updates, rho = 4 (steady_clock around each update)\n", kUpdates);
-    std::printf("%-20s %8s %8s %8s %9s %9s %8s\n", "estimator", "p50[ns]", "p99[ns]", "p99.9", "max[ns]",
-                "clock[ns]", "p99/p50");
+    std::printf("%-20s %8s %8s %8s %9s %9s %8s\n", "estimator", "p50[ns]", "p99[ns]", "p99.9", "max[ns]", "clock[ns]",
+                "p99/p50");
     for (auto& [name, c] : counters_) {
       if (!c.count("p50_ns")) continue;  // the interleaved benchmark has its own line below
-      std::printf("%-20s %8.1f %8.1f %8.1f %9.1f %9.1f %8.2f\n", name.c_str(), c["p50_ns"], c["p99_ns"],
-                  c["p999_ns"], c["max_ns"], c["clock_p50_ns"], c["p99_ns"] / c["p50_ns"]);
+      std::printf("%-20s %8.1f %8.1f %8.1f %9.1f %9.1f %8.2f\n", name.c_str(), c["p50_ns"], c["p99_ns"], c["p999_ns"],
+                  c["max_ns"], c["clock_p50_ns"], c["p99_ns"] / c["p50_ns"]);
     }
     if (counters_.count("BM_LatencyCauchy4") && counters_.count("BM_LatencyRls4")) {
       auto& c = counters_["BM_LatencyCauchy4"];
@@ -208,9 +208,10 @@ class LatencyReporter : public benchmark::ConsoleReporter {
     }
     if (counters_.count("BM_LatencyInterleavedCauchyRls4")) {
       auto& i = counters_["BM_LatencyInterleavedCauchyRls4"];
-      std::printf("Cauchy / RLS at p50, updated alternately in one loop (Cauchy %.0f ns, RLS %.0f ns): %.2f (raw), "
-                  "%.2f (clock overhead subtracted)\n", i["cauchy_p50_ns"], i["rls_p50_ns"],
-                  i["cauchy_p50_ns"] / i["rls_p50_ns"], i["ratio_net"]);
+      std::printf(
+          "Cauchy / RLS at p50, updated alternately in one loop (Cauchy %.0f ns, RLS %.0f ns): %.2f (raw), "
+          "%.2f (clock overhead subtracted)\n",
+          i["cauchy_p50_ns"], i["rls_p50_ns"], i["cauchy_p50_ns"] / i["rls_p50_ns"], i["ratio_net"]);
     }
 #ifndef IDENT_HAS_CAUCHY
     std::printf("Cauchy / RLS: the Cauchy estimator (ident/regression/student_regression.h) is not in this build\n");

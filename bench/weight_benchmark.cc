@@ -8,8 +8,8 @@
 //   ./build/bench/weight_benchmark --benchmark_min_time=0.2
 #include <vector>
 
-#include <Eigen/Core>
 #include <benchmark/benchmark.h>
+#include <Eigen/Core>
 
 #include "approx/weighting_polynomial.h"
 #include "bench/support/ratio_reporter.h"

@@ -38,9 +38,9 @@ namespace internal {
 
 }  // namespace ident
 
-#define IDENT_REQUIRE(condition, ...)                                     \
-  do {                                                                    \
-    if (!(condition)) [[unlikely]] {                                      \
-      ::ident::internal::ThrowInvalidArgument(fmt::format(__VA_ARGS__));  \
-    }                                                                     \
+#define IDENT_REQUIRE(condition, ...)                                    \
+  do {                                                                   \
+    if (!(condition)) [[unlikely]] {                                     \
+      ::ident::internal::ThrowInvalidArgument(fmt::format(__VA_ARGS__)); \
+    }                                                                    \
   } while (false)

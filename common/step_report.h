@@ -12,18 +12,22 @@
 namespace ident {
 
 enum class StepStatus {
-  kUpdated,          // the state changed
-  kSkipped,          // the caller skipped the sample (disabled or missing); state unchanged
-  kRejectedInvalid,  // the sample had NaN/Inf, wrong size or would overflow; state unchanged
-  kNumericalFailure, // the step would have broken an invariant (e.g. D not positive); state unchanged
+  kUpdated,           // the state changed
+  kSkipped,           // the caller skipped the sample (disabled or missing); state unchanged
+  kRejectedInvalid,   // the sample had NaN/Inf, wrong size or would overflow; state unchanged
+  kNumericalFailure,  // the step would have broken an invariant (e.g. D not positive); state unchanged
 };
 
 constexpr std::string_view ToString(StepStatus status) {
   switch (status) {
-    case StepStatus::kUpdated: return "updated";
-    case StepStatus::kSkipped: return "skipped";
-    case StepStatus::kRejectedInvalid: return "rejected (invalid sample)";
-    case StepStatus::kNumericalFailure: return "rejected (numerical failure)";
+    case StepStatus::kUpdated:
+      return "updated";
+    case StepStatus::kSkipped:
+      return "skipped";
+    case StepStatus::kRejectedInvalid:
+      return "rejected (invalid sample)";
+    case StepStatus::kNumericalFailure:
+      return "rejected (numerical failure)";
   }
   return "unknown";
 }

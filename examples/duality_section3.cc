@@ -26,8 +26,10 @@ int main(int argc, char** argv) {
   std::string plot;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
-    if (arg == "--seed" && i + 1 < argc) seed = static_cast<unsigned>(std::atoi(argv[++i]));
-    else if (arg == "--plot" && i + 1 < argc) plot = argv[++i];
+    if (arg == "--seed" && i + 1 < argc)
+      seed = static_cast<unsigned>(std::atoi(argv[++i]));
+    else if (arg == "--plot" && i + 1 < argc)
+      plot = argv[++i];
     else {
       fmt::print(stderr, "usage: duality_section3 [--seed N] [--plot FILE.svg]\n");
       return 2;

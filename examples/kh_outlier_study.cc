@@ -57,7 +57,8 @@ Record Simulate(unsigned seed, int n, bool innovation) {
     const bool outlier = uni(rng) < 0.1;
     const double o = outlier ? (uni(rng) < 0.5 ? -5.0 : 5.0) : 0.0;
     auto next = [&](const std::vector<double>& y) {
-      return t < 2 ? 0.0 : kTheta(0) * y[t - 1] + kTheta(1) * y[t - 2] + kTheta(2) * r.u[t - 1] + kTheta(3) * r.u[t - 2];
+      return t < 2 ? 0.0
+                   : kTheta(0) * y[t - 1] + kTheta(1) * y[t - 2] + kTheta(2) * r.u[t - 1] + kTheta(3) * r.u[t - 2];
     };
     r.y_clean[t] = next(r.y_clean) + e;
     y_out[t] = next(y_out) + e + (innovation ? o : 0.0);
@@ -127,9 +128,12 @@ void DefaultTable(int runs, int samples) {
                 innovation ? "Innovation" : "Additive measurement", runs, samples);
     std::printf("%-22s %10s %10s %10s %9s\n", "estimator", "median", "p90", "worst", "lock-in");
     const double clean_median = rls_clean.Quantile(0.5), clean_p90 = rls_clean.Quantile(0.9);
-    for (auto [name, sum] : {std::pair<const char*, Summary*>{"cauchy", &cauchy}, {"student k=3", &student},
-                             {"cauchy --exact", &cauchy_exact}, {"student k=3 --exact", &student_exact},
-                             {"rls (contaminated)", &rls}, {"rls (clean data)", &rls_clean}}) {
+    for (auto [name, sum] : {std::pair<const char*, Summary*>{"cauchy", &cauchy},
+                             {"student k=3", &student},
+                             {"cauchy --exact", &cauchy_exact},
+                             {"student k=3 --exact", &student_exact},
+                             {"rls (contaminated)", &rls},
+                             {"rls (clean data)", &rls_clean}}) {
       std::printf("%-22s %10.4f %10.4f %10.4f %9d   (median %.2fx, p90 %.2fx clean RLS)\n", name, sum->Quantile(0.5),
                   sum->Quantile(0.9), sum->Quantile(1.0), sum->lock_in, sum->Quantile(0.5) / clean_median,
                   sum->Quantile(0.9) / clean_p90);
@@ -173,12 +177,16 @@ int main(int argc, char** argv) {
   std::vector<const char*> positional;
   bool lock_in = false;
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--lock-in") == 0) lock_in = true;
-    else positional.push_back(argv[i]);
+    if (std::strcmp(argv[i], "--lock-in") == 0)
+      lock_in = true;
+    else
+      positional.push_back(argv[i]);
   }
   const int runs = positional.size() > 0 ? std::atoi(positional[0]) : 200;
   const int samples = positional.size() > 1 ? std::atoi(positional[1]) : 2000;
-  if (lock_in) LockInTable(runs, samples);
-  else DefaultTable(runs, samples);
+  if (lock_in)
+    LockInTable(runs, samples);
+  else
+    DefaultTable(runs, samples);
   return 0;
 }

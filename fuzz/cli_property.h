@@ -32,8 +32,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
 #include "tools/command_line.h"
 
@@ -104,9 +104,11 @@ inline std::string DataFile(ByteReader& in) {
 
 inline std::string ModelFile(ByteReader& in) {
   static const char* const kMeasurement[] = {
-      R"({"penalty": "l1"})", R"({"penalty": "huber", "kappa": 1})",
+      R"({"penalty": "l1"})",
+      R"({"penalty": "huber", "kappa": 1})",
       R"({"penalty": "piecewise_linear", "knots": [-1000, 0, 1000], "values": [1000, 0, 1000]})",
-      R"({"penalty": "box", "lower": [-1], "upper": [1], "M": [[1]]})", R"({"penalty": "quadratic", "covariance": [[0]]})",
+      R"({"penalty": "box", "lower": [-1], "upper": [1], "M": [[1]]})",
+      R"({"penalty": "quadratic", "covariance": [[0]]})",
       R"({"penalty": "vapnik", "epsilon": 0.1})"};
   static const char* const kProcess[] = {R"({"penalty": "quadratic", "covariance": [[0.1]]})",
                                          R"({"penalty": "huber", "kappa": 0.5})", R"({"penalty": "l1"})"};
@@ -148,18 +150,45 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
 
   static const char* const kCommands[] = {"fit",    "fit",        "fit",      "compare", "compare",
                                           "smooth", "logcondens", "datasets", "mems"};
-  static const char* const kValues[] = {"0",   "1",     "2",    "3",     "-1",    "0.5",  "0.99",  "1e-300",
-                                        "1e300", "nan", "inf",  "abc",   "",      "2147483647", "1e80", "0.2",
-                                        "5",   "u",     "y",    "x",     "z",     "q",    "mean",  "none"};
-  static const char* const kEstimators[] = {"rls", "cauchy", "student:3", "huber", "cauchy-ml", "student",
-                                            "nonesuch", "rls,cauchy", "rls,,cauchy", "student:0", "cauchy,huber"};
-  static const char* const kFitOptions[] = {
-      "--output", "--input", "--regressors", "--na", "--nb", "--nk", "--estimator", "--dof", "--delta", "--forgetting",
-      "--split", "--detrend", "--missing", "--json", "--passes", "--intercept", "--nu0", "--vy0", "--vz0",
-      "--lock-in-window", "--lock-in-threshold", "--clean-regressors", "--exact", "--trace", "--stabilised",
-      "--estimators", "--outliers", "--trials", "--csv", "--column", "--bogus"};
-  static const char* const kMemsOptions[] = {"--t-mean", "--seed", "--h", "--ep-window", "--csv", "--trace",
-                                             "--steps", "--grid-points", "--t-mean", "--bogus"};
+  static const char* const kValues[] = {"0",     "1",   "2",   "3",   "-1", "0.5",        "0.99", "1e-300",
+                                        "1e300", "nan", "inf", "abc", "",   "2147483647", "1e80", "0.2",
+                                        "5",     "u",   "y",   "x",   "z",  "q",          "mean", "none"};
+  static const char* const kEstimators[] = {"rls",         "cauchy",    "student:3",   "huber",
+                                            "cauchy-ml",   "student",   "nonesuch",    "rls,cauchy",
+                                            "rls,,cauchy", "student:0", "cauchy,huber"};
+  static const char* const kFitOptions[] = {"--output",
+                                            "--input",
+                                            "--regressors",
+                                            "--na",
+                                            "--nb",
+                                            "--nk",
+                                            "--estimator",
+                                            "--dof",
+                                            "--delta",
+                                            "--forgetting",
+                                            "--split",
+                                            "--detrend",
+                                            "--missing",
+                                            "--json",
+                                            "--passes",
+                                            "--intercept",
+                                            "--nu0",
+                                            "--vy0",
+                                            "--vz0",
+                                            "--lock-in-window",
+                                            "--lock-in-threshold",
+                                            "--clean-regressors",
+                                            "--exact",
+                                            "--trace",
+                                            "--stabilised",
+                                            "--estimators",
+                                            "--outliers",
+                                            "--trials",
+                                            "--csv",
+                                            "--column",
+                                            "--bogus"};
+  static const char* const kMemsOptions[] = {"--t-mean", "--seed",  "--h",           "--ep-window", "--csv",
+                                             "--trace",  "--steps", "--grid-points", "--t-mean",    "--bogus"};
   const std::string command = Pick(in, kCommands);
   const std::string mems_csv = dir + "/mems.csv";
   std::filesystem::remove(mems_csv);

@@ -21,14 +21,14 @@
 
 #include <fmt/format.h>
 
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
-#include "ident/regression/estimator_registry.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
+#include "ident/regression/estimator_registry.h"
 #include "ident/regression/regression_prior.h"
-#include "models/arx.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"
+#include "models/arx.h"
 
 namespace ident::fuzz {
 
@@ -57,7 +57,8 @@ inline Outcome Run(const std::string& path, bool streamed, const EstimatorSettin
         mean_squares = workflow::CsvEstimationMeanSquares(path, {}, *source, fit);
       } else {
         io::DataTable table = io::ReadCsv(path);
-        mean_squares = workflow::EstimationMeanSquares(table, workflow::PrepareData(table, *source, fit).first, *source);
+        mean_squares =
+            workflow::EstimationMeanSquares(table, workflow::PrepareData(table, *source, fit).first, *source);
       }
       if ((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all())
         chosen.prior = RegressionPrior::Flat(mean_squares);

@@ -37,12 +37,12 @@ class ByteReader {
 
 }  // namespace ident::fuzz
 
-#define IDENT_FUZZ_ENTRY(check)                                                     \
+#define IDENT_FUZZ_ENTRY(check)                                                       \
   extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) { \
-    const std::string violated = check(data, size);                                 \
-    if (!violated.empty()) {                                                        \
-      std::fprintf(stderr, "fuzz property violated: %s\n", violated.c_str());        \
-      __builtin_trap();                                                             \
-    }                                                                               \
-    return 0;                                                                       \
+    const std::string violated = check(data, size);                                   \
+    if (!violated.empty()) {                                                          \
+      std::fprintf(stderr, "fuzz property violated: %s\n", violated.c_str());         \
+      __builtin_trap();                                                               \
+    }                                                                                 \
+    return 0;                                                                         \
   }

@@ -25,9 +25,9 @@
 
 #include <Eigen/Core>
 
+#include "common/error.h"
 #include "fuzz/fuzz_util.h"
 #include "fuzz/observer_property.h"
-#include "common/error.h"
 #include "ident/observers/grid_observer.h"
 #include "models/measurement.h"
 #include "models/state_space.h"

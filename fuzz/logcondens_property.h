@@ -14,15 +14,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
-#include "ident/density/logconcave_mle.h"
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
+#include "ident/density/logconcave_mle.h"
 
 namespace ident::fuzz {
 

@@ -23,8 +23,8 @@
 
 #include <Eigen/Core>
 
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
@@ -64,10 +64,14 @@ inline std::unique_ptr<models::ProjectedMeasurement> ReadMeasurement(ByteReader&
   y = Value(in);
   try {
     switch (kind) {
-      case 0: return std::make_unique<models::GaussianMeasurement>(c, parameter);
-      case 1: return std::make_unique<models::ThresholdSensor>(c, parameter);
-      case 2: return std::make_unique<models::UniformQuantizer>(c, parameter);
-      default: return std::make_unique<models::LaplaceMeasurement>(c, parameter);
+      case 0:
+        return std::make_unique<models::GaussianMeasurement>(c, parameter);
+      case 1:
+        return std::make_unique<models::ThresholdSensor>(c, parameter);
+      case 2:
+        return std::make_unique<models::UniformQuantizer>(c, parameter);
+      default:
+        return std::make_unique<models::LaplaceMeasurement>(c, parameter);
     }
   } catch (const InvalidArgument&) {
     return nullptr;

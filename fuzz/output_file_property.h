@@ -38,8 +38,8 @@
 
 #include <Eigen/Core>
 
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/fit.h"
 #include "tools/output_file.h"
@@ -60,7 +60,7 @@ class FileSizeLimit {
  public:
   explicit FileSizeLimit(rlim_t bytes) {
     getrlimit(RLIMIT_FSIZE, &saved_);
-    struct sigaction ignore{};
+    struct sigaction ignore {};
     ignore.sa_handler = SIG_IGN;
     sigemptyset(&ignore.sa_mask);
     sigaction(SIGXFSZ, &ignore, &saved_action_);
@@ -78,7 +78,7 @@ class FileSizeLimit {
 
  private:
   rlimit saved_{};
-  struct sigaction saved_action_{};
+  struct sigaction saved_action_ {};
 };
 
 struct Abandon {};  // thrown to leave the writing scope before Commit, as an error in a command does
@@ -126,8 +126,12 @@ inline std::string OutputFileProperty(const std::uint8_t* data, std::size_t size
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const std::vector<double>& r = rows[k];
       const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(r.data() + 3, rho);
-      workflow::WriteTraceRow(memory, {.t = static_cast<long>(k + 1), .nu = r[0], .beta = r[1], .pred_err = r[2],
-                                    .theta = &theta, .Dy = r[static_cast<std::size_t>(rho) + 3]});
+      workflow::WriteTraceRow(memory, {.t = static_cast<long>(k + 1),
+                                       .nu = r[0],
+                                       .beta = r[1],
+                                       .pred_err = r[2],
+                                       .theta = &theta,
+                                       .Dy = r[static_cast<std::size_t>(rho) + 3]});
     }
     std::fclose(memory);
     expected.assign(buffer, buffer_size);
@@ -168,8 +172,12 @@ inline std::string OutputFileProperty(const std::uint8_t* data, std::size_t size
         if (failure == 1 && k >= fail_at % 64) throw Abandon{};
         const std::vector<double>& r = rows[k];
         const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(r.data() + 3, rho);
-        workflow::WriteTraceRow(out.stream(), {.t = static_cast<long>(k + 1), .nu = r[0], .beta = r[1],
-                                            .pred_err = r[2], .theta = &theta, .Dy = r[static_cast<std::size_t>(rho) + 3]});
+        workflow::WriteTraceRow(out.stream(), {.t = static_cast<long>(k + 1),
+                                               .nu = r[0],
+                                               .beta = r[1],
+                                               .pred_err = r[2],
+                                               .theta = &theta,
+                                               .Dy = r[static_cast<std::size_t>(rho) + 3]});
       }
     }
     if (failure == 1) throw Abandon{};
@@ -181,13 +189,17 @@ inline std::string OutputFileProperty(const std::uint8_t* data, std::size_t size
   }
 
   check(!(failure == 1 && committed), "an abandoned file is not committed");
-  if (failure == 2) check(committed == (expected.size() <= fail_at), "a write beyond the size limit fails, else commits");
+  if (failure == 2)
+    check(committed == (expected.size() <= fail_at), "a write beyond the size limit fails, else commits");
   if (failure == 0) check(committed, "a run without failure commits");
   check(committed || failure != 0 || refused, "a run ends committed, abandoned or refused");
   const std::optional<std::string> now = Slurp(file);
-  if (committed) check(now && *now == expected, "a committed target holds the complete new content");
-  else if (existed) check(now && *now == old_content, "a failed run leaves the old content byte for byte");
-  else check(!now, "a failed run creates no target");
+  if (committed)
+    check(now && *now == expected, "a committed target holds the complete new content");
+  else if (existed)
+    check(now && *now == old_content, "a failed run leaves the old content byte for byte");
+  else
+    check(!now, "a failed run creates no target");
   if (via_link) check(fs::is_symlink(link) && fs::read_symlink(link) == "out.csv", "a symbolic link stays a link");
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();

@@ -20,8 +20,8 @@
 #include <Eigen/Core>
 
 #include "fuzz/fuzz_util.h"
-#include "tests/support/dense_rls.h"
 #include "ident/regression/rls.h"
+#include "tests/support/dense_rls.h"
 
 namespace ident::fuzz {
 

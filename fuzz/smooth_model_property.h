@@ -19,8 +19,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/smoothing/map_smoother.h"
 #include "tools/smooth_model.h"
 

@@ -22,8 +22,8 @@
 
 #include <Eigen/Core>
 
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/smoothing/map_smoother.h"
 #include "models/penalties.h"
 
@@ -40,12 +40,15 @@ inline models::Penalty ScalablePenalty(models::Penalty::Kind kind, double parame
                                        const Eigen::Vector3d& knots, const Eigen::Vector3d& values) {
   using models::Penalty;
   switch (kind) {
-    case Penalty::Kind::kHuber: return Penalty::Huber(s * parameter, dim);
+    case Penalty::Kind::kHuber:
+      return Penalty::Huber(s * parameter, dim);
     case Penalty::Kind::kBoxMonitoring:
-      return Penalty::BoxMonitoring(Eigen::VectorXd::Constant(dim, -s * parameter),
-                                    Eigen::VectorXd::Constant(dim, s), Eigen::MatrixXd::Identity(dim, dim));
-    case Penalty::Kind::kPiecewiseLinear: return Penalty::PiecewiseLinear(s * knots, s * s * values);
-    default: return Penalty::Quadratic(parameter * Eigen::MatrixXd::Identity(dim, dim));
+      return Penalty::BoxMonitoring(Eigen::VectorXd::Constant(dim, -s * parameter), Eigen::VectorXd::Constant(dim, s),
+                                    Eigen::MatrixXd::Identity(dim, dim));
+    case Penalty::Kind::kPiecewiseLinear:
+      return Penalty::PiecewiseLinear(s * knots, s * s * values);
+    default:
+      return Penalty::Quadratic(parameter * Eigen::MatrixXd::Identity(dim, dim));
   }
 }
 
@@ -74,7 +77,8 @@ inline std::string SmootherScalingProperty(const std::uint8_t* data, std::size_t
   const int shift_raw = static_cast<std::int16_t>(in.Byte() | (in.Byte() << 8));
   const bool fast = in.Byte() & 1;
   ScalableSmootherProblem b;
-  constexpr Penalty::Kind kProcess[] = {Penalty::Kind::kQuadratic, Penalty::Kind::kHuber, Penalty::Kind::kBoxMonitoring};
+  constexpr Penalty::Kind kProcess[] = {Penalty::Kind::kQuadratic, Penalty::Kind::kHuber,
+                                        Penalty::Kind::kBoxMonitoring};
   constexpr Penalty::Kind kMeasurement[] = {Penalty::Kind::kQuadratic, Penalty::Kind::kHuber,
                                             Penalty::Kind::kBoxMonitoring, Penalty::Kind::kPiecewiseLinear};
   b.process_kind = kProcess[choice % 3];

@@ -17,8 +17,8 @@
 
 #include <Eigen/Core>
 
-#include "fuzz/fuzz_util.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/regression/student_regression.h"
 
 namespace ident::fuzz {

@@ -21,8 +21,7 @@ ArxStructure::ArxStructure(int na, std::vector<int> nb, std::vector<int> nk)
     IDENT_REQUIRE(nk_[i] >= 0, "nk = {} for input {}; need nk >= 0", nk_[i], i + 1);
     num_parameters += nb_[i];
     const long long history = static_cast<long long>(nk_[i]) + nb_[i];
-    IDENT_REQUIRE(history <= kMaxHistory, "nk + nb = {} for input {}; need at most {}", history, i + 1,
-                  kMaxHistory);
+    IDENT_REQUIRE(history <= kMaxHistory, "nk + nb = {} for input {}; need at most {}", history, i + 1, kMaxHistory);
     if (nb_[i] > 0) t0 = std::max(t0, history - 1);
   }
   IDENT_REQUIRE(num_parameters >= 1, "the model has no parameters (na = 0 and nb = 0)");
@@ -57,7 +56,8 @@ OutputCleaningOptions WithWarmUp(OutputCleaningOptions cleaning, int num_paramet
 ArxRegressor::ArxRegressor(const ArxStructure& structure, const OutputCleaningOptions& cleaning)
     : structure_(structure), cleaner_(WithWarmUp(cleaning, structure.num_parameters())) {
   past_y_.setZero(structure_.na());
-  for (int i = 0; i < structure_.num_inputs(); ++i) past_u_.emplace_back(Eigen::VectorXd::Zero(structure_.input_history(i)));
+  for (int i = 0; i < structure_.num_inputs(); ++i)
+    past_u_.emplace_back(Eigen::VectorXd::Zero(structure_.input_history(i)));
   Reset();
 }
 
@@ -71,8 +71,8 @@ void ArxRegressor::Reset() {
 }
 
 bool ArxRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> z) {
-  IDENT_REQUIRE(u.size() == structure_.num_inputs(), "input sample has {} entries; the model has {} inputs",
-                u.size(), structure_.num_inputs());
+  IDENT_REQUIRE(u.size() == structure_.num_inputs(), "input sample has {} entries; the model has {} inputs", u.size(),
+                structure_.num_inputs());
   IDENT_REQUIRE(z.size() == structure_.num_parameters(), "regressor has {} entries; the model has {} parameters",
                 z.size(), structure_.num_parameters());
   IDENT_REQUIRE(outputs_ == samples_, "ArxRegressor::Next called twice without PushOutput");
@@ -111,8 +111,9 @@ double ArxRegressor::PushCheckedOutput(double y, double y_hat, double scale, boo
 
 bool ArxRegressor::MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const {
   if (!last_cleaned_ || structure_.na() == 0 || samples_ <= structure_.first_regression_index()) return false;
-  IDENT_REQUIRE(z_measured.size() == structure_.num_parameters(), "regressor has {} entries; the model has {} parameters",
-                z_measured.size(), structure_.num_parameters());
+  IDENT_REQUIRE(z_measured.size() == structure_.num_parameters(),
+                "regressor has {} entries; the model has {} parameters", z_measured.size(),
+                structure_.num_parameters());
   // z(t) as Next() formed it, with −y(t−1) measured (the first entry, models/arx.h's ordering).
   Eigen::Index col = 0;
   for (int k = 0; k < structure_.na(); ++k) z_measured(col++) = k == 0 ? -last_measured_ : -past_y_(k);

@@ -86,11 +86,11 @@ class ArxRegressor {
 
  private:
   ArxStructure structure_;
-  Eigen::VectorXd past_y_;                 // past_y_(k) = y(t−1−k), k < na (as stored: maybe cleaned)
-  double last_measured_ = 0;               // the measured y(t−1)
-  bool last_cleaned_ = false;              // past_y_(0) is a cleaned value
-  std::vector<Eigen::VectorXd> past_u_;    // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
-  long samples_ = 0;                       // samples pushed with Next()
+  Eigen::VectorXd past_y_;               // past_y_(k) = y(t−1−k), k < na (as stored: maybe cleaned)
+  double last_measured_ = 0;             // the measured y(t−1)
+  bool last_cleaned_ = false;            // past_y_(0) is a cleaned value
+  std::vector<Eigen::VectorXd> past_u_;  // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
+  long samples_ = 0;                     // samples pushed with Next()
   long outputs_ = 0;
   OutputCleaner cleaner_;
 };

@@ -83,7 +83,7 @@ TiltedMoments UpperStandardTruncatedMoments(double a, double b) {
     log_z = std::log(z);
   }
   if (!std::isfinite(log_z)) return {};
-  const double ra = std::exp(LogPhi(a) - log_z), rb = std::exp(LogPhi(b) - log_z);   // φ(a)/Z, φ(b)/Z
+  const double ra = std::exp(LogPhi(a) - log_z), rb = std::exp(LogPhi(b) - log_z);  // φ(a)/Z, φ(b)/Z
   const double a_ra = std::isinf(a) ? 0.0 : a * ra, b_rb = std::isinf(b) ? 0.0 : b * rb;
   const double mean = ra - rb;
   const double var = std::max(0.0, 1.0 + a_ra - b_rb - mean * mean);
@@ -140,15 +140,31 @@ TiltedMoments ProjectedMeasurement::QuadratureTilt(double y, double mean, double
   // Window for the mode search: the prior's ±40 sd clipped to the support (or the support's near end).
   double a = std::max(p.lo, mean - 40 * sd), b = std::min(p.hi, mean + 40 * sd);
   if (a >= b) {
-    if (p.lo >= mean) { a = p.lo; b = std::min(p.hi, p.lo + 40 * sd); }
-    else { b = p.hi; a = std::max(p.lo, p.hi - 40 * sd); }
+    if (p.lo >= mean) {
+      a = p.lo;
+      b = std::min(p.hi, p.lo + 40 * sd);
+    } else {
+      b = p.hi;
+      a = std::max(p.lo, p.hi - 40 * sd);
+    }
   }
   // Golden-section search for the mode of the concave log integrand.
   const double g = (std::sqrt(5.0) - 1) / 2;
   double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = log_f(x1), f2 = log_f(x2);
   for (int i = 0; i < 200 && b - a > 1e-13 * (1 + std::abs(a) + std::abs(b)); ++i) {
-    if (f1 < f2) { a = x1; x1 = x2; f1 = f2; x2 = a + g * (b - a); f2 = log_f(x2); }
-    else { b = x2; x2 = x1; f2 = f1; x1 = b - g * (b - a); f1 = log_f(x1); }
+    if (f1 < f2) {
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = a + g * (b - a);
+      f2 = log_f(x2);
+    } else {
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = b - g * (b - a);
+      f1 = log_f(x1);
+    }
   }
   const double mode = 0.5 * (a + b);
   const double log_peak = std::max({log_f(mode), f1, f2});
@@ -161,7 +177,8 @@ TiltedMoments ProjectedMeasurement::QuadratureTilt(double y, double mean, double
   cuts[n++] = lo;
   std::array<double, 3> kinks = p.kinks;
   std::sort(kinks.begin(), kinks.end(), [](double u, double v) { return std::isnan(v) ? !std::isnan(u) : u < v; });
-  for (double k : kinks) if (!std::isnan(k) && k > lo && k < hi) cuts[n++] = k;
+  for (double k : kinks)
+    if (!std::isnan(k) && k > lo && k < hi) cuts[n++] = k;
   cuts[n++] = hi;
   using GK = boost::math::quadrature::gauss_kronrod<double, 31>;
   auto integrate = [&](auto&& fn) {
@@ -257,7 +274,7 @@ OptimalQuantizer::OptimalQuantizer(Eigen::VectorXd c) : ProjectedMeasurement(std
 
 double OptimalQuantizer::Density(double x) {
   const double a = std::abs(x);
-  if (a <= 0.5) return std::exp2(-4 * a * a);                  // [1, example 1]
+  if (a <= 0.5) return std::exp2(-4 * a * a);  // [1, example 1]
   if (a <= 1.0) return 1.0 - std::exp2(-4 * (1 - a) * (1 - a));
   return 0.0;
 }
@@ -279,7 +296,8 @@ ProjectedMeasurement::Pieces OptimalQuantizer::SupportPieces(double y) const {
 
 // ---- Laplace --------------------------------------------------------------------------------------
 
-LaplaceMeasurement::LaplaceMeasurement(Eigen::VectorXd c, double scale) : ProjectedMeasurement(std::move(c)), b_(scale) {
+LaplaceMeasurement::LaplaceMeasurement(Eigen::VectorXd c, double scale)
+    : ProjectedMeasurement(std::move(c)), b_(scale) {
   IDENT_REQUIRE(b_ > 0 && std::isfinite(b_), "Laplace scale = {}; need > 0", b_);
 }
 

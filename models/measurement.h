@@ -82,7 +82,10 @@ class ProjectedMeasurement : public MeasurementFunction {
     std::array<double, 3> kinks{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
                                 std::numeric_limits<double>::quiet_NaN()};
   };
-  virtual Pieces SupportPieces(double y) const { (void)y; return {}; }
+  virtual Pieces SupportPieces(double y) const {
+    (void)y;
+    return {};
+  }
 
  private:
   Eigen::VectorXd c_;
@@ -163,8 +166,8 @@ class OptimalQuantizer final : public ProjectedMeasurement {
  public:
   explicit OptimalQuantizer(Eigen::VectorXd c);
   std::string name() const override { return "optimal-quantizer"; }
-  static double Density(double x);      // f(x)
-  static double LogDensity(double x);   // log f(x)
+  static double Density(double x);     // f(x)
+  static double LogDensity(double x);  // log f(x)
   double LogLikelihoodScalar(double y, double s) const override { return LogDensity(s - y); }
   double ScalarStrength(double) const override { return 8.0 * std::log(2.0); }
   bool IsValidOutput(double y) const override { return std::isfinite(y) && y == std::round(y); }

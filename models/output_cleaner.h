@@ -41,14 +41,14 @@ namespace ident::models {
 
 struct OutputCleaningOptions {
   bool enabled = false;
-  double clip = 2.0;  // c in (1), with gross = 0: the stored value stays within c·s of the prediction
-  int max_run = 2;    // (3): at most this many consecutive cleaned samples (>= 1)
-  int warm_up = 0;    // (4): samples screened model-free after Reset(); 0 = 10 × num_parameters (ArxRegressor)
-  double screen = 10; // (4): a jump beyond this many robust scales of the stored differences is a gross
-                      // error (10: none among the first 400 samples of the bundled dryer, gas_furnace and
-                      // glassfurnace records; ≥ 100σ outliers on them are); 0 = no screen
-  double gross = 5;   // (5): after warm-up a flagged sample is cleaned only if |y − ŷ| exceeds this many
-                      // robust scales of the last 16 prediction errors; 0 = every flagged sample
+  double clip = 2.0;   // c in (1), with gross = 0: the stored value stays within c·s of the prediction
+  int max_run = 2;     // (3): at most this many consecutive cleaned samples (>= 1)
+  int warm_up = 0;     // (4): samples screened model-free after Reset(); 0 = 10 × num_parameters (ArxRegressor)
+  double screen = 10;  // (4): a jump beyond this many robust scales of the stored differences is a gross
+                       // error (10: none among the first 400 samples of the bundled dryer, gas_furnace and
+                       // glassfurnace records; ≥ 100σ outliers on them are); 0 = no screen
+  double gross = 5;    // (5): after warm-up a flagged sample is cleaned only if |y − ŷ| exceeds this many
+                       // robust scales of the last 16 prediction errors; 0 = every flagged sample
   // "" if valid, else one line naming the option.
   std::string Validate() const;
 };
@@ -77,9 +77,9 @@ class OutputCleaner {
 
  private:
   double Accept(double y);
-  double Store(double y);               // records y as the last stored value and its difference
-  double DifferenceScale() const;       // s_Δ of (4); 0 while fewer than 5 differences are known
-  double ErrorScale() const;            // the robust scale of (5); 0 while fewer than 5 errors are known
+  double Store(double y);          // records y as the last stored value and its difference
+  double DifferenceScale() const;  // s_Δ of (4); 0 while fewer than 5 differences are known
+  double ErrorScale() const;       // the robust scale of (5); 0 while fewer than 5 errors are known
   static double RingScale(const double* ring, int count);
 
   static constexpr int kDifferences = 16;
@@ -93,7 +93,7 @@ class OutputCleaner {
   double last_ = 0;                        // the last stored value
   double differences_[kDifferences] = {};  // ring of the last stored differences
   int num_differences_ = 0, next_difference_ = 0;
-  double errors_[kDifferences] = {};       // ring of the last prediction errors y − ŷ (after warm-up)
+  double errors_[kDifferences] = {};  // ring of the last prediction errors y − ŷ (after warm-up)
   int num_errors_ = 0, next_error_ = 0;
 };
 

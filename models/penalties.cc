@@ -126,8 +126,7 @@ Penalty Penalty::BoxMonitoring(const Eigen::VectorXd& lo, const Eigen::VectorXd&
                 "M is not symmetric");
   bool unbounded = false;
   for (int i = 0; i < m; ++i) {
-    IDENT_REQUIRE(!std::isnan(lo(i)) && !std::isnan(hi(i)) && lo(i) < hi(i) && lo(i) < kInfinity &&
-                      hi(i) > -kInfinity,
+    IDENT_REQUIRE(!std::isnan(lo(i)) && !std::isnan(hi(i)) && lo(i) < hi(i) && lo(i) < kInfinity && hi(i) > -kInfinity,
                   "box bound {}: lo = {}, hi = {}; need lo < hi", i, lo(i), hi(i));
     unbounded = unbounded || std::isinf(lo(i)) || std::isinf(hi(i));
   }
@@ -159,16 +158,16 @@ Penalty Penalty::PiecewiseLinear(const Eigen::VectorXd& knots, const Eigen::Vect
   IDENT_REQUIRE(knots.allFinite() && values.allFinite(), "piecewise_linear knots/values must be finite");
   Eigen::VectorXd slope(J);
   for (int j = 0; j < J; ++j) {
-    IDENT_REQUIRE(knots(j + 1) > knots(j), "piecewise_linear knots must increase strictly (knot {} = {} <= {})",
-                  j + 1, knots(j + 1), knots(j));
+    IDENT_REQUIRE(knots(j + 1) > knots(j), "piecewise_linear knots must increase strictly (knot {} = {} <= {})", j + 1,
+                  knots(j + 1), knots(j));
     slope(j) = (values(j + 1) - values(j)) / (knots(j + 1) - knots(j));
   }
   // Relative to the steepest slope, so that the same penalty in other units (knots × s, values × s²) keeps
   // the same kinks.
   const double tol = 1e-9 * slope.cwiseAbs().maxCoeff();
   for (int j = 1; j < J; ++j)
-    IDENT_REQUIRE(slope(j) >= slope(j - 1) - tol,
-                  "piecewise_linear is not convex at knot {} (slope {} then {})", j, slope(j - 1), slope(j));
+    IDENT_REQUIRE(slope(j) >= slope(j - 1) - tol, "piecewise_linear is not convex at knot {} (slope {} then {})", j,
+                  slope(j - 1), slope(j));
   Penalty f(Kind::kPiecewiseLinear, 1);
   f.knots_ = knots;
   f.values_ = values;
@@ -207,13 +206,20 @@ Penalty Penalty::PiecewiseLinear(const Eigen::VectorXd& knots, const Eigen::Vect
 
 std::string Penalty::Name() const {
   switch (kind_) {
-    case Kind::kQuadratic: return "quadratic";
-    case Kind::kL1: return "l1";
-    case Kind::kHuber: return "huber";
-    case Kind::kVapnik: return "vapnik";
-    case Kind::kQuantile: return "quantile";
-    case Kind::kBoxMonitoring: return "box";
-    case Kind::kPiecewiseLinear: return "piecewise_linear";
+    case Kind::kQuadratic:
+      return "quadratic";
+    case Kind::kL1:
+      return "l1";
+    case Kind::kHuber:
+      return "huber";
+    case Kind::kVapnik:
+      return "vapnik";
+    case Kind::kQuantile:
+      return "quantile";
+    case Kind::kBoxMonitoring:
+      return "box";
+    case Kind::kPiecewiseLinear:
+      return "piecewise_linear";
   }
   return "?";
 }
@@ -253,8 +259,10 @@ double Penalty::Value(const Eigen::Ref<const Eigen::VectorXd>& r, double domain_
                 r.size());
   double sum = 0;
   switch (kind_) {
-    case Kind::kQuadratic: return HalfQuadraticForm(precision_, r);
-    case Kind::kL1: return r.cwiseAbs().sum();
+    case Kind::kQuadratic:
+      return HalfQuadraticForm(precision_, r);
+    case Kind::kL1:
+      return r.cwiseAbs().sum();
     case Kind::kHuber:
       for (int i = 0; i < dim_; ++i) {
         const double a = std::abs(r(i)), k = parameter_;
@@ -267,7 +275,8 @@ double Penalty::Value(const Eigen::Ref<const Eigen::VectorXd>& r, double domain_
     case Kind::kQuantile:
       for (int i = 0; i < dim_; ++i) sum += r(i) >= 0 ? parameter_ * r(i) : (parameter_ - 1) * r(i);
       return sum;
-    case Kind::kBoxMonitoring: return BoxMonitoringValue(r);
+    case Kind::kBoxMonitoring:
+      return BoxMonitoringValue(r);
     case Kind::kPiecewiseLinear: {
       const int last = static_cast<int>(knots_.size()) - 1;
       double x = r(0);
@@ -279,9 +288,9 @@ double Penalty::Value(const Eigen::Ref<const Eigen::VectorXd>& r, double domain_
         if (x > knots_(last) + domain_tolerance) return kInfinity;
         x = knots_(last);
       }
-      const int j = std::clamp(
-          static_cast<int>(std::upper_bound(knots_.data(), knots_.data() + last + 1, x) - knots_.data()) - 1, 0,
-          last - 1);
+      const int j =
+          std::clamp(static_cast<int>(std::upper_bound(knots_.data(), knots_.data() + last + 1, x) - knots_.data()) - 1,
+                     0, last - 1);
       const double t = (x - knots_(j)) / (knots_(j + 1) - knots_(j));
       return (1 - t) * values_(j) + t * values_(j + 1);
     }
@@ -295,12 +304,18 @@ double Penalty::Conjugate(const Eigen::Ref<const Eigen::VectorXd>& v) const {
   for (int i = 0; i < dim_; ++i)
     if (!(v(i) >= conj_lo_(i) && v(i) <= conj_hi_(i))) return kInfinity;
   switch (kind_) {
-    case Kind::kQuadratic: return HalfQuadraticForm(matrix_, v);  // (1/2 r'C^-1 r)* = 1/2 v'C v
-    case Kind::kL1: return 0.0;                                        // indicator of [-1, 1]^m
-    case Kind::kHuber: return 0.5 * v.squaredNorm();                   // Lemma 2.8, U = [-kappa, kappa]
-    case Kind::kVapnik: return parameter_ * v.cwiseAbs().sum();        // eps |v| on [-1, 1]
-    case Kind::kQuantile: return 0.0;                                  // indicator of [tau-1, tau]
-    case Kind::kBoxMonitoring: return HalfQuadraticForm(matrix_, v);  // Lemma 2.8
+    case Kind::kQuadratic:
+      return HalfQuadraticForm(matrix_, v);  // (1/2 r'C^-1 r)* = 1/2 v'C v
+    case Kind::kL1:
+      return 0.0;  // indicator of [-1, 1]^m
+    case Kind::kHuber:
+      return 0.5 * v.squaredNorm();  // Lemma 2.8, U = [-kappa, kappa]
+    case Kind::kVapnik:
+      return parameter_ * v.cwiseAbs().sum();  // eps |v| on [-1, 1]
+    case Kind::kQuantile:
+      return 0.0;  // indicator of [tau-1, tau]
+    case Kind::kBoxMonitoring:
+      return HalfQuadraticForm(matrix_, v);  // Lemma 2.8
     case Kind::kPiecewiseLinear: {
       // sup_r { v r - rho(r) } is attained at a knot: rho* (v) = max_j { v k_j - rho(k_j) }.
       double best = -kInfinity;
@@ -328,12 +343,15 @@ void Penalty::ConjugateGradient(const Eigen::Ref<const Eigen::VectorXd>& v, Eige
       for (int j = 0; j < dim_; ++j)
         for (int i = 0; i < dim_; ++i) g(i) += matrix_(i, j) * v(j);
       break;
-    case Kind::kHuber: g = v; break;
+    case Kind::kHuber:
+      g = v;
+      break;
     case Kind::kVapnik:
       for (int i = 0; i < dim_; ++i) g(i) = v(i) > 0 ? parameter_ : (v(i) < 0 ? -parameter_ : 0.0);
       break;
     case Kind::kL1:
-    case Kind::kQuantile: break;
+    case Kind::kQuantile:
+      break;
     case Kind::kPiecewiseLinear: {
       int arg = 0;
       for (int j = 1; j < knots_.size(); ++j)

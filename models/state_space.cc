@@ -20,8 +20,7 @@ void LinearStateSpace::Validate() const {
   IDENT_REQUIRE(B.rows() == n, "B has {} rows; A has {}", B.rows(), n);
   IDENT_REQUIRE(process_noise.rows() == n && process_noise.cols() == n, "process_noise is {}×{}; need {}×{}",
                 process_noise.rows(), process_noise.cols(), n, n);
-  IDENT_REQUIRE(A.allFinite() && B.allFinite() && process_noise.allFinite(),
-                "A, B and process_noise must be finite");
+  IDENT_REQUIRE(A.allFinite() && B.allFinite() && process_noise.allFinite(), "A, B and process_noise must be finite");
   IDENT_REQUIRE((process_noise - process_noise.transpose()).cwiseAbs().maxCoeff() <=
                     1e-12 * (1.0 + process_noise.cwiseAbs().maxCoeff()),
                 "process_noise is not symmetric");
@@ -32,10 +31,10 @@ void LinearStateSpace::Validate() const {
 
 LinearStateSpace MemsAccelerometerDynamics(double h, double noise_intensity) {
   IDENT_REQUIRE(h > 0 && std::isfinite(h), "sampling period h = {}; need h > 0", h);
-  IDENT_REQUIRE(noise_intensity >= 0 && std::isfinite(noise_intensity),
-                "noise intensity sigma^2 = {}; need >= 0", noise_intensity);
+  IDENT_REQUIRE(noise_intensity >= 0 && std::isfinite(noise_intensity), "noise intensity sigma^2 = {}; need >= 0",
+                noise_intensity);
   Eigen::MatrixXd A(2, 2), B(2, 1), P(2, 2);
-  A << 1, h, 0, 1;                                           // [1, sec. II]
+  A << 1, h, 0, 1;  // [1, sec. II]
   B << 0.5 * h * h, h;
   P << h * h * h / 3, h * h / 2, h * h / 2, h;
   return LinearStateSpace::Make(A, B, noise_intensity * P);

@@ -18,9 +18,9 @@
 namespace ident::models {
 
 struct LinearStateSpace {
-  Eigen::MatrixXd A;                // n × n
-  Eigen::MatrixXd B;                // n × m (m may be 0)
-  Eigen::MatrixXd process_noise;    // P_N, n × n, symmetric positive semidefinite
+  Eigen::MatrixXd A;              // n × n
+  Eigen::MatrixXd B;              // n × m (m may be 0)
+  Eigen::MatrixXd process_noise;  // P_N, n × n, symmetric positive semidefinite
 
   int num_states() const { return static_cast<int>(A.rows()); }
   int num_inputs() const { return static_cast<int>(B.cols()); }

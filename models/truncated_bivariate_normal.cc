@@ -18,7 +18,9 @@ constexpr double kPlusInfinity = std::numeric_limits<double>::infinity();
 constexpr double kNotANumber = std::numeric_limits<double>::quiet_NaN();
 
 // log of the integrand φ(y) Q((h − ρy)/s) of P(X > h, Y > k) = ∫_k^∞ φ(y) Q((h − ρy)/s) dy.
-double LogIntegrand(double y, double h, double rho, double s) { return LogNormalDensity(y) + LogNormalTail((h - rho * y) / s); }
+double LogIntegrand(double y, double h, double rho, double s) {
+  return LogNormalDensity(y) + LogNormalTail((h - rho * y) / s);
+}
 
 // d/dy of LogIntegrand: −y + (ρ/s) λ(z), z = (h − ρy)/s, λ = φ/Q the normal hazard. Decreasing in y
 // (the integrand is log-concave with curvature ≤ −1).
@@ -37,8 +39,8 @@ double OwenBivariateCdf(double a, double b, double rho, double s) {
   // Evaluated in double (no promotion to long double, which doubles the cost of a wedge refit).
   using Policy = boost::math::policies::policy<boost::math::policies::promote_double<false>>;
   const boost::math::normal_distribution<double, Policy> unit;
-  return 0.5 * boost::math::cdf(unit, a) + 0.5 * boost::math::cdf(unit, b) - boost::math::owens_t(a, alpha_a, Policy()) -
-         boost::math::owens_t(b, alpha_b, Policy()) - beta;
+  return 0.5 * boost::math::cdf(unit, a) + 0.5 * boost::math::cdf(unit, b) -
+         boost::math::owens_t(a, alpha_a, Policy()) - boost::math::owens_t(b, alpha_b, Policy()) - beta;
 }
 
 // Below this probability the closed form's absolute error (≈ 1e-16) exceeds a relative 1e-10: quadrature.
@@ -103,8 +105,7 @@ double LogUpperOrthantProbabilityByQuadrature(double h, double k, double rho) {
 
 TruncatedBivariateMoments TruncatedBivariateNormalMoments(const Eigen::Vector2d& mean,
                                                           const Eigen::Matrix2d& covariance,
-                                                          const Eigen::Vector2d& bounds,
-                                                          const Eigen::Vector2d& sides) {
+                                                          const Eigen::Vector2d& bounds, const Eigen::Vector2d& sides) {
   TruncatedBivariateMoments out;
   if (!mean.allFinite() || !covariance.allFinite() || bounds.hasNaN()) return out;
   if (std::abs(sides(0)) != 1 || std::abs(sides(1)) != 1) return out;
@@ -121,16 +122,19 @@ TruncatedBivariateMoments TruncatedBivariateNormalMoments(const Eigen::Vector2d&
   const double s = std::sqrt((1 - rho) * (1 + rho));
   // Ratios to L of A_h = φ(h) Q((k − ρh)/s), A_k = φ(k) Q((h − ρk)/s) and f = φ2(h, k; ρ) (zero at −∞).
   const bool fin_h = std::isfinite(h), fin_k = std::isfinite(k);
-  const double r_h = fin_h ? std::exp(LogNormalDensity(h) + (fin_k ? LogNormalTail((k - rho * h) / s) : 0.0) - log_l) : 0.0;
-  const double r_k = fin_k ? std::exp(LogNormalDensity(k) + (fin_h ? LogNormalTail((h - rho * k) / s) : 0.0) - log_l) : 0.0;
-  const double r_f = fin_h && fin_k ? std::exp(-(h * h - 2 * rho * h * k + k * k) / (2 * s * s) -
-                                               std::log(2 * std::numbers::pi * s) - log_l)
-                                    : 0.0;
+  const double r_h =
+      fin_h ? std::exp(LogNormalDensity(h) + (fin_k ? LogNormalTail((k - rho * h) / s) : 0.0) - log_l) : 0.0;
+  const double r_k =
+      fin_k ? std::exp(LogNormalDensity(k) + (fin_h ? LogNormalTail((h - rho * k) / s) : 0.0) - log_l) : 0.0;
+  const double r_f =
+      fin_h && fin_k
+          ? std::exp(-(h * h - 2 * rho * h * k + k * k) / (2 * s * s) - std::log(2 * std::numbers::pi * s) - log_l)
+          : 0.0;
   const double h_rh = fin_h ? h * r_h : 0.0, k_rk = fin_k ? k * r_k : 0.0;
-  const double ex = r_h + rho * r_k, ey = r_k + rho * r_h;                                  // E[X], E[Y]
-  const double vx = 1 + h_rh + rho * rho * k_rk + rho * s * s * r_f - ex * ex;              // Var X
-  const double vy = 1 + k_rk + rho * rho * h_rh + rho * s * s * r_f - ey * ey;              // Var Y
-  const double cxy = rho + rho * h_rh + rho * k_rk + s * s * r_f - ex * ey;                 // Cov(X, Y)
+  const double ex = r_h + rho * r_k, ey = r_k + rho * r_h;                      // E[X], E[Y]
+  const double vx = 1 + h_rh + rho * rho * k_rk + rho * s * s * r_f - ex * ex;  // Var X
+  const double vy = 1 + k_rk + rho * rho * h_rh + rho * s * s * r_f - ey * ey;  // Var Y
+  const double cxy = rho + rho * h_rh + rho * k_rk + s * s * r_f - ex * ey;     // Cov(X, Y)
   if (!(vx > 0) || !(vy > 0) || !std::isfinite(cxy)) return out;
   out.log_probability = log_l;
   out.mean << mean(0) + sides(0) * sd(0) * ex, mean(1) + sides(1) * sd(1) * ey;

@@ -37,10 +37,10 @@
 namespace ident::models {
 
 struct TruncatedBivariateMoments {
-  double log_probability = std::numeric_limits<double>::quiet_NaN();   // log P(region) under N(μ, Σ)
+  double log_probability = std::numeric_limits<double>::quiet_NaN();  // log P(region) under N(μ, Σ)
   Eigen::Vector2d mean = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  bool ok = false;   // false: mass below DBL_MIN, Σ (numerically) singular or an input not finite
+  bool ok = false;  // false: mass below DBL_MIN, Σ (numerically) singular or an input not finite
 };
 
 // log P(X > h, Y > k), X, Y standard normal with correlation rho, |rho| < 1; h, k may be −∞ (no bound)
@@ -56,7 +56,6 @@ double LogUpperOrthantProbabilityByQuadrature(double h, double k, double rho);
 // the smallest normal double (log P < −708: the reading is impossible to double precision).
 TruncatedBivariateMoments TruncatedBivariateNormalMoments(const Eigen::Vector2d& mean,
                                                           const Eigen::Matrix2d& covariance,
-                                                          const Eigen::Vector2d& bounds,
-                                                          const Eigen::Vector2d& sides);
+                                                          const Eigen::Vector2d& bounds, const Eigen::Vector2d& sides);
 
 }  // namespace ident::models

@@ -7,12 +7,12 @@
 
 namespace ident::tools {
 
-void AddFitCommand(CLI::App& app);        // ident fit        (fit_command.cc)
-void AddDatasetsCommand(CLI::App& app);   // ident datasets   (datasets_command.cc)
-void AddCompareCommand(CLI::App& app);    // ident compare    (compare_command.cc)
-void AddMemsCommand(CLI::App& app);       // ident mems       (mems_command.cc)
-void AddLogcondensCommand(CLI::App& app); // ident logcondens (logcondens_command.cc)
-void AddSmoothCommand(CLI::App& app);     // ident smooth     (smooth_command.cc)
+void AddFitCommand(CLI::App& app);         // ident fit        (fit_command.cc)
+void AddDatasetsCommand(CLI::App& app);    // ident datasets   (datasets_command.cc)
+void AddCompareCommand(CLI::App& app);     // ident compare    (compare_command.cc)
+void AddMemsCommand(CLI::App& app);        // ident mems       (mems_command.cc)
+void AddLogcondensCommand(CLI::App& app);  // ident logcondens (logcondens_command.cc)
+void AddSmoothCommand(CLI::App& app);      // ident smooth     (smooth_command.cc)
 
 // Exit codes of every subcommand.
 inline constexpr int kExitOk = 0;

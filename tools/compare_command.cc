@@ -14,8 +14,8 @@
 
 #include "common/error.h"
 #include "ident/io/csv.h"
-#include "tools/commands.h"
 #include "ident/workflow/compare.h"
+#include "tools/commands.h"
 #include "tools/dataset_index.h"
 #include "tools/estimator_options.h"
 #include "tools/gnuplot.h"
@@ -56,25 +56,30 @@ void PlotCompare(OutputFile& out, const workflow::CompareResult& r, const workfl
   RenderPlot(out, {panel});
 }
 
-nlohmann::ordered_json Number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); }
+nlohmann::ordered_json Number(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
+}
 
 nlohmann::ordered_json SpreadJson(const workflow::Spread& s) {
-  return {{"mean", Number(s.mean)}, {"std", Number(s.std)}, {"min", Number(s.min)}, {"median", Number(s.median)},
-          {"p90", Number(s.p90)}, {"max", Number(s.max)}};
+  return {{"mean", Number(s.mean)},     {"std", Number(s.std)}, {"min", Number(s.min)},
+          {"median", Number(s.median)}, {"p90", Number(s.p90)}, {"max", Number(s.max)}};
 }
 
 std::vector<double> ToStd(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
 
-nlohmann::ordered_json ToJson(const workflow::CompareResult& r, const std::string& path, const workflow::OutlierSpec& spec, int trials,
-                              const std::string& cleaning) {
+nlohmann::ordered_json ToJson(const workflow::CompareResult& r, const std::string& path,
+                              const workflow::OutlierSpec& spec, int trials, const std::string& cleaning) {
   nlohmann::ordered_json j;
   j["data"] = path;
   j["structure"] = r.structure;
   j["parameter_names"] = r.parameter_names;
   j["estimation_rows"] = {r.estimation.first + 1, r.estimation.first + r.estimation.count};
   j["validation_rows"] = {r.validation.first + 1, r.validation.first + r.validation.count};
-  j["outliers"] = {{"rate", spec.rate}, {"size", spec.size}, {"seed", spec.seed},
-                   {"per_trial", r.outliers_per_trial}, {"sigma", r.sigma}};
+  j["outliers"] = {{"rate", spec.rate},
+                   {"size", spec.size},
+                   {"seed", spec.seed},
+                   {"per_trial", r.outliers_per_trial},
+                   {"sigma", r.sigma}};
   j["trials"] = trials;
   j["clean_regressors"] = cleaning;
   j["reference"] = {{"estimator", "clean-data least squares"},
@@ -105,8 +110,9 @@ nlohmann::ordered_json ToJson(const workflow::CompareResult& r, const std::strin
 }
 
 void PrintCsv(const workflow::CompareResult& r) {
-  fmt::print("estimator,fit_one_step,fit_one_step_std,fit_one_step_min,fit_one_step_median,fit_one_step_max,"
-             "fit_simulation,fit_simulation_std,theta_distance,theta_distance_std,ns_per_update");
+  fmt::print(
+      "estimator,fit_one_step,fit_one_step_std,fit_one_step_min,fit_one_step_median,fit_one_step_max,"
+      "fit_simulation,fit_simulation_std,theta_distance,theta_distance_std,ns_per_update");
   for (const auto& name : r.parameter_names) fmt::print(",{}", name);
   fmt::print("\n");
   for (const workflow::EstimatorScore& s : r.scores) {
@@ -125,15 +131,16 @@ std::string Cell(const workflow::Spread& s, int trials, const char* format) {
   return trials > 1 ? mean + " ± " + fmt::format(fmt::runtime(format), s.std) : mean;
 }
 
-void PrintTable(const workflow::CompareResult& r, const std::string& name, const workflow::OutlierSpec& spec, int trials,
-                const std::string& cleaning) {
+void PrintTable(const workflow::CompareResult& r, const std::string& name, const workflow::OutlierSpec& spec,
+                int trials, const std::string& cleaning) {
   fmt::print("{}: {}, estimation rows {}-{}, validation rows {}-{}\n", name, r.structure, r.estimation.first + 1,
              r.estimation.first + r.estimation.count, r.validation.first + 1, r.validation.first + r.validation.count);
   if (r.outliers_per_trial > 0)
-    fmt::print("outliers: {} of the {} estimation samples ({:g} %) moved by ±{:g}σ (σ = {:.4g}, the clean LS residual "
-               "std), seed {}{}\n",
-               r.outliers_per_trial, r.estimation.count, 100 * spec.rate, spec.size, r.sigma, spec.seed,
-               trials > 1 ? fmt::format("…{} ({} trials: mean ± std)", spec.seed + trials - 1, trials) : "");
+    fmt::print(
+        "outliers: {} of the {} estimation samples ({:g} %) moved by ±{:g}σ (σ = {:.4g}, the clean LS residual "
+        "std), seed {}{}\n",
+        r.outliers_per_trial, r.estimation.count, 100 * spec.rate, spec.size, r.sigma, spec.seed,
+        trials > 1 ? fmt::format("…{} ({} trials: mean ± std)", spec.seed + trials - 1, trials) : "");
   else
     fmt::print("no outliers injected\n");
   if (cleaning == "on") fmt::print("regressor cleaning on (outputs flagged by the estimator are cleaned)\n");
@@ -152,9 +159,10 @@ void PrintTable(const workflow::CompareResult& r, const std::string& name, const
     if (s.failed_trials > 0)
       fmt::print("\n  {} failed in {} of {} trials (left out of its figures); first, {}\n", s.estimator,
                  s.failed_trials, trials, s.failure);
-  fmt::print("\n  fit % = 100·(1 − ‖y − ŷ‖/‖y − mean y‖) on the clean validation rows (100 = perfect; one-step uses\n"
-             "  measured past outputs, simulation the model's own); θ distance = ‖θ̂ − θ_LS‖/‖θ_LS‖ to the clean-data\n"
-             "  least-squares θ (0 = identical). Sorted by one-step fit.\n");
+  fmt::print(
+      "\n  fit % = 100·(1 − ‖y − ŷ‖/‖y − mean y‖) on the clean validation rows (100 = perfect; one-step uses\n"
+      "  measured past outputs, simulation the model's own); θ distance = ‖θ̂ − θ_LS‖/‖θ_LS‖ to the clean-data\n"
+      "  least-squares θ (0 = identical). Sorted by one-step fit.\n");
 }
 
 void ProgressBar(int done, int total) {

@@ -43,7 +43,9 @@ std::vector<DatasetInfo> LoadDatasetIndex() {
   const std::string dir = DatasetsDirectory();
   const std::string path = dir + "/index.json";
   std::ifstream in(path);
-  if (!in) throw DataError(fmt::format("cannot open the dataset index '{}' (set IDENT_DATASETS to the datasets directory)", path));
+  if (!in)
+    throw DataError(
+        fmt::format("cannot open the dataset index '{}' (set IDENT_DATASETS to the datasets directory)", path));
   std::vector<DatasetInfo> index;
   try {
     const nlohmann::json j = nlohmann::json::parse(in);

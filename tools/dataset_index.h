@@ -16,13 +16,13 @@
 namespace ident::tools {
 
 struct DatasetInfo {
-  std::string name;                 // bare name accepted wherever a data file is ("dryer")
-  std::string file;                 // file name inside the datasets directory
-  std::string path;                 // datasets directory + file
-  std::string system;               // one-line description
-  std::optional<double> ts;         // sampling time [s], if the source gives one
-  StructureCliOptions structure;    // suggested structure (the defaults of `ident compare NAME`)
-  double split = 0.5;               // estimation fraction used by the README baselines
+  std::string name;               // bare name accepted wherever a data file is ("dryer")
+  std::string file;               // file name inside the datasets directory
+  std::string path;               // datasets directory + file
+  std::string system;             // one-line description
+  std::optional<double> ts;       // sampling time [s], if the source gives one
+  StructureCliOptions structure;  // suggested structure (the defaults of `ident compare NAME`)
+  double split = 0.5;             // estimation fraction used by the README baselines
 };
 
 // The datasets directory: $IDENT_DATASETS if set, else the source tree's datasets/.

@@ -25,8 +25,7 @@ void RunDatasets(bool json) {
   std::vector<CsvShape> shapes;
   for (const DatasetInfo& d : index) shapes.push_back(ReadCsvShape(d.path));
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  if (!json)
-    fmt::print("{:<26} {:>7} {:>8}  {:<44} {}\n", "name", "rows", "size", "columns", "suggested structure");
+  if (!json) fmt::print("{:<26} {:>7} {:>8}  {:<44} {}\n", "name", "rows", "size", "columns", "suggested structure");
   for (std::size_t i = 0; i < index.size(); ++i) {
     const DatasetInfo& d = index[i];
     const CsvShape& shape = shapes[i];
@@ -51,9 +50,10 @@ void RunDatasets(bool json) {
   if (json)
     std::cout << list.dump(2) << "\n";
   else
-    fmt::print("\nUse a name wherever a data file goes, e.g. `ident fit dryer --output y --input u --nk 3`;\n"
-               "`ident compare NAME` uses the suggested structure. Provenance: {}/README.md\n",
-               DatasetsDirectory());
+    fmt::print(
+        "\nUse a name wherever a data file goes, e.g. `ident fit dryer --output y --input u --nk 3`;\n"
+        "`ident compare NAME` uses the suggested structure. Provenance: {}/README.md\n",
+        DatasetsDirectory());
 }
 
 }  // namespace

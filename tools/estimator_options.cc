@@ -74,7 +74,8 @@ EstimatorSettings EstimatorCliOptions::Resolve(int num_parameters, const std::st
 
 RegressionPrior ReadPriorJson(const std::string& path, int num_parameters) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw DataError(fmt::format("cannot read '{}': it is a directory", path));
+  if (std::filesystem::is_directory(path, ec))
+    throw DataError(fmt::format("cannot read '{}': it is a directory", path));
   std::ifstream in(path);
   if (!in) throw DataError(fmt::format("cannot open prior file '{}'", path));
   nlohmann::json j;

@@ -12,14 +12,14 @@
 
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/workflow/fit.h"
+#include "ident/workflow/residual_analysis.h"
 #include "tools/commands.h"
 #include "tools/estimator_options.h"
-#include "ident/workflow/fit.h"
 #include "tools/fit_plot.h"
 #include "tools/gnuplot.h"
 #include "tools/output_file.h"
 #include "tools/output_paths.h"
-#include "ident/workflow/residual_analysis.h"
 #include "tools/structure_options.h"
 
 namespace ident::tools {
@@ -53,7 +53,8 @@ nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events
   return list;
 }
 
-nlohmann::ordered_json ToJson(const workflow::FitResult& r, const std::string& data, double split, const std::string& detrend) {
+nlohmann::ordered_json ToJson(const workflow::FitResult& r, const std::string& data, double split,
+                              const std::string& detrend) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
   nlohmann::ordered_json j;
   j["data"] = data;
@@ -108,12 +109,16 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
   const int lags = static_cast<int>(a.autocorrelation.size());
   fmt::print("\n  residual analysis (validation one-step residuals, N = {}, 99 % band ±{:.3f}):\n", a.samples, a.band);
   const auto [r_ee, tau_ee] = worst(a.autocorrelation, 1);
-  fmt::print("    whiteness     r_ee(τ), τ = 1..{}: {:2} lags outside, largest {:+.3f} at τ = {}; Q = {:.1f} (1 % limit {:.1f})\n", lags,
-             a.OutsideAuto(), r_ee, tau_ee, a.QAuto(), a.QAutoLimit());
+  fmt::print(
+      "    whiteness     r_ee(τ), τ = 1..{}: {:2} lags outside, largest {:+.3f} at τ = {}; Q = {:.1f} (1 % limit "
+      "{:.1f})\n",
+      lags, a.OutsideAuto(), r_ee, tau_ee, a.QAuto(), a.QAutoLimit());
   for (std::size_t i = 0; i < a.input_names.size(); ++i) {
     const auto [r_eu, tau_eu] = worst(a.cross_correlation[i], 0);
-    fmt::print("    input {:<7} r_eu(τ), τ = 0..{}: {:2} lags outside, largest {:+.3f} at τ = {}; Q = {:.1f} (1 % limit "
-               "{:.1f})\n", a.input_names[i], lags, a.OutsideCross(i), r_eu, tau_eu, a.QCross(i), a.QCrossLimit());
+    fmt::print(
+        "    input {:<7} r_eu(τ), τ = 0..{}: {:2} lags outside, largest {:+.3f} at τ = {}; Q = {:.1f} (1 % limit "
+        "{:.1f})\n",
+        a.input_names[i], lags, a.OutsideCross(i), r_eu, tau_eu, a.QCross(i), a.QCrossLimit());
   }
   fmt::print("  {}\n", a.Verdict());
 }
@@ -150,17 +155,22 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
   fmt::print("\n  noise std {:.4g}\n", r.noise_std);
   if (r.lock_in) {
     const LockInStatus& l = *r.lock_in;
-    fmt::print("  lock-in monitor (window {}, weight threshold {}): flagged at {} update{}, {} restart{}; {:.0f} % of "
-               "the last window below the threshold\n", l.window, l.threshold, l.flagged, l.flagged == 1 ? "" : "s",
-               l.restarts, l.restarts == 1 ? "" : "s", 100 * l.low_weight_fraction);
+    fmt::print(
+        "  lock-in monitor (window {}, weight threshold {}): flagged at {} update{}, {} restart{}; {:.0f} % of "
+        "the last window below the threshold\n",
+        l.window, l.threshold, l.flagged, l.flagged == 1 ? "" : "s", l.restarts, l.restarts == 1 ? "" : "s",
+        100 * l.low_weight_fraction);
     if (l.start_at_end)
-      fmt::print("  robust start from all {} samples when the data ended (no earlier window determined every "
-                 "coefficient from its inliers)\n", l.start_window);
+      fmt::print(
+          "  robust start from all {} samples when the data ended (no earlier window determined every "
+          "coefficient from its inliers)\n",
+          l.start_window);
     else if (l.start_update > 0)
       fmt::print("  robust start after update {} from its last {} samples\n", l.start_update, l.start_window);
     for (const RestartEvent& e : l.events)
-      fmt::print("    restart at update {}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n", e.update,
-                 e.replayed, e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
+      fmt::print("    restart at update {}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
+                 e.update, e.replayed,
+                 e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
                  100 * e.low_weight_before, 100 * e.low_weight_after,
                  e.resolved ? "" : " (not a lock-in: the noise is heavier-tailed than the model; next restart waits)");
   }

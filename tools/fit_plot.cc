@@ -23,7 +23,10 @@ void PlotFit(OutputFile& out, const io::DataTable& data, workflow::Segment valid
     source.PushOutput(y);
   }
   std::vector<PlotPanel> panels;
-  PlotPanel output{"validation: measured and predicted output", "row", data.names[static_cast<std::size_t>(source.output_column())], {}};
+  PlotPanel output{"validation: measured and predicted output",
+                   "row",
+                   data.names[static_cast<std::size_t>(source.output_column())],
+                   {}};
   output.series.push_back(measured);
   output.series.push_back(one_step);
   if (source.dynamic()) {
@@ -49,7 +52,8 @@ void PlotFit(OutputFile& out, const io::DataTable& data, workflow::Segment valid
   PlotPanel parameters{"estimation: parameter trajectories", "row", "estimate", {}};
   const std::vector<std::string> names = source.parameter_names();
   for (int i = 0; i < rho && i < static_cast<int>(history.theta.size()); ++i)
-    parameters.series.push_back({names[static_cast<std::size_t>(i)], history.t, history.theta[static_cast<std::size_t>(i)]});
+    parameters.series.push_back(
+        {names[static_cast<std::size_t>(i)], history.t, history.theta[static_cast<std::size_t>(i)]});
   if (!history.t.empty()) panels.push_back(parameters);
   RenderPlot(out, panels);
 }

@@ -21,7 +21,7 @@
 namespace ident::tools {
 
 struct ParameterHistory {
-  std::vector<double> t;                 // 1-based row of each update
+  std::vector<double> t;                   // 1-based row of each update
   std::vector<std::vector<double>> theta;  // theta[i][k]: entry i after update k
 };
 

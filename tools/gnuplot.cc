@@ -40,8 +40,10 @@ class ScratchDirectory {
 std::string Quoted(std::string_view text) {
   std::string out = "'";
   for (char c : text) {
-    if (c == '\'') out += "''";
-    else out += c;
+    if (c == '\'')
+      out += "''";
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -49,8 +51,10 @@ std::string Quoted(std::string_view text) {
 std::string ShellQuoted(const std::string& text) {
   std::string out = "'";
   for (char c : text) {
-    if (c == '\'') out += "'\\''";
-    else out += c;
+    if (c == '\'')
+      out += "'\\''";
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -66,8 +70,10 @@ void WriteSeries(const fs::path& file, const PlotSeries& s) {
   std::ofstream out(file);
   out.precision(17);
   for (std::size_t i = 0; i < s.x.size(); ++i) {
-    if (std::isfinite(s.x[i]) && std::isfinite(s.y[i])) out << s.x[i] << ' ' << s.y[i] << '\n';
-    else out << '\n';  // a blank line is a gap in gnuplot
+    if (std::isfinite(s.x[i]) && std::isfinite(s.y[i]))
+      out << s.x[i] << ' ' << s.y[i] << '\n';
+    else
+      out << '\n';  // a blank line is a gap in gnuplot
   }
   if (!out) throw InvalidArgument(fmt::format("cannot write plot data to '{}'", file.string()));
 }
@@ -91,8 +97,8 @@ void RenderPlot(OutputFile& out, const std::vector<PlotPanel>& panels, PlotSize 
   const int height = size.height_per_panel * static_cast<int>(panels.size());
   const std::string terminal = Terminal(path, size.width, height);
   if (!GnuplotAvailable()) {
-    throw InvalidArgument(fmt::format(
-        "cannot write plot '{}': gnuplot is not installed (Debian: apt-get install gnuplot-nox)", path));
+    throw InvalidArgument(
+        fmt::format("cannot write plot '{}': gnuplot is not installed (Debian: apt-get install gnuplot-nox)", path));
   }
 
   ScratchDirectory scratch;
@@ -106,12 +112,12 @@ void RenderPlot(OutputFile& out, const std::vector<PlotPanel>& panels, PlotSize 
                           Quoted(panel.xlabel), Quoted(panel.ylabel));
     for (std::size_t k = 0; k < panel.series.size(); ++k) {
       const PlotSeries& s = panel.series[k];
-      IDENT_REQUIRE(s.x.size() == s.y.size() && !s.x.empty(),
-                    "plot '{}': series '{}' has {} x and {} y values", path, s.title, s.x.size(), s.y.size());
+      IDENT_REQUIRE(s.x.size() == s.y.size() && !s.x.empty(), "plot '{}': series '{}' has {} x and {} y values", path,
+                    s.title, s.x.size(), s.y.size());
       const fs::path data = scratch.path() / fmt::format("p{}s{}.dat", p, k);
       WriteSeries(data, s);
-      script += fmt::format("{}{} using 1:2 title {} lw 1.5", k == 0 ? "" : ", ", Quoted(data.string()),
-                            Quoted(s.title));
+      script +=
+          fmt::format("{}{} using 1:2 title {} lw 1.5", k == 0 ? "" : ", ", Quoted(data.string()), Quoted(s.title));
     }
     script += "\n";
   }
@@ -133,10 +139,9 @@ void RenderPlot(OutputFile& out, const std::vector<PlotPanel>& panels, PlotSize 
     std::ifstream log(log_file);
     std::string first_line;
     std::getline(log, first_line);
-    while (first_line.empty() && std::getline(log, first_line)) {
-    }
-    throw InvalidArgument(fmt::format("cannot write plot '{}': gnuplot failed{}{}", path,
-                                      first_line.empty() ? "" : ": ", first_line));
+    while (first_line.empty() && std::getline(log, first_line)) {}
+    throw InvalidArgument(
+        fmt::format("cannot write plot '{}': gnuplot failed{}{}", path, first_line.empty() ? "" : ": ", first_line));
   }
 }
 

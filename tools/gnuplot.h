@@ -35,8 +35,8 @@ struct PlotPanel {
 };
 
 struct PlotSize {
-  int width = 1000;             // pixels
-  int height_per_panel = 320;   // pixels
+  int width = 1000;            // pixels
+  int height_per_panel = 320;  // pixels
 };
 
 // Renders `panels` (at least one, each with at least one non-empty series) into `path` (*.svg or *.png),

@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/density/logconcave_mle.h"
 #include "common/error.h"
+#include "ident/density/logconcave_mle.h"
 #include "ident/io/csv.h"
 #include "tools/commands.h"
 
@@ -30,8 +30,8 @@ std::vector<double> ReadSamples(const LogcondensOptions& o) {
   } else if (table.names.size() > 1) {
     auto it = std::find(table.names.begin(), table.names.end(), "x");
     if (it == table.names.end())
-      throw InvalidArgument(fmt::format("{} has {} columns and none is named 'x'; pass --column NAME", o.samples,
-                                        table.names.size()));
+      throw InvalidArgument(
+          fmt::format("{} has {} columns and none is named 'x'; pass --column NAME", o.samples, table.names.size()));
     col = static_cast<int>(it - table.names.begin());
   }
   std::vector<double> x(table.num_rows());
@@ -61,15 +61,16 @@ void RunLogcondens(const LogcondensOptions& o) {
              mle.x.size(), mle.knots.size(), mle.iterations);
   fmt::print("log-likelihood sum log f(X_i) = {:.10g}\n\n  {:>16} {:>16}\n", mle.loglik, "knot", "phi");
   for (int a = 0; a < mle.knots.size(); ++a) fmt::print("  {:>16.10g} {:>16.10g}\n", mle.knots(a), mle.knot_phi(a));
-  fmt::print("\nKKT: max D = {:.1e}, max |D| at knots = {:.1e}, |int f - 1| = {:.1e}\n",
-             kkt.max_directional_derivative, kkt.max_knot_residual, kkt.mass_error);
+  fmt::print("\nKKT: max D = {:.1e}, max |D| at knots = {:.1e}, |int f - 1| = {:.1e}\n", kkt.max_directional_derivative,
+             kkt.max_knot_residual, kkt.mass_error);
 }
 
 }  // namespace
 
 void AddLogcondensCommand(CLI::App& app) {
   auto o = std::make_shared<LogcondensOptions>();
-  CLI::App* cmd = app.add_subcommand("logcondens", "Log-concave density MLE of a univariate sample (knots, phi, loglik)");
+  CLI::App* cmd =
+      app.add_subcommand("logcondens", "Log-concave density MLE of a univariate sample (knots, phi, loglik)");
   cmd->add_option("SAMPLES", o->samples, "CSV file with a header; one column, or a column named x, or --column")
       ->required();
   cmd->add_option("--column", o->column, "Column holding the samples");

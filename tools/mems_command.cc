@@ -34,12 +34,20 @@ struct MemsCommandOptions {
 };
 
 // The columns of the Fig. 9 table: (csv name, observer name in the study).
-const std::vector<std::pair<std::string, std::string>> kColumns = {
-    {"grid", "grid"},         {"tuned_kalman", "tuned_kalman"}, {"tuned_kalman_13", "tuned_kalman_13"},
-    {"lc_gaussian", "lc_truncated"}, {"lc_event", "lc_event"}, {"lc_plain", "lc_plain"},    {"lc_event_trunc", "lc_event_trunc"}, {"lc_event_capped", "lc_event_capped"},
-    {"lc_wedge", "lc_wedge"}, {"lc_excursion", "lc_excursion"},
-    {"lc_excursion_silent", "lc_excursion_silent"}, {"lc_window", "lc_window"}, {"lc_truncated", "lc_truncated"},
-    {"bound", "bound"}};
+const std::vector<std::pair<std::string, std::string>> kColumns = {{"grid", "grid"},
+                                                                   {"tuned_kalman", "tuned_kalman"},
+                                                                   {"tuned_kalman_13", "tuned_kalman_13"},
+                                                                   {"lc_gaussian", "lc_truncated"},
+                                                                   {"lc_event", "lc_event"},
+                                                                   {"lc_plain", "lc_plain"},
+                                                                   {"lc_event_trunc", "lc_event_trunc"},
+                                                                   {"lc_event_capped", "lc_event_capped"},
+                                                                   {"lc_wedge", "lc_wedge"},
+                                                                   {"lc_excursion", "lc_excursion"},
+                                                                   {"lc_excursion_silent", "lc_excursion_silent"},
+                                                                   {"lc_window", "lc_window"},
+                                                                   {"lc_truncated", "lc_truncated"},
+                                                                   {"bound", "bound"}};
 
 void RunMems(const MemsCommandOptions& o) {
   IDENT_REQUIRE(!o.t_targets.empty(), "--t-mean needs at least one value");
@@ -76,8 +84,8 @@ void RunMems(const MemsCommandOptions& o) {
   for (size_t i = 0; i < o.t_targets.size(); ++i) results.push_back(RunMemsStudy(study_options(i)));
   // Fig. 9 analogue.
   std::ostringstream report;
-  report << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {}x{} grid)\n", o.h,
-                           o.steps, o.grid_points, o.grid_points);
+  report << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {}x{} grid)\n", o.h, o.steps,
+                        o.grid_points, o.grid_points);
   report << "RMS velocity error (calibration = predicted variance / mean squared error)\n";
   report << fmt::format("{:>8} {:>7}", "t_mean", "events");
   for (const auto& [col, name] : kColumns) report << fmt::format(" {:>17}", col);
@@ -96,22 +104,24 @@ void RunMems(const MemsCommandOptions& o) {
   for (const auto& r : results) {
     report << fmt::format("{:8.3f}", r.t_mean);
     for (const char* name : {"grid", "tuned_kalman", "lc_truncated"})
-      report << fmt::format(" {:>15}", fmt::format("{:.2f} +- {:.2f}", r.Get(name).calibration,
-                                                       r.Get(name).calibration_se));
+      report << fmt::format(" {:>15}",
+                            fmt::format("{:.2f} +- {:.2f}", r.Get(name).calibration, r.Get(name).calibration_se));
     report << "\n";
   }
-  report << fmt::format("sigma_o = {:.4f} (p11 = 1/sqrt 3), bound: sigma_M^2 = (2 h v_ref)^2/3; lc_gaussian = "
-                           "lc_truncated: every reading exact, Gaussian restricted to the current reading's interval, "
-                           "no sigma_o\n",
-                           results.front().sigma_o);
+  report << fmt::format(
+      "sigma_o = {:.4f} (p11 = 1/sqrt 3), bound: sigma_M^2 = (2 h v_ref)^2/3; lc_gaussian = "
+      "lc_truncated: every reading exact, Gaussian restricted to the current reading's interval, "
+      "no sigma_o\n",
+      results.front().sigma_o);
   long truncated_failures = 0, truncated_projection_failures = 0;
   for (const auto& r : results) {
     truncated_failures += r.truncated_failures;
     truncated_projection_failures += r.truncated_projection_failures;
   }
-  report << fmt::format("lc_truncated: Gaussian restricted to the current reading's interval (assumed-density "
-                           "filter); rectangles without mass {}, projections without a parent {}\n",
-                           truncated_failures, truncated_projection_failures);
+  report << fmt::format(
+      "lc_truncated: Gaussian restricted to the current reading's interval (assumed-density "
+      "filter); rectangles without mass {}, projections without a parent {}\n",
+      truncated_failures, truncated_projection_failures);
   if (csv_file) {
     std::string f = "t_mean,t_target,events";
     for (const auto& [col, name] : kColumns) f += ",rms_" + col;
@@ -132,25 +142,36 @@ void RunMems(const MemsCommandOptions& o) {
   if (trace_file) {
     trace_file->Write("t,x1,y,var_grid,var_tuned_kalman,var_lc_gaussian,var_bound\n");
     for (size_t k = 0; k < tr.t.size(); ++k)
-      trace_file->Write(fmt::format("{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", tr.t[k], tr.x1[k], tr.y[k], tr.var_grid[k],
-                       tr.var_tuned_kalman[k], tr.var_lc_gaussian[k], tr.var_bound[k]));
+      trace_file->Write(fmt::format("{:.6g},{:.6g},{},{:.6g},{:.6g},{:.6g},{:.6g}\n", tr.t[k], tr.x1[k], tr.y[k],
+                                    tr.var_grid[k], tr.var_tuned_kalman[k], tr.var_lc_gaussian[k], tr.var_bound[k]));
   }
   if (plot_file) {
-    PlotPanel fig9{.title = "Fig. 9: RMS velocity error vs mean time between events", .xlabel = "t_mean",
-                   .ylabel = "RMS x2 error", .series = {}};
+    PlotPanel fig9{.title = "Fig. 9: RMS velocity error vs mean time between events",
+                   .xlabel = "t_mean",
+                   .ylabel = "RMS x2 error",
+                   .series = {}};
     for (const auto& [col, name] : {std::pair<std::string, std::string>{"grid", "grid"},
-                                    {"tuned Kalman", "tuned_kalman"}, {"LC Gaussian", "lc_truncated"},
+                                    {"tuned Kalman", "tuned_kalman"},
+                                    {"LC Gaussian", "lc_truncated"},
                                     {"bound", "bound"}}) {
       PlotSeries s{col, {}, {}};
-      for (const auto& r : results) { s.x.push_back(r.t_mean); s.y.push_back(r.Get(name).rms); }
+      for (const auto& r : results) {
+        s.x.push_back(r.t_mean);
+        s.y.push_back(r.Get(name).rms);
+      }
       fig9.series.push_back(std::move(s));
     }
     PlotPanel fig8{.title = fmt::format("Fig. 8: velocity variance, t_mean = {:.2f}", results.front().t_mean),
-                   .xlabel = "t", .ylabel = "var x2", .series = {}};
+                   .xlabel = "t",
+                   .ylabel = "var x2",
+                   .series = {}};
     const size_t first = tr.t.size() / 10, last = std::min(tr.t.size(), first + static_cast<size_t>(10 / o.h));
     auto window = [&](const std::string& title, const std::vector<double>& v) {
       PlotSeries s{title, {}, {}};
-      for (size_t k = first; k < last; ++k) { s.x.push_back(tr.t[k]); s.y.push_back(v[k]); }
+      for (size_t k = first; k < last; ++k) {
+        s.x.push_back(tr.t[k]);
+        s.y.push_back(v[k]);
+      }
       return s;
     };
     fig8.series.push_back(window("grid", tr.var_grid));

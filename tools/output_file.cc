@@ -45,11 +45,11 @@ void InstallHandlerOnce() {
   static std::once_flag once;
   std::call_once(once, [] {
     for (std::size_t i = 0; i < kSignals.size(); ++i) {
-      struct sigaction previous{};
+      struct sigaction previous {};
       sigaction(kSignals[i], nullptr, &previous);
       g_previous[i] = previous;
       if (previous.sa_handler == SIG_IGN) continue;  // e.g. SIGHUP under nohup: stays ignored
-      struct sigaction action{};
+      struct sigaction action {};
       action.sa_handler = &RemoveTemporaryFilesAndReraise;
       sigemptyset(&action.sa_mask);
       for (int s : kSignals) sigaddset(&action.sa_mask, s);
@@ -95,7 +95,7 @@ void ReleaseSlot(int i) {
 std::string ResolveLinks(const std::string& path, std::string& problem) {
   std::string current = path;
   for (int hops = 0; hops < 40; ++hops) {
-    struct stat st{};
+    struct stat st {};
     if (lstat(current.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return current;
     std::string target(kMaxPath, '\0');
     const ssize_t n = readlink(current.c_str(), target.data(), target.size());
@@ -128,7 +128,7 @@ OutputFile::OutputFile(std::string path, std::string what) : path_(std::move(pat
   final_path_ = ResolveLinks(path_, problem);
   if (!problem.empty()) Fail(problem);
   mode_t mode = 0;
-  struct stat st{};
+  struct stat st {};
   if (stat(final_path_.c_str(), &st) == 0) {
     if (!S_ISREG(st.st_mode)) Fail("not a regular file (a device, fifo or directory)");
     if (access(final_path_.c_str(), W_OK) != 0) Fail(std::strerror(errno));  // a read-only file stays so

@@ -62,7 +62,7 @@ class OutputFile {
   std::string final_path_;  // the target after following symbolic links
   std::string temp_path_;
   std::FILE* file_ = nullptr;
-  int slot_ = -1;  // index in the signal handler's table
+  int slot_ = -1;           // index in the signal handler's table
   bool owns_temp_ = false;  // the temporary file exists and is this object's to rename or remove
   bool committed_ = false;
 };

@@ -29,8 +29,10 @@ void CheckOutputPaths(const std::vector<NamedPath>& outputs, const std::vector<N
   for (std::size_t i = 0; i < outputs.size(); ++i) {
     const NamedPath& out = outputs[i];
     if (out.path.empty()) continue;
-    IDENT_REQUIRE(out.path != "-", "{} '-': writing to standard output is not supported; give a file name (./- for a "
-                  "file named '-')", out.name);
+    IDENT_REQUIRE(out.path != "-",
+                  "{} '-': writing to standard output is not supported; give a file name (./- for a "
+                  "file named '-')",
+                  out.name);
     std::error_code ec;
     const fs::file_status status = fs::status(out.path, ec);  // follows symbolic links
     IDENT_REQUIRE(!fs::exists(status) || fs::is_regular_file(status),

@@ -72,10 +72,13 @@ models::Penalty ParsePenalty(const Json& j, int dim, const std::string& where) {
   const Json& name_json = Field(j, "penalty", where);
   if (!name_json.is_string()) Fail(where + ".penalty", "expected a string");
   const std::string name = name_json.get<std::string>();
-  const std::map<std::string, std::vector<std::string>> keys = {
-      {"quadratic", {"covariance"}},   {"l1", {}},          {"huber", {"kappa"}},
-      {"vapnik", {"epsilon"}},         {"quantile", {"tau"}}, {"piecewise_linear", {"knots", "values"}},
-      {"box", {"lower", "upper", "M"}}};
+  const std::map<std::string, std::vector<std::string>> keys = {{"quadratic", {"covariance"}},
+                                                                {"l1", {}},
+                                                                {"huber", {"kappa"}},
+                                                                {"vapnik", {"epsilon"}},
+                                                                {"quantile", {"tau"}},
+                                                                {"piecewise_linear", {"knots", "values"}},
+                                                                {"box", {"lower", "upper", "M"}}};
   auto it = keys.find(name);
   if (it == keys.end())
     Fail(where + ".penalty", fmt::format("unknown penalty '{}' (known: quadratic, l1, huber, vapnik, quantile, "
@@ -177,15 +180,15 @@ MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::s
   } else {
     for (int i = 1; find(fmt::format("z{}", i)) >= 0; ++i) cols.push_back(find(fmt::format("z{}", i)));
   }
-  if (cols.empty())
-    throw DataError(fmt::format("{}: no measurement column (need z, or z1, z2, ...)", data_path));
+  if (cols.empty()) throw DataError(fmt::format("{}: no measurement column (need z, or z1, z2, ...)", data_path));
   MapSmootherProblem p;
   p.z.resize(cols.size(), table.num_rows());
   for (size_t i = 0; i < cols.size(); ++i) p.z.row(i) = table.values.col(cols[i]).transpose();
   if (!std::isfinite(p.z.squaredNorm()))  // the penalties square residuals of this size
-    throw DataError(fmt::format("{}: the measurements' sum of squares is beyond 1e308 (values near 1e308?); "
-                                "rescale the data",
-                                data_path));
+    throw DataError(
+        fmt::format("{}: the measurements' sum of squares is beyond 1e308 (values near 1e308?); "
+                    "rescale the data",
+                    data_path));
   ParseSmoothModel(model, model_path, &p);
   return p;
 }

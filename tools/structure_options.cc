@@ -7,8 +7,8 @@ namespace ident::tools {
 void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
   auto* output_option = app.add_option("--output", output, "Output column y (one output at a time for MIMO data)")
                             ->required(require_output);
-  auto* input = app.add_option("--input", inputs, "Input column(s) u (comma-separated for several inputs)")
-                    ->delimiter(',');
+  auto* input =
+      app.add_option("--input", inputs, "Input column(s) u (comma-separated for several inputs)")->delimiter(',');
   auto* na_option = app.add_option("--na", na, "ARX order of the output polynomial (0: FIR)")->capture_default_str();
   auto* nb_option = app.add_option("--nb", nb, "Number of b coefficients (one value, or one per input)")
                         ->delimiter(',')
@@ -23,8 +23,9 @@ void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
           ->excludes(na_option)
           ->excludes(nb_option)
           ->excludes(nk_option);
-  auto* intercept_option = app.add_flag("--intercept", intercept, "Static regression: add an intercept (first parameter)")
-                               ->needs(regressors_option);
+  auto* intercept_option =
+      app.add_flag("--intercept", intercept, "Static regression: add an intercept (first parameter)")
+          ->needs(regressors_option);
   app.add_option("--clean-regressors", clean_regressors,
                  "ARX: replace outputs the estimator flags as outliers (nu*beta < --clean-below) by a bounded "
                  "cleaned value in later regressors")
@@ -50,7 +51,7 @@ bool StructureCliOptions::Given() const {
 }
 
 std::unique_ptr<workflow::DataSource> StructureCliOptions::MakeSource(const std::vector<std::string>& columns,
-                                                            const std::string& source) const {
+                                                                      const std::string& source) const {
   // The cleaning options are checked whatever the structure: a bad value is an error, not ignored.
   models::OutputCleaningOptions clean = cleaning;
   clean.enabled = clean_regressors == "on";
@@ -63,8 +64,8 @@ std::unique_ptr<workflow::DataSource> StructureCliOptions::MakeSource(const std:
   IDENT_REQUIRE(!inputs.empty(), "give --input (ARX/FIR model) or --regressors (static regression)");
   const std::size_t m = inputs.size();
   auto per_input = [m](const std::vector<int>& v, const char* name) {
-    IDENT_REQUIRE(v.size() == 1 || v.size() == m, "--{} has {} values; give one, or one per input ({})", name,
-                  v.size(), m);
+    IDENT_REQUIRE(v.size() == 1 || v.size() == m, "--{} has {} values; give one, or one per input ({})", name, v.size(),
+                  m);
     return v.size() == m ? v : std::vector<int>(m, v[0]);
   };
   models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));

@@ -9,8 +9,8 @@
 #include <CLI/CLI.hpp>
 
 #include "ident/regression/outlier_decision.h"
-#include "models/output_cleaner.h"
 #include "ident/workflow/data_source.h"
+#include "models/output_cleaner.h"
 
 namespace ident::tools {
 
@@ -24,7 +24,7 @@ struct StructureCliOptions {
   bool intercept = false;
   // Outlier cleaning of past outputs in ARX regressors (models/output_cleaner.h) and the decision
   // threshold on the estimator's relative weight νβ (ident/regression/outlier_decision.h).
-  std::string clean_regressors = "on";  // "on" | "off" (on: safe by the study in docs/practice.md)
+  std::string clean_regressors = "on";     // "on" | "off" (on: safe by the study in docs/practice.md)
   models::OutputCleaningOptions cleaning;  // clip etc.; `enabled` follows clean_regressors
   double clean_below = 0.2;
 
@@ -40,7 +40,8 @@ struct StructureCliOptions {
   // The estimator-side decision that goes with `cleaning`. Throws InvalidArgument if invalid.
   OutlierDecision Decision() const;
   // Throws InvalidArgument (inconsistent options) or DataError (unknown column).
-  std::unique_ptr<workflow::DataSource> MakeSource(const std::vector<std::string>& columns, const std::string& source) const;
+  std::unique_ptr<workflow::DataSource> MakeSource(const std::vector<std::string>& columns,
+                                                   const std::string& source) const;
 
  private:
   std::vector<const CLI::Option*> options_;  // set by AddTo, read by Given()

@@ -18,8 +18,8 @@ enum class Noise { kGaussian, kCauchy };
 
 struct StreamOptions {
   Noise noise = Noise::kGaussian;
-  double scale = 0.1;              // standard deviation (Gaussian) or scale (Cauchy) of e(t)
-  double outlier_fraction = 0;     // probability that a sample gets an extra ±outlier_size
+  double scale = 0.1;           // standard deviation (Gaussian) or scale (Cauchy) of e(t)
+  double outlier_fraction = 0;  // probability that a sample gets an extra ±outlier_size
   double outlier_size = 50;
   int length = 4096;
   unsigned long long seed = 20261123;  // the stream for n parameters uses seed + n

@@ -79,8 +79,7 @@ Metrics RunLoop(Estimator& est, unsigned seed, int samples, bool outliers, Feedb
   design_options.ao = Eigen::Vector2d(1, -0.3);
   design_options.integral_action = true;
   ident::control::PolePlacement design(2, 2, 1, design_options);
-  ident::control::RstController law(static_cast<int>(design.R().size()) - 1,
-                                    static_cast<int>(design.S().size()) - 1,
+  ident::control::RstController law(static_cast<int>(design.R().size()) - 1, static_cast<int>(design.S().size()) - 1,
                                     static_cast<int>(design.T().size()) - 1, /*u_max=*/20);
   const Eigen::Vector3d am = design_options.am;
   double y1 = 0, y2 = 0, ym1 = 0, ym2 = 0, u1 = 0, u2 = 0, yd1 = 0, yd2 = 0, r1 = 0;
@@ -172,8 +171,8 @@ void WriteCsv(const std::string& path, const Trace& a, const Trace* b) {
   if (b) out << ",y_true_cauchy,u_cauchy,a1_hat_cauchy,b1_hat_cauchy";
   out << "\n";
   for (size_t i = 0; i < a.t.size(); ++i) {
-    out << a.t[i] << ',' << a.r[i] << ',' << a.y[i] << ',' << a.y_measured[i] << ',' << a.u[i] << ',' << a.a1[i]
-        << ',' << a.a1_hat[i] << ',' << a.b1[i] << ',' << a.b1_hat[i];
+    out << a.t[i] << ',' << a.r[i] << ',' << a.y[i] << ',' << a.y_measured[i] << ',' << a.u[i] << ',' << a.a1[i] << ','
+        << a.a1_hat[i] << ',' << a.b1[i] << ',' << a.b1_hat[i];
     if (b) out << ',' << b->y[i] << ',' << b->u[i] << ',' << b->a1_hat[i] << ',' << b->b1_hat[i];
     out << '\n';
   }
@@ -199,19 +198,26 @@ int main(int argc, char** argv) {
       return 2;
     }
     const std::string value = argv[++i];
-    if (arg == "--runs") runs = std::atoi(value.c_str());
-    else if (arg == "--samples") samples = std::atoi(value.c_str());
-    else if (arg == "--plot") plot = value;
-    else if (arg == "--csv") csv = value;
-    else if (arg == "--plot-feedback") plot_feedback = value;
+    if (arg == "--runs")
+      runs = std::atoi(value.c_str());
+    else if (arg == "--samples")
+      samples = std::atoi(value.c_str());
+    else if (arg == "--plot")
+      plot = value;
+    else if (arg == "--csv")
+      csv = value;
+    else if (arg == "--plot-feedback")
+      plot_feedback = value;
     else {
       std::fprintf(stderr, "unknown option %s\n", arg.c_str());
       return 2;
     }
   }
   Feedback plotted = Feedback::kValidated;
-  if (plot_feedback == "raw") plotted = Feedback::kRaw;
-  else if (plot_feedback == "skip") plotted = Feedback::kValidatedSkip;
+  if (plot_feedback == "raw")
+    plotted = Feedback::kRaw;
+  else if (plot_feedback == "skip")
+    plotted = Feedback::kValidatedSkip;
   else if (plot_feedback != "validated") {
     std::fprintf(stderr, "--plot-feedback %s: need raw, validated or skip\n", plot_feedback.c_str());
     return 2;
@@ -242,9 +248,10 @@ int main(int argc, char** argv) {
   };
   std::vector<Table> tables;
   for (const Feedback feedback : {Feedback::kRaw, Feedback::kValidated, Feedback::kValidatedSkip}) {
-    Table table{feedback == Feedback::kRaw         ? "control law fed the raw measurement y_m"
-                : feedback == Feedback::kValidated ? "control law fed y_m validated by the model (|y_m - yhat| > 5 sigma: use yhat)"
-                                                   : "validated, and rejected samples withheld from the estimator (Skip())",
+    Table table{feedback == Feedback::kRaw ? "control law fed the raw measurement y_m"
+                : feedback == Feedback::kValidated
+                    ? "control law fed y_m validated by the model (|y_m - yhat| > 5 sigma: use yhat)"
+                    : "validated, and rejected samples withheld from the estimator (Skip())",
                 {}};
     table.rows.push_back(Study("true model (floor)", make_truth, runs, samples, feedback));
     table.rows.push_back(Study("RLS, lambda = 0.99", make_rls, runs, samples, feedback));
@@ -254,13 +261,14 @@ int main(int argc, char** argv) {
     tables.push_back(table);
   }
 
-  std::printf("Indirect STR (pole placement), drifting ARX(2,2,1) plant, %d seeded runs x %d samples "
-              "(statistics over t >= %d)\n",
-              runs, samples, kBurnIn);
+  std::printf(
+      "Indirect STR (pole placement), drifting ARX(2,2,1) plant, %d seeded runs x %d samples "
+      "(statistics over t >= %d)\n",
+      runs, samples, kBurnIn);
   for (const Table& table : tables) {
     std::printf("\n%s\n", table.title);
-    std::printf("%-24s %15s %14s %8s   %14s %12s %8s\n", "model from", "Var(y-yd) clean", "with outliers",
-                "ratio", "RMS(r-y) clean", "w/ outliers", "ratio");
+    std::printf("%-24s %15s %14s %8s   %14s %12s %8s\n", "model from", "Var(y-yd) clean", "with outliers", "ratio",
+                "RMS(r-y) clean", "w/ outliers", "ratio");
     for (const Row& row : table.rows)
       std::printf("%-24s %15.5f %14.5f %8.3f   %14.5f %12.5f %8.3f\n", row.name, row.clean.output_variance,
                   row.outliers.output_variance, row.outliers.output_variance / row.clean.output_variance,
@@ -287,7 +295,10 @@ int main(int argc, char** argv) {
 #ifdef IDENT_HAS_GNUPLOT
       using ident::tools::PlotPanel;
       std::vector<PlotPanel> panels;
-      PlotPanel p1{.title = "run 1 with outliers (feedback: " + plot_feedback + "): RLS-based loop", .xlabel = "t", .ylabel = "y", .series = {}};
+      PlotPanel p1{.title = "run 1 with outliers (feedback: " + plot_feedback + "): RLS-based loop",
+                   .xlabel = "t",
+                   .ylabel = "y",
+                   .series = {}};
       p1.series.push_back({"true output y", rls_trace.t, rls_trace.y});
       p1.series.push_back({"reference r", rls_trace.t, rls_trace.r});
       panels.push_back(p1);
@@ -295,7 +306,10 @@ int main(int argc, char** argv) {
       p3.series.push_back({"true a1", rls_trace.t, rls_trace.a1});
       p3.series.push_back({"RLS", rls_trace.t, rls_trace.a1_hat});
       if (cauchy_ptr) {
-        PlotPanel p2{.title = "run 1 with outliers (feedback: " + plot_feedback + "): Cauchy-based loop", .xlabel = "t", .ylabel = "y", .series = {}};
+        PlotPanel p2{.title = "run 1 with outliers (feedback: " + plot_feedback + "): Cauchy-based loop",
+                     .xlabel = "t",
+                     .ylabel = "y",
+                     .series = {}};
         p2.series.push_back({"true output y", cauchy_ptr->t, cauchy_ptr->y});
         p2.series.push_back({"reference r", cauchy_ptr->t, cauchy_ptr->r});
         panels.push_back(p2);

@@ -26,8 +26,8 @@ std::string PolePlacementOptions::Validate(int na, int nb, int nk) const {
   const int deg_b = nk + nb - 1;
   const int deg_ac = static_cast<int>(am.size() + ao.size()) - 2;
   if (deg_ac > deg_a + deg_b - 1)
-    return fmt::format("deg(am*ao) = {}; the minimum-degree design allows at most deg A' + deg B - 1 = {}",
-                       deg_ac, deg_a + deg_b - 1);
+    return fmt::format("deg(am*ao) = {}; the minimum-degree design allows at most deg A' + deg B - 1 = {}", deg_ac,
+                       deg_a + deg_b - 1);
   return {};
 }
 

@@ -39,17 +39,17 @@ namespace ident::control {
 
 struct PolePlacementOptions {
   Eigen::VectorXd am = Eigen::Vector3d(1, -1.2, 0.36);  // desired (model) poles Am, Am(0) = 1
-  Eigen::VectorXd ao = Eigen::VectorXd::Ones(1);         // observer polynomial Ao, Ao(0) = 1
-  bool integral_action = true;                            // R = (1 − q⁻¹) R̄: zero steady-state error
+  Eigen::VectorXd ao = Eigen::VectorXd::Ones(1);        // observer polynomial Ao, Ao(0) = 1
+  bool integral_action = true;                          // R = (1 − q⁻¹) R̄: zero steady-state error
 
   // "" if valid for the given structure, else one line naming the option.
   std::string Validate(int na, int nb, int nk) const;
 };
 
 enum class DesignStatus {
-  kOk,              // R, S, T updated
-  kInvalidModel,    // a or b has the wrong size or a non-finite entry; R, S, T unchanged
-  kNotControllable, // A' and B (nearly) share a factor, or B(1) ≈ 0; R, S, T unchanged
+  kOk,               // R, S, T updated
+  kInvalidModel,     // a or b has the wrong size or a non-finite entry; R, S, T unchanged
+  kNotControllable,  // A' and B (nearly) share a factor, or B(1) ≈ 0; R, S, T unchanged
 };
 
 class PolePlacement {
@@ -58,8 +58,7 @@ class PolePlacement {
   PolePlacement(int na, int nb, int nk, const PolePlacementOptions& options = {});
 
   // Solves the Diophantine equation for A = [1, a], B = q^{−nk}[b]. noexcept, allocation-free.
-  DesignStatus Design(const Eigen::Ref<const Eigen::VectorXd>& a,
-                      const Eigen::Ref<const Eigen::VectorXd>& b) noexcept;
+  DesignStatus Design(const Eigen::Ref<const Eigen::VectorXd>& a, const Eigen::Ref<const Eigen::VectorXd>& b) noexcept;
 
   // The last successful design (R(0) = 1). Before the first: R = 1, S = 0, T = 0 (u = 0).
   const Eigen::VectorXd& R() const { return R_; }

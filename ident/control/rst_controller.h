@@ -29,8 +29,8 @@ class RstController {
   // Throws InvalidArgument if a degree is negative or u_max is not positive.
   RstController(int deg_r, int deg_s, int deg_t, double u_max = std::numeric_limits<double>::infinity())
       : u_max_(u_max) {
-    IDENT_REQUIRE(deg_r >= 0 && deg_s >= 0 && deg_t >= 0, "degrees (R, S, T) = ({}, {}, {}); need >= 0", deg_r,
-                  deg_s, deg_t);
+    IDENT_REQUIRE(deg_r >= 0 && deg_s >= 0 && deg_t >= 0, "degrees (R, S, T) = ({}, {}, {}); need >= 0", deg_r, deg_s,
+                  deg_t);
     IDENT_REQUIRE(u_max > 0, "u_max = {}; need u_max > 0", u_max);
     R_ = Eigen::VectorXd::Zero(deg_r + 1);
     R_(0) = 1;

@@ -44,7 +44,7 @@ JValues Jfun(double r, double s) {
   const double e = std::exp(base);
   JValues v;
   v.J = e * j0;
-  const double near = e * (j0 - j1), far = e * j1;            // int (1-t) e, int t e  (t from `base`)
+  const double near = e * (j0 - j1), far = e * j1;  // int (1-t) e, int t e  (t from `base`)
   const double near2 = e * (j0 - 2 * j1 + j2), far2 = e * j2, mixed = e * (j1 - j2);
   v.Jr = swap ? far : near;
   v.Js = swap ? near : far;
@@ -61,7 +61,8 @@ inline void SegmentIntegrals(double r, double s, double er, double es, double* J
   if (std::abs(d) < 1e-2) {
     // J/er = sum_m d^m/(m+1)!,  Jr/er = sum_m d^m/(m+2)!  (Horner; the d^7 terms are below 1e-18)
     const double j0 = 1 + d * (1. / 2 + d * (1. / 6 + d * (1. / 24 + d * (1. / 120 + d * (1. / 720 + d / 5040)))));
-    const double jr = 1. / 2 + d * (1. / 6 + d * (1. / 24 + d * (1. / 120 + d * (1. / 720 + d * (1. / 5040 + d / 40320)))));
+    const double jr =
+        1. / 2 + d * (1. / 6 + d * (1. / 24 + d * (1. / 120 + d * (1. / 720 + d * (1. / 5040 + d / 40320)))));
     *J = er * j0;
     *Jr = er * jr;
     return;
@@ -204,8 +205,7 @@ class ActiveSet {
           const bool drop = conv_new(a) > 0 && conv_old(a) / (conv_old(a) - conv_new(a)) <= lambda * (1 + 1e-12);
           if (!drop) kept.push_back(kn[a]);
         }
-        if (lambda == 0 && kept.size() + 1 == kn.size() &&
-            std::find(kept.begin(), kept.end(), best) == kept.end()) {
+        if (lambda == 0 && kept.size() + 1 == kn.size() && std::find(kept.begin(), kept.end(), best) == kept.end()) {
           stalled = true;  // the new knot is rejected at once: D(best) is at rounding level
           kn = kept;
           break;

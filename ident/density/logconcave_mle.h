@@ -34,20 +34,20 @@
 namespace ident::approx {
 
 struct LogConcaveMleOptions {
-  int max_iterations = 10000;     // active-set changes
-  double tolerance = 1e-12;       // on D_j (relative to the data range) and on Newton steps
+  int max_iterations = 10000;  // active-set changes
+  double tolerance = 1e-12;    // on D_j (relative to the data range) and on Newton steps
 };
 
 struct LogConcaveMle {
-  int n = 0;                      // sample size
-  Eigen::VectorXd x;              // sorted distinct sample values x_1 < ... < x_m
-  Eigen::VectorXd weights;        // multiplicity / n
-  Eigen::VectorXd phi;            // log-density at x
-  std::vector<int> knot_index;    // indices into x of the knots (first and last included)
-  Eigen::VectorXd knots;          // x at the knots
-  Eigen::VectorXd knot_phi;       // phi at the knots
-  double loglik = 0;              // sum_{i=1..n} log f_hat(X_i) = n sum_j w_j phi_j
-  int iterations = 0;             // active-set changes
+  int n = 0;                    // sample size
+  Eigen::VectorXd x;            // sorted distinct sample values x_1 < ... < x_m
+  Eigen::VectorXd weights;      // multiplicity / n
+  Eigen::VectorXd phi;          // log-density at x
+  std::vector<int> knot_index;  // indices into x of the knots (first and last included)
+  Eigen::VectorXd knots;        // x at the knots
+  Eigen::VectorXd knot_phi;     // phi at the knots
+  double loglik = 0;            // sum_{i=1..n} log f_hat(X_i) = n sum_j w_j phi_j
+  int iterations = 0;           // active-set changes
 
   double LogDensity(double t) const;  // -inf outside [x_1, x_m]
   double Cdf(double t) const;

@@ -7,8 +7,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <limits>
+#include <sstream>
 #include <unordered_map>
 
 #include <fmt/format.h>
@@ -79,7 +79,8 @@ std::string ShowCell(std::string_view cell) {
 
 CsvReader::CsvReader(const std::string& path, const CsvOptions& options) : path_(path), options_(options) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw DataError(fmt::format("cannot read '{}': it is a directory", path));
+  if (std::filesystem::is_directory(path, ec))
+    throw DataError(fmt::format("cannot read '{}': it is a directory", path));
   in_ = std::make_unique<std::ifstream>(path, std::ios::in | std::ios::binary);
   if (!*in_) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
   ReadHeader();
@@ -165,8 +166,8 @@ void CsvReader::ReadHeader() {
       throw DataError(fmt::format("{}:{}: column {} name contains a NUL byte", path, line_, j + 1));
     const auto [it, inserted] = seen.emplace(name, j);
     if (!inserted)
-      throw DataError(fmt::format("{}:{}: duplicate column name {} (columns {} and {})", path, line_,
-                                  ShowCell(name), it->second + 1, j + 1));
+      throw DataError(fmt::format("{}:{}: duplicate column name {} (columns {} and {})", path, line_, ShowCell(name),
+                                  it->second + 1, j + 1));
     names_.emplace_back(name);
   }
 }
@@ -178,8 +179,7 @@ int CsvReader::ColumnIndex(std::string_view name) const {
 }
 
 bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
-  IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(),
-                num_columns());
+  IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(), num_columns());
   while (ReadLine()) {
     if (IsBlank(buffer_)) {
       if (rows_ > 0 && blank_line_ == 0) blank_line_ = line_;
@@ -202,9 +202,10 @@ bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
       double value = std::numeric_limits<double>::quiet_NaN();
       if (cell.empty()) {
         if (!options_.missing_as_nan)
-          throw DataError(fmt::format("{}:{}: column {} ({}) is empty (pass --missing to treat empty cells as "
-                                      "missing samples)",
-                                      path_, line_, column + 1, ShowCell(names_[column])));
+          throw DataError(
+              fmt::format("{}:{}: column {} ({}) is empty (pass --missing to treat empty cells as "
+                          "missing samples)",
+                          path_, line_, column + 1, ShowCell(names_[column])));
       } else {
         if (cell.find('\0') != std::string_view::npos)
           throw DataError(fmt::format("{}:{}: column {} ({}): contains a NUL byte", path_, line_, column + 1,
@@ -221,9 +222,10 @@ bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
                                       ShowCell(names_[column]), ShowCell(cell)));
         if (!std::isfinite(value)) {
           if (!options_.missing_as_nan)
-            throw DataError(fmt::format("{}:{}: column {} ({}): {} is not a finite number (pass --missing to "
-                                        "treat NaN/Inf/empty cells as missing samples)",
-                                        path_, line_, column + 1, ShowCell(names_[column]), ShowCell(cell)));
+            throw DataError(
+                fmt::format("{}:{}: column {} ({}): {} is not a finite number (pass --missing to "
+                            "treat NaN/Inf/empty cells as missing samples)",
+                            path_, line_, column + 1, ShowCell(names_[column]), ShowCell(cell)));
           value = std::numeric_limits<double>::quiet_NaN();
         }
       }
@@ -232,8 +234,8 @@ bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
       rest.remove_prefix(comma + 1);
     }
     if (column != n)
-      throw DataError(fmt::format("{}:{}: row has {} field{}; the header has {}", path_, line_, column,
-                                  column == 1 ? "" : "s", n));
+      throw DataError(
+          fmt::format("{}:{}: row has {} field{}; the header has {}", path_, line_, column, column == 1 ? "" : "s", n));
     ++rows_;
     return true;
   }
@@ -258,7 +260,8 @@ DataTable ReadAll(CsvReader& reader) {
   Eigen::VectorXd row(n);
   while (reader.Next(row)) data.insert(data.end(), row.data(), row.data() + n);
   const Eigen::Index rows = static_cast<Eigen::Index>(data.size()) / n;
-  table.values = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(data.data(), rows, n);
+  table.values =
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(data.data(), rows, n);
   return table;
 }
 

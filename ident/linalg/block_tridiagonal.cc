@@ -10,7 +10,9 @@ namespace {
 // Plain loops on column-major n x n blocks (ld = n). kN > 0 fixes the block size at compile time
 // (n = 1..4: the loops unroll); kN = 0 is the run-time-size fallback.
 template <int kN>
-inline int Size(int n) { return kN > 0 ? kN : n; }
+inline int Size(int n) {
+  return kN > 0 ? kN : n;
+}
 inline double& At(double* A, int n, int i, int j) { return A[i + j * n]; }
 inline double At(const double* A, int n, int i, int j) { return A[i + j * n]; }
 
@@ -127,26 +129,35 @@ void SolveBlocks(const double* C_all, const double* G_all, int n_runtime, int N,
 
 bool FactorizeBlockTridiagonal(int n, int N, const double* D, const double* E, double* C, double* G, double* work) {
   switch (n) {  // fixed-size kernels for small blocks, run-time size beyond
-    case 1: return FactorizeBlocks<1>(D, E, n, N, C, G, work);
-    case 2: return FactorizeBlocks<2>(D, E, n, N, C, G, work);
-    case 3: return FactorizeBlocks<3>(D, E, n, N, C, G, work);
-    case 4: return FactorizeBlocks<4>(D, E, n, N, C, G, work);
-    default: return FactorizeBlocks<0>(D, E, n, N, C, G, work);
+    case 1:
+      return FactorizeBlocks<1>(D, E, n, N, C, G, work);
+    case 2:
+      return FactorizeBlocks<2>(D, E, n, N, C, G, work);
+    case 3:
+      return FactorizeBlocks<3>(D, E, n, N, C, G, work);
+    case 4:
+      return FactorizeBlocks<4>(D, E, n, N, C, G, work);
+    default:
+      return FactorizeBlocks<0>(D, E, n, N, C, G, work);
   }
 }
 
 void SolveBlockTridiagonal(int n, int N, const double* C, const double* G, double* b) {
   switch (n) {
-    case 1: return SolveBlocks<1>(C, G, n, N, b);
-    case 2: return SolveBlocks<2>(C, G, n, N, b);
-    case 3: return SolveBlocks<3>(C, G, n, N, b);
-    case 4: return SolveBlocks<4>(C, G, n, N, b);
-    default: return SolveBlocks<0>(C, G, n, N, b);
+    case 1:
+      return SolveBlocks<1>(C, G, n, N, b);
+    case 2:
+      return SolveBlocks<2>(C, G, n, N, b);
+    case 3:
+      return SolveBlocks<3>(C, G, n, N, b);
+    case 4:
+      return SolveBlocks<4>(C, G, n, N, b);
+    default:
+      return SolveBlocks<0>(C, G, n, N, b);
   }
 }
 
-BlockTridiagonalCholesky::BlockTridiagonalCholesky(int block_size, int num_blocks)
-    : n_(block_size), N_(num_blocks) {
+BlockTridiagonalCholesky::BlockTridiagonalCholesky(int block_size, int num_blocks) : n_(block_size), N_(num_blocks) {
   IDENT_REQUIRE(block_size >= 1 && num_blocks >= 1, "block-tridiagonal size {} x {} blocks is invalid", block_size,
                 num_blocks);
   C_.resize(n_, static_cast<Eigen::Index>(n_) * N_);

@@ -87,20 +87,17 @@ class LdFactor {
   //   L[j,i] = (V_ij - sum_{k>j} d_k L[k,i] L[k,j]) / d_j     (i < j)
   void Factorize(const Eigen::Ref<const Eigen::MatrixXd>& V) {
     const Eigen::Index n = V.rows();
-    IDENT_REQUIRE(n >= 1 && V.cols() == n, "matrix V is {}x{}; need a non-empty square matrix", V.rows(),
-                  V.cols());
+    IDENT_REQUIRE(n >= 1 && V.cols() == n, "matrix V is {}x{}; need a non-empty square matrix", V.rows(), V.cols());
     IDENT_REQUIRE(Dim == Eigen::Dynamic || n == Dim, "matrix V is {}x{}; need {}x{}", n, n, Dim, Dim);
     IDENT_REQUIRE(V.allFinite(), "matrix V has a non-finite entry");
     const double scale = V.cwiseAbs().maxCoeff();
-    IDENT_REQUIRE(((V - V.transpose()).cwiseAbs().array() <= 1e-12 * scale).all(),
-                  "matrix V is not symmetric");
+    IDENT_REQUIRE(((V - V.transpose()).cwiseAbs().array() <= 1e-12 * scale).all(), "matrix V is not symmetric");
     L_.setIdentity(n, n);
     d_.resize(n);
     for (Eigen::Index j = n - 1; j >= 0; --j) {
       double dj = V(j, j);
       for (Eigen::Index k = j + 1; k < n; ++k) dj -= d_(k) * L_(k, j) * L_(k, j);
-      IDENT_REQUIRE(dj > 0 && std::isfinite(dj),
-                    "matrix V is not positive definite (pivot {} is {})", j, dj);
+      IDENT_REQUIRE(dj > 0 && std::isfinite(dj), "matrix V is not positive definite (pivot {} is {})", j, dj);
       d_(j) = dj;
       for (Eigen::Index i = 0; i < j; ++i) {
         double s = V(i, j);
@@ -326,9 +323,9 @@ class LdFactor {
 
   Matrix L_;
   Vector d_;
-  Vector d_next_, b_;                 // PlanUpdate -> CommitUpdate workspace
-  Eigen::Index sweep_end_ = 0;        // rows below this keep their L (the sweep's c reached 0)
-  Plan plan_;                         // the last PlanUpdate()
+  Vector d_next_, b_;                // PlanUpdate -> CommitUpdate workspace
+  Eigen::Index sweep_end_ = 0;       // rows below this keep their L (the sweep's c reached 0)
+  Plan plan_;                        // the last PlanUpdate()
   mutable double l_bound_ = kStale;  // ≥ max |L_ij| off the diagonal; NaN = recompute
 };
 

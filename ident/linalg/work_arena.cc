@@ -53,8 +53,8 @@ WorkArena::~WorkArena() {
 
 double* WorkArena::Take(std::size_t count) {
   const std::size_t padded = Padded(count);
-  IDENT_REQUIRE(used_ + padded <= capacity_, "WorkArena: {} doubles requested, {} of {} left", count,
-                capacity_ - used_, capacity_);
+  IDENT_REQUIRE(used_ + padded <= capacity_, "WorkArena: {} doubles requested, {} of {} left", count, capacity_ - used_,
+                capacity_);
   double* p = data_ + used_;
   used_ += padded;
   return p;

@@ -36,12 +36,13 @@ class CovarianceBoundTracker {
 
   StepReport Predict(const models::LinearStateSpace& model) {
     if (model.num_states() != bound_.dim()) return {StepStatus::kRejectedInvalid};
-    bound_.Affine(model.A);                 // Thm 1, affine
-    bound_.Convolve(model.process_noise);   // Thm 1, convolution
+    bound_.Affine(model.A);                // Thm 1, affine
+    bound_.Convolve(model.process_noise);  // Thm 1, convolution
     return {StepStatus::kUpdated};
   }
   StepReport Correct(const models::MeasurementFunction& measurement, double y) {
-    if (measurement.num_states() != bound_.dim() || !measurement.IsValidOutput(y)) return {StepStatus::kRejectedInvalid};
+    if (measurement.num_states() != bound_.dim() || !measurement.IsValidOutput(y))
+      return {StepStatus::kRejectedInvalid};
     bound_.Multiply(measurement.Strength(y));  // Thm 1, product
     return {StepStatus::kUpdated};
   }

@@ -5,9 +5,9 @@
 #include <limits>
 #include <numbers>
 
+#include <fmt/format.h>
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <fmt/format.h>
 
 #include "common/error.h"
 
@@ -22,7 +22,8 @@ using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 3, 1>;
 int NiceFftSize(int m) {
   for (int s = std::max(m, 1);; ++s) {
     int r = s;
-    for (int f : {2, 3, 5}) while (r % f == 0) r /= f;
+    for (int f : {2, 3, 5})
+      while (r % f == 0) r /= f;
     if (r == 1) return s;
   }
 }
@@ -31,10 +32,12 @@ int NiceFftSize(int m) {
 
 std::string GridObserverOptions::Validate() const {
   if (points.empty() || points.size() > 3) return fmt::format("points has {} entries; need 1 to 3", points.size());
-  for (int n : points) if (n < 8 || n > 4096) return fmt::format("points = {}; need 8 <= points <= 4096", n);
+  for (int n : points)
+    if (n < 8 || n > 4096) return fmt::format("points = {}; need 8 <= points <= 4096", n);
   if (!(initial_sigmas > 0)) return fmt::format("initial_sigmas = {}; need > 0", initial_sigmas);
   if (!(noise_sigmas >= 0)) return fmt::format("noise_sigmas = {}; need >= 0", noise_sigmas);
-  if (!(support_level > 0 && support_level < 1)) return fmt::format("support_level = {}; need in (0, 1)", support_level);
+  if (!(support_level > 0 && support_level < 1))
+    return fmt::format("support_level = {}; need in (0, 1)", support_level);
   if (!(min_half_width > 0)) return fmt::format("min_half_width = {}; need > 0", min_half_width);
   if (padding < 0) return fmt::format("padding = {}; need >= 0", padding);
   return "";
@@ -86,13 +89,15 @@ GridObserver::GridObserver(const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0,
   }
 }
 
-GridObserver::GridObserver(models::LinearStateSpace model, std::shared_ptr<const models::MeasurementFunction> measurement,
-                           const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0, const GridObserverOptions& options)
+GridObserver::GridObserver(models::LinearStateSpace model,
+                           std::shared_ptr<const models::MeasurementFunction> measurement, const Eigen::VectorXd& m0,
+                           const Eigen::MatrixXd& P0, const GridObserverOptions& options)
     : GridObserver(m0, P0, options) {
   model.Validate();
   IDENT_REQUIRE(measurement != nullptr, "measurement must not be null");
   IDENT_REQUIRE(model.num_states() == dim_ && measurement->num_states() == dim_,
-                "model ({}) and measurement ({}) must have {} states", model.num_states(), measurement->num_states(), dim_);
+                "model ({}) and measurement ({}) must have {} states", model.num_states(), measurement->num_states(),
+                dim_);
   model_ = std::move(model);
   measurement_ = std::move(measurement);
 }
@@ -157,8 +162,9 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
   const auto old_origin = origin_;
   const auto old_spacing = spacing_;
   for (int i = 0; i < dim_; ++i) {
-    const double hw = std::max(options_.min_half_width,
-                               new_half(i) + options_.noise_sigmas * std::sqrt(std::max(0.0, model.process_noise(i, i))));
+    const double hw =
+        std::max(options_.min_half_width,
+                 new_half(i) + options_.noise_sigmas * std::sqrt(std::max(0.0, model.process_noise(i, i))));
     origin_[i] = new_mid(i) - hw;
     spacing_[i] = 2 * hw / (n_[i] - 1);
     // The box beyond double range (huge A, B u or noise): no representable grid.
@@ -191,11 +197,17 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
       for (int j = 0; j < dim_; ++j) f[j] += ji * G(j, i);
     }
     for (int j = 0; j < dim_ && inside; ++j) {
-      if (!(f[j] >= 0 && f[j] <= n_[j] - 1)) { inside = false; break; }  // also NaN (no int cast of NaN)
+      if (!(f[j] >= 0 && f[j] <= n_[j] - 1)) {
+        inside = false;
+        break;
+      }  // also NaN (no int cast of NaN)
       base[j] = std::min(static_cast<int>(f[j]), n_[j] - 2);
       w[j] = f[j] - base[j];
     }
-    if (!inside) { q_[idx] = 0; continue; }
+    if (!inside) {
+      q_[idx] = 0;
+      continue;
+    }
     double v = 0;
     for (int corner = 0; corner < (1 << dim_); ++corner) {
       double weight = 1;
@@ -227,8 +239,10 @@ void GridObserver::Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* 
       for (int line = 0; line < lines; ++line) {
         const int start = (line % stride) + (line / stride) * stride * len;
         for (int k = 0; k < len; ++k) line_in_[k] = data[start + k * stride];
-        if (inverse) fft_.inv(line_out_.data(), line_in_.data(), len);
-        else fft_.fwd(line_out_.data(), line_in_.data(), len);
+        if (inverse)
+          fft_.inv(line_out_.data(), line_in_.data(), len);
+        else
+          fft_.fwd(line_out_.data(), line_in_.data(), len);
         for (int k = 0; k < len; ++k) data[start + k * stride] = line_out_[k];
       }
     }
@@ -283,7 +297,10 @@ void GridObserver::Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* 
       max_log = std::max(max_log, l);
     }
     double sum = 0;
-    for (auto& k : kernel_) { k = std::exp(k.real() - max_log); sum += k.real(); }
+    for (auto& k : kernel_) {
+      k = std::exp(k.real() - max_log);
+      sum += k.real();
+    }
     for (auto& k : kernel_) k /= sum;
     transform(kernel_, false);
     for (int flat = 0; flat < padded_total_; ++flat) buf_[flat] *= kernel_[flat];
@@ -358,7 +375,10 @@ StepReport GridObserver::Correct(const models::MeasurementFunction& measurement,
   // (3) in log space: q = log f_M(y, x) on nodes with mass, shifted by its maximum before exp.
   double max_log = -std::numeric_limits<double>::infinity();
   for (int idx = 0; idx < total_; ++idx) {
-    if (p_[idx] == 0) { q_[idx] = -std::numeric_limits<double>::infinity(); continue; }
+    if (p_[idx] == 0) {
+      q_[idx] = -std::numeric_limits<double>::infinity();
+      continue;
+    }
     NodeCoordinates(idx, x_);
     q_[idx] = measurement.LogLikelihood(y, x_);
     if (std::isnan(q_[idx])) return {StepStatus::kNumericalFailure};  // density unchanged

@@ -126,7 +126,7 @@ BasicKalmanFilter<N>::BasicKalmanFilter(const Eigen::Ref<const Eigen::VectorXd>&
   S_bak_.resize(n, n);
   c_ = StateVector::Zero(n);
   noise_cached_ = StateMatrix::Constant(n, n, std::numeric_limits<double>::quiet_NaN());  // never equal: first
-  noise_sqrt_.resize(n, n);                                                                 // Predict factors P_N
+  noise_sqrt_.resize(n, n);                                                               // Predict factors P_N
   noise_tmp_.resize(n, n);
   // Sizes the LDLᵀ workspace and sets its status (LDLT(n) leaves the status uninitialised: UBSan).
   noise_ldlt_.compute(StateMatrix::Identity(n, n));
@@ -182,7 +182,7 @@ StepReport BasicKalmanFilter<N>::Predict(const models::LinearStateSpace& model,
   pre_.bottomRows(n) = noise_sqrt_.transpose();
   TriangularizeInPlace(pre_, qr_workspace_);
   S_new_ = pre_.topRows(n).template triangularView<Eigen::Upper>().transpose();
-  x_new_.noalias() = model.A * x_;                                           // eq. (1) for the mean
+  x_new_.noalias() = model.A * x_;  // eq. (1) for the mean
   if (model.num_inputs() > 0) x_new_.noalias() += model.B * u;
   if (!S_new_.allFinite() || !x_new_.allFinite()) return {StepStatus::kNumericalFailure};
   S_ = S_new_;
@@ -204,7 +204,7 @@ StepReport BasicKalmanFilter<N>::Correct(const Eigen::Ref<const Eigen::VectorXd>
   TriangularizeInPlace(pre1_, qr_workspace_);
   post1_ = pre1_.template triangularView<Eigen::Upper>().transpose();
   const double re_sqrt = post1_(0, 0);
-  const double w = (y - c.dot(x_)) / re_sqrt;                                 // Re^{-1/2} e
+  const double w = (y - c.dot(x_)) / re_sqrt;  // Re^{-1/2} e
   const double log_det = std::log(std::abs(re_sqrt));
   x_new_ = x_ + post1_.col(0).tail(n) * w;
   S_new_ = post1_.bottomRightCorner(n, n);

@@ -60,8 +60,7 @@ class BasicLcGaussianFilter {
   // Throws InvalidArgument if sizes differ, entries are not finite or P0 is not positive definite.
   BasicLcGaussianFilter(const Eigen::Ref<const Eigen::VectorXd>& m0, const Eigen::Ref<const Eigen::MatrixXd>& P0);
   // Convenience for Update(): a fixed model and measurement function.
-  BasicLcGaussianFilter(models::LinearStateSpace model,
-                        std::shared_ptr<const models::ProjectedMeasurement> measurement,
+  BasicLcGaussianFilter(models::LinearStateSpace model, std::shared_ptr<const models::ProjectedMeasurement> measurement,
                         const Eigen::Ref<const Eigen::VectorXd>& m0, const Eigen::Ref<const Eigen::MatrixXd>& P0);
 
   // Eqs. (1)-(2). kRejectedInvalid for a model or u of the wrong size or non-finite u.
@@ -82,7 +81,8 @@ class BasicLcGaussianFilter {
   // excursion smoother (studies/mems/excursion_reading.h); the log-likelihood is left unchanged.
   // kRejectedInvalid (state untouched) for wrong sizes, non-finite entries or a negative variance; the
   // covariance is symmetrised.
-  StepReport Assign(const Eigen::Ref<const Eigen::VectorXd>& mean, const Eigen::Ref<const Eigen::MatrixXd>& cov) noexcept;
+  StepReport Assign(const Eigen::Ref<const Eigen::VectorXd>& mean,
+                    const Eigen::Ref<const Eigen::MatrixXd>& cov) noexcept;
   // Predict + Correct with the stored model and measurement (the whole step or nothing);
   // kRejectedInvalid without a stored model.
   StepReport Update(const StateSpaceItem& item) noexcept;
@@ -154,11 +154,11 @@ StepReport BasicLcGaussianFilter<N>::Predict(const models::LinearStateSpace& mod
       model.process_noise.cols() != n || u.size() != model.num_inputs() || !u.allFinite()) {
     return {StepStatus::kRejectedInvalid};
   }
-  m_new_.noalias() = model.A * m_;                                    // eq. (1) for the mean
+  m_new_.noalias() = model.A * m_;  // eq. (1) for the mean
   if (model.num_inputs() > 0) m_new_.noalias() += model.B * u;
   tmp_.noalias() = model.A * P_;
   P_new_.noalias() = tmp_ * model.A.transpose();
-  P_new_ += model.process_noise;                                      // eq. (2): P_N adds
+  P_new_ += model.process_noise;  // eq. (2): P_N adds
   if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
   m_ = m_new_;
   P_ = P_new_;
@@ -177,17 +177,17 @@ StepReport BasicLcGaussianFilter<N>::ApplyTilt(const Eigen::Ref<const Eigen::Vec
   const double s2 = c.dot(k_);
   if (!(s2 > 0) || !std::isfinite(s2)) return {StepStatus::kNumericalFailure};
   const double prior_mean = c.dot(m_);
-  k_ /= s2;                                                           // k = P c / σ²
-  m_new_ = m_ + k_ * (t.mean - prior_mean);                           // m ← m + k (μ_s − c'm)
+  k_ /= s2;                                  // k = P c / σ²
+  m_new_ = m_ + k_ * (t.mean - prior_mean);  // m ← m + k (μ_s − c'm)
   P_new_ = P_;
-  P_new_.noalias() -= (s2 - std::min(t.variance, s2)) * k_ * k_.transpose();   // P ← P − k k'(σ² − v_s)
+  P_new_.noalias() -= (s2 - std::min(t.variance, s2)) * k_ * k_.transpose();  // P ← P − k k'(σ² − v_s)
   return CommitUpdate(t.log_normalizer, t.mean - prior_mean);
 }
 
 template <int N>
 StepReport BasicLcGaussianFilter<N>::CommitUpdate(double log_normalizer, double prediction_error) noexcept {
   const int n = num_states();
-  for (int i = 0; i < n; ++i) {                                       // symmetrise against round-off
+  for (int i = 0; i < n; ++i) {  // symmetrise against round-off
     for (int j = 0; j < i; ++j) P_new_(i, j) = P_new_(j, i) = 0.5 * (P_new_(i, j) + P_new_(j, i));
   }
   if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
@@ -216,17 +216,17 @@ StepReport BasicLcGaussianFilter<N>::ApplyPairTilt(const Eigen::Ref<const Eigen:
   Eigen::Matrix2d s_inv;
   s_inv << prior_cov(1, 1), -prior_cov(0, 1), -prior_cov(1, 0), prior_cov(0, 0);
   s_inv /= det;
-  k2_.noalias() = cross * s_inv;                                      // K = Cov(x, s) S⁻¹
+  k2_.noalias() = cross * s_inv;  // K = Cov(x, s) S⁻¹
   // D = S − V_t ≥ 0 (clip round-off): symmetric 2×2 eigen-decomposition, negative eigenvalues to 0.
   const Eigen::Matrix2d d = 0.5 * ((prior_cov - t.covariance) + (prior_cov - t.covariance).transpose());
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(d);
   const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(0.0);
   const Eigen::Matrix2d d_psd = eig.eigenvectors() * lambda.asDiagonal() * eig.eigenvectors().transpose();
   m_new_ = m_;
-  m_new_.noalias() += k2_ * (t.mean - prior_mean);                    // m ← m + K (μ_t − μ_s)
+  m_new_.noalias() += k2_ * (t.mean - prior_mean);  // m ← m + K (μ_t − μ_s)
   kd_.noalias() = k2_ * d_psd;
   tmp_.noalias() = kd_ * k2_.transpose();
-  P_new_ = P_ - tmp_;                                                 // P ← P − K (S − V_t) K'
+  P_new_ = P_ - tmp_;  // P ← P − K (S − V_t) K'
   return CommitUpdate(t.log_probability, t.mean(1) - prior_mean(1));
 }
 

@@ -29,8 +29,8 @@ double ParseNumber(const std::string& observer, const std::string& key, std::str
 
 int ParseInt(const std::string& observer, const std::string& key, std::string_view text) {
   const double value = ParseNumber(observer, key, text);
-  IDENT_REQUIRE(value == std::floor(value) && std::abs(value) < 1e9, "observer '{}': option {} = '{}' is not an integer",
-                observer, key, text);
+  IDENT_REQUIRE(value == std::floor(value) && std::abs(value) < 1e9,
+                "observer '{}': option {} = '{}' is not an integer", observer, key, text);
   return static_cast<int>(value);
 }
 
@@ -71,8 +71,8 @@ std::unique_ptr<AnyStateObserver> MakeLcTruncated(const ObserverSettings& s, con
                 "observer 'lc_truncated' needs a threshold sensor on 2 states; '{}' is not (use lc_gaussian or grid)",
                 p.measurement->name());
   IDENT_REQUIRE(p.x0.size() == 2 && p.P0.rows() == 2 && p.P0.cols() == 2,
-                "observer 'lc_truncated': x0 has {} entries and P0 is {}×{}; need 2 and 2×2", p.x0.size(),
-                p.P0.rows(), p.P0.cols());
+                "observer 'lc_truncated': x0 has {} entries and P0 is {}×{}; need 2 and 2×2", p.x0.size(), p.P0.rows(),
+                p.P0.cols());
   return std::make_unique<StateObserverModel<TruncatedGaussianFilter>>("lc_truncated", p.model, *threshold,
                                                                        Eigen::Vector2d(p.x0), Eigen::Matrix2d(p.P0));
 }
@@ -108,8 +108,10 @@ std::unique_ptr<AnyStateObserver> MakeGrid(const ObserverSettings& s, const Obse
     } else if (key == "padding") {
       o.padding = ParseInt("grid", key, value);
     } else {
-      IDENT_REQUIRE(false, "observer 'grid' has no option '{}' (options: points, initial_sigmas, noise_sigmas, "
-                    "support_level, min_half_width, padding)", key);
+      IDENT_REQUIRE(false,
+                    "observer 'grid' has no option '{}' (options: points, initial_sigmas, noise_sigmas, "
+                    "support_level, min_half_width, padding)",
+                    key);
     }
   }
   const std::string problem = o.Validate();

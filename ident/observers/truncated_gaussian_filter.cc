@@ -6,10 +6,10 @@
 #include <numbers>
 #include <utility>
 
-#include <boost/math/distributions/normal.hpp>
-#include <boost/math/special_functions/owens_t.hpp>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/special_functions/owens_t.hpp>
 
 #include "common/error.h"
 #include "models/truncated_bivariate_normal.h"
@@ -18,13 +18,13 @@ namespace ident {
 namespace {
 
 constexpr double kTgInf = std::numeric_limits<double>::infinity();
-constexpr double kTgFarSd = 9.0;          // a bound this many sd away holds mass < 1.2e-19
-constexpr double kTgMassFloor = 1e-8;     // inclusion–exclusion is accurate to ≈ 1e-15 absolute
+constexpr double kTgFarSd = 9.0;       // a bound this many sd away holds mass < 1.2e-19
+constexpr double kTgMassFloor = 1e-8;  // inclusion–exclusion is accurate to ≈ 1e-15 absolute
 
 using TgPolicy = boost::math::policies::policy<boost::math::policies::promote_double<false>>;
 
 double TgPhi(double x) { return 0.5 * std::erfc(-x / std::numbers::sqrt2); }
-double TgTail(double x) { return 0.5 * std::erfc(x / std::numbers::sqrt2); }   // Q(x) = P(X > x)
+double TgTail(double x) { return 0.5 * std::erfc(x / std::numbers::sqrt2); }  // Q(x) = P(X > x)
 double TgDensity(double x) { return std::isfinite(x) ? std::exp(-0.5 * x * x) / std::sqrt(2 * std::numbers::pi) : 0.0; }
 
 // Φ2(a, b; ρ) by Owen's T (Owen 1956, eq. (2.1)); a, b ≠ 0 (nudged by 1e-13: error < 1e-13 absolute).
@@ -47,13 +47,18 @@ TgQuadrant TgQuadrantMoments(double h, double k, double rho, double s) {
   TgQuadrant q;
   if (h == kTgInf || k == kTgInf) return q;
   const bool fh = std::isfinite(h), fk = std::isfinite(k);
-  if (!fh && !fk) q.l = 1;
-  else if (!fh) q.l = TgTail(k);
-  else if (!fk) q.l = TgTail(h);
-  else q.l = std::max(TgOwenCdf(-h, -k, rho, s), 0.0);
+  if (!fh && !fk)
+    q.l = 1;
+  else if (!fh)
+    q.l = TgTail(k);
+  else if (!fk)
+    q.l = TgTail(h);
+  else
+    q.l = std::max(TgOwenCdf(-h, -k, rho, s), 0.0);
   const double ah = fh ? TgDensity(h) * (fk ? TgTail((k - rho * h) / s) : 1.0) : 0.0;
   const double ak = fk ? TgDensity(k) * (fh ? TgTail((h - rho * k) / s) : 1.0) : 0.0;
-  const double f = fh && fk ? std::exp(-(h * h - 2 * rho * h * k + k * k) / (2 * s * s)) / (2 * std::numbers::pi * s) : 0.0;
+  const double f =
+      fh && fk ? std::exp(-(h * h - 2 * rho * h * k + k * k) / (2 * s * s)) / (2 * std::numbers::pi * s) : 0.0;
   const double hah = fh ? h * ah : 0.0, kak = fk ? k * ak : 0.0;
   q.x = ah + rho * ak;
   q.y = ak + rho * ah;
@@ -73,7 +78,7 @@ RectangleMoments TruncatedBivariateRectangleMoments(const Eigen::Vector2d& mean,
   const Eigen::Vector2d sd(std::sqrt(covariance(0, 0)), std::sqrt(covariance(1, 1)));
   const double rho = 0.5 * (covariance(0, 1) + covariance(1, 0)) / (sd(0) * sd(1));
   if (!(std::abs(rho) < 1 - 1e-12)) return out;
-  Eigen::Vector2d l, u;   // standardised bounds, far ones dropped
+  Eigen::Vector2d l, u;  // standardised bounds, far ones dropped
   for (int i = 0; i < 2; ++i) {
     l(i) = (lo(i) - mean(i)) / sd(i);
     u(i) = (hi(i) - mean(i)) / sd(i);
@@ -85,9 +90,16 @@ RectangleMoments TruncatedBivariateRectangleMoments(const Eigen::Vector2d& mean,
     // One Tallis quadrant (log-space, accurate far into the tails).
     Eigen::Vector2d bounds, sides;
     for (int i = 0; i < 2; ++i) {
-      if (u(i) != kTgInf) { bounds(i) = hi(i); sides(i) = -1; }
-      else if (l(i) != -kTgInf) { bounds(i) = lo(i); sides(i) = 1; }
-      else { bounds(i) = -kTgInf; sides(i) = 1; }
+      if (u(i) != kTgInf) {
+        bounds(i) = hi(i);
+        sides(i) = -1;
+      } else if (l(i) != -kTgInf) {
+        bounds(i) = lo(i);
+        sides(i) = 1;
+      } else {
+        bounds(i) = -kTgInf;
+        sides(i) = 1;
+      }
     }
     if (bounds(0) == -kTgInf && bounds(1) == -kTgInf) {
       out.log_probability = 0;
@@ -143,7 +155,7 @@ bool InvertTruncatedNormalMoments(double mean, double variance, double lo, doubl
   const double ly = (lo - mean) / scale, uy = (hi - mean) / scale;
   struct Eval {
     bool ok = false;
-    double r0 = 0, r1 = 0;     // residual: mean, ½ log var
+    double r0 = 0, r1 = 0;  // residual: mean, ½ log var
     double j00 = 0, j01 = 0, j10 = 0, j11 = 0;
   };
   auto eval = [&](double c, double t) {
@@ -152,11 +164,14 @@ bool InvertTruncatedNormalMoments(double mean, double variance, double lo, doubl
     const double al = (ly - c) / sd, be = (uy - c) / sd;
     const auto z = models::StandardTruncatedMoments(al, be);
     if (!z.ok || !(z.variance > 0)) return e;
-    const double pa = std::isfinite(al) ? std::exp(-0.5 * al * al - 0.5 * std::log(2 * std::numbers::pi) - z.log_normalizer) : 0.0;
-    const double pb = std::isfinite(be) ? std::exp(-0.5 * be * be - 0.5 * std::log(2 * std::numbers::pi) - z.log_normalizer) : 0.0;
+    const double pa =
+        std::isfinite(al) ? std::exp(-0.5 * al * al - 0.5 * std::log(2 * std::numbers::pi) - z.log_normalizer) : 0.0;
+    const double pb =
+        std::isfinite(be) ? std::exp(-0.5 * be * be - 0.5 * std::log(2 * std::numbers::pi) - z.log_normalizer) : 0.0;
     const double mz = z.mean, e2 = z.variance + mz * mz;
     const double am = std::isfinite(al) ? pa * (mz - al) : 0.0, bm = std::isfinite(be) ? pb * (be - mz) : 0.0;
-    const double ae2 = std::isfinite(al) ? pa * (e2 - al * al) : 0.0, be2 = std::isfinite(be) ? pb * (be * be - e2) : 0.0;
+    const double ae2 = std::isfinite(al) ? pa * (e2 - al * al) : 0.0,
+                 be2 = std::isfinite(be) ? pb * (be * be - e2) : 0.0;
     const double av = ae2 - 2 * mz * am, bv = be2 - 2 * mz * bm;
     const double aal = std::isfinite(al) ? al : 0.0, bbe = std::isfinite(be) ? be : 0.0;
     e.r0 = c + sd * mz;
@@ -200,12 +215,20 @@ bool InvertTruncatedNormalMoments(double mean, double variance, double lo, doubl
 
 TruncatedGaussianFilter::TruncatedGaussianFilter(const models::ThresholdSensor& sensor, const Eigen::Vector2d& mean,
                                                  const Eigen::Matrix2d& covariance)
-    : threshold_(sensor.threshold()), pm_(mean), mean_(mean), pP_(covariance), cov_(covariance), lo_(-kTgInf), hi_(kTgInf) {
+    : threshold_(sensor.threshold()),
+      pm_(mean),
+      mean_(mean),
+      pP_(covariance),
+      cov_(covariance),
+      lo_(-kTgInf),
+      hi_(kTgInf) {
   IDENT_REQUIRE(sensor.num_states() == 2, "TruncatedGaussianFilter: the sensor reads {} states; need 2",
                 sensor.num_states());
-  IDENT_REQUIRE(mean.allFinite() && covariance.allFinite(), "TruncatedGaussianFilter: prior mean/covariance not finite");
-  IDENT_REQUIRE((covariance - covariance.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1 + covariance.cwiseAbs().maxCoeff()),
-                "TruncatedGaussianFilter: prior covariance not symmetric");
+  IDENT_REQUIRE(mean.allFinite() && covariance.allFinite(),
+                "TruncatedGaussianFilter: prior mean/covariance not finite");
+  IDENT_REQUIRE(
+      (covariance - covariance.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1 + covariance.cwiseAbs().maxCoeff()),
+      "TruncatedGaussianFilter: prior covariance not symmetric");
   IDENT_REQUIRE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues().minCoeff() > 0,
                 "TruncatedGaussianFilter: prior covariance not positive definite");
   c_ = sensor.c().head<2>();
@@ -226,8 +249,8 @@ StepReport TruncatedGaussianFilter::Update(const StateSpaceItem& item) {
   return Step(model_, item.u, item.y);
 }
 
-StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
-                                         double y) {
+StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model,
+                                         const Eigen::Ref<const Eigen::VectorXd>& u, double y) {
   if (!model.FitsStep(2, u) || !(y == -1.0 || y == 0.0 || y == 1.0)) {
     return {StepStatus::kRejectedInvalid};
   }
@@ -237,7 +260,7 @@ StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, 
   const Eigen::Matrix2d A = model.A;
   Eigen::Vector2d mp = A * pm_;
   if (model.num_inputs() > 0) {
-    const Eigen::Vector2d Bu = model.B * u;   // not `mp += B u`: Eigen's aliasing-safe temporary is heap-allocated
+    const Eigen::Vector2d Bu = model.B * u;  // not `mp += B u`: Eigen's aliasing-safe temporary is heap-allocated
     mp += Bu;
   }
   Eigen::Matrix2d Pp = A * pP_ * A.transpose() + model.process_noise;
@@ -247,7 +270,7 @@ StepReport TruncatedGaussianFilter::Step(const models::LinearStateSpace& model, 
   Eigen::Vector2d mu_s(c_.dot(pm_), c_.dot(mp));
   Eigen::Matrix2d S;
   S << c_.dot(Pc), c_.dot(A * Pc), c_.dot(A * Pc), c_.dot(Ppc);
-  Eigen::Matrix2d C;   // Cov(x(k), s)
+  Eigen::Matrix2d C;  // Cov(x(k), s)
   C.col(0) = A * Pc;
   C.col(1) = Ppc;
   const RectangleMoments t =

@@ -98,9 +98,9 @@ class TruncatedGaussianFilter {
   // Step with the stored model (second constructor); kRejectedInvalid without one.
   StepReport Update(const StateSpaceItem& item);
 
-  const Eigen::Vector2d& mean() const { return mean_; }           // moments of q_k (read-out)
+  const Eigen::Vector2d& mean() const { return mean_; }  // moments of q_k (read-out)
   const Eigen::Matrix2d& covariance() const { return cov_; }
-  const Eigen::Vector2d& parent_mean() const { return pm_; }      // parent N(m, P) of q_k
+  const Eigen::Vector2d& parent_mean() const { return pm_; }  // parent N(m, P) of q_k
   const Eigen::Matrix2d& parent_covariance() const { return pP_; }
   long failures() const { return failures_; }
   long projection_failures() const { return projection_failures_; }
@@ -110,9 +110,9 @@ class TruncatedGaussianFilter {
   double threshold_ = 0;
   Eigen::Vector2d pm_, mean_;
   Eigen::Matrix2d pP_, cov_;
-  double lo_, hi_;   // interval of the current reading (−∞, ∞ before the first)
+  double lo_, hi_;  // interval of the current reading (−∞, ∞ before the first)
   long failures_ = 0, projection_failures_ = 0;
-  bool has_model_ = false;   // stored model for Update()
+  bool has_model_ = false;  // stored model for Update()
   models::LinearStateSpace model_;
 };
 

@@ -46,8 +46,8 @@ Orthonormalised Orthonormalise(const Eigen::Ref<const Eigen::MatrixXd>& Z) {
   f.rank = qr.rank();
   if (f.rank < p) return f;
   f.Q = qr.householderQ() * Eigen::MatrixXd::Identity(n, p);
-  const Eigen::MatrixXd Rinv = qr.matrixR().topLeftCorner(p, p).triangularView<Eigen::Upper>().solve(
-      Eigen::MatrixXd::Identity(p, p));
+  const Eigen::MatrixXd Rinv =
+      qr.matrixR().topLeftCorner(p, p).triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(p, p));
   f.T = qr.colsPermutation() * Rinv;
   return f;
 }
@@ -327,8 +327,7 @@ std::vector<CauchyPoint> ScreenedStarts(const CauchyProblem& problem, const Cauc
   for (Eigen::VectorXd& b : betas) {
     CauchyPoint point = problem.Start(std::move(b));
     if (!std::isfinite(point.nll)) continue;
-    for (int i = 0; i < options.screening_iterations && problem.EmStep(point); ++i) {
-    }
+    for (int i = 0; i < options.screening_iterations && problem.EmStep(point); ++i) {}
     point.nll = problem.Nll(point.beta, point.gamma);
     if (std::isfinite(point.nll)) points.push_back(std::move(point));
   }
@@ -353,11 +352,9 @@ std::string CauchyMlOptions::Validate() const {
   if (lts_starts < 0) return fmt::format("cauchy lts_starts = {}; need >= 0", lts_starts);
   if (elemental_starts == 0 && lts_starts == 0 && !ls_start)
     return "cauchy: no starts (elemental_starts = lts_starts = 0, ls_start = false); need at least one";
-  if (screening_iterations < 0)
-    return fmt::format("cauchy screening_iterations = {}; need >= 0", screening_iterations);
+  if (screening_iterations < 0) return fmt::format("cauchy screening_iterations = {}; need >= 0", screening_iterations);
   if (polished < 1) return fmt::format("cauchy polished = {}; need >= 1", polished);
-  if (!(gradient_tolerance >= 0))
-    return fmt::format("cauchy gradient_tolerance = {}; need >= 0", gradient_tolerance);
+  if (!(gradient_tolerance >= 0)) return fmt::format("cauchy gradient_tolerance = {}; need >= 0", gradient_tolerance);
   if (max_iterations < 0) return fmt::format("cauchy max_iterations = {}; need >= 0", max_iterations);
   return "";
 }
@@ -417,8 +414,7 @@ BatchRegressionResult HuberRegression(const Eigen::Ref<const Eigen::MatrixXd>& Z
 }
 
 BatchRegressionResult CauchyMlRegression(const Eigen::Ref<const Eigen::MatrixXd>& Z,
-                                         const Eigen::Ref<const Eigen::VectorXd>& y,
-                                         const CauchyMlOptions& options) {
+                                         const Eigen::Ref<const Eigen::VectorXd>& y, const CauchyMlOptions& options) {
   using namespace batch_regression_detail;
   const std::string error = options.Validate();
   IDENT_REQUIRE(error.empty(), "{}", error);
@@ -465,8 +461,8 @@ BatchRegressionResult CauchyMlRegression(const Eigen::Ref<const Eigen::MatrixXd>
 double CauchyNegativeLogLikelihood(const Eigen::Ref<const Eigen::MatrixXd>& Z,
                                    const Eigen::Ref<const Eigen::VectorXd>& y,
                                    const Eigen::Ref<const Eigen::VectorXd>& theta, double gamma) {
-  IDENT_REQUIRE(Z.rows() == y.size() && Z.cols() == theta.size(), "Z is {}x{}, y has {} and theta {} entries",
-                Z.rows(), Z.cols(), y.size(), theta.size());
+  IDENT_REQUIRE(Z.rows() == y.size() && Z.cols() == theta.size(), "Z is {}x{}, y has {} and theta {} entries", Z.rows(),
+                Z.cols(), y.size(), theta.size());
   const double nd = static_cast<double>(y.size());
   return ((y - Z * theta).array().square() + gamma * gamma).log().sum() - nd * std::log(gamma) +
          nd * std::log(std::numbers::pi);
@@ -511,8 +507,7 @@ const BatchRegressionResult& BatchRegressionEstimator::Solved() const {
   if (solved_) return cache_;
   solved_ = true;
   const Eigen::Index n = static_cast<Eigen::Index>(y_.size()), p = num_parameters_;
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Zrows(z_.data(), n,
-                                                                                                     p);
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> Zrows(z_.data(), n, p);
   const Eigen::MatrixXd Z = Zrows;
   const Eigen::Map<const Eigen::VectorXd> y(y_.data(), n);
   if (n <= p || batch_regression_detail::Orthonormalise(Z).rank < p) {

@@ -78,9 +78,9 @@ struct BatchRegressionResult {
 };
 
 struct HuberOptions {
-  double k = 1.345;          // ψ's corner, in units of s
-  double tolerance = 1e-12;  // on ‖r_new − r_old‖/‖r_old‖; MASS::rlm: 1e-4
-  int max_iterations = 1000; // MASS::rlm: 20
+  double k = 1.345;           // ψ's corner, in units of s
+  double tolerance = 1e-12;   // on ‖r_new − r_old‖/‖r_old‖; MASS::rlm: 1e-4
+  int max_iterations = 1000;  // MASS::rlm: 20
 
   // "" if valid, else one line naming the option.
   std::string Validate() const;
@@ -88,13 +88,13 @@ struct HuberOptions {
 
 struct CauchyMlOptions {
   static constexpr int kAuto = -1;
-  int elemental_starts = kAuto;    // random elemental subsets; kAuto = max(50, 20ρ)
-  int lts_starts = 5;              // LTS fits from random elemental subsets
-  bool ls_start = true;            // the least-squares fit as a start
-  int screening_iterations = 10;   // EM steps from every start before the best are chosen
-  int polished = 5;                // best distinct screened starts taken on to convergence
+  int elemental_starts = kAuto;   // random elemental subsets; kAuto = max(50, 20ρ)
+  int lts_starts = 5;             // LTS fits from random elemental subsets
+  bool ls_start = true;           // the least-squares fit as a start
+  int screening_iterations = 10;  // EM steps from every start before the best are chosen
+  int polished = 5;               // best distinct screened starts taken on to convergence
   double gradient_tolerance = 1e-10;
-  int max_iterations = 500;        // EM + Newton steps of one polished start
+  int max_iterations = 500;  // EM + Newton steps of one polished start
   std::uint64_t seed = 0x5eed'1de7'0bad'cafeULL;
 
   // "" if valid, else one line naming the option.

@@ -8,8 +8,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "ident/regression/batch_regression.h"
 #include "common/error.h"
+#include "ident/regression/batch_regression.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 
@@ -20,10 +20,11 @@ using Factory = std::function<std::unique_ptr<AnyRegressionEstimator>(const Esti
 
 std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int rho) {
   IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator 'rls'", *s.dof);
-  IDENT_REQUIRE(!s.delta, "delta = {} does not apply to estimator 'rls' (it is a Kárný–Hangos convention: cauchy, "
-                "student)", s.delta.value_or(1));
-  IDENT_REQUIRE(!s.lock_in.any(),
-                "the lock-in options apply to the robust estimators (cauchy, student), not to 'rls'");
+  IDENT_REQUIRE(!s.delta,
+                "delta = {} does not apply to estimator 'rls' (it is a Kárný–Hangos convention: cauchy, "
+                "student)",
+                s.delta.value_or(1));
+  IDENT_REQUIRE(!s.lock_in.any(), "the lock-in options apply to the robust estimators (cauchy, student), not to 'rls'");
   RlsOptions options;
   options.forgetting = s.forgetting;
   options.prior = s.prior;
@@ -48,8 +49,10 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, 
 }
 
 std::unique_ptr<AnyRegressionEstimator> MakeCauchy(const EstimatorSettings& s, int rho) {
-  IDENT_REQUIRE(!s.dof || *s.dof == 1, "dof = {} does not apply to estimator 'cauchy' (it is student with k = 1; "
-                "use --estimator student --dof {})", s.dof.value_or(1), s.dof.value_or(1));
+  IDENT_REQUIRE(!s.dof || *s.dof == 1,
+                "dof = {} does not apply to estimator 'cauchy' (it is student with k = 1; "
+                "use --estimator student --dof {})",
+                s.dof.value_or(1), s.dof.value_or(1));
   return MakeStudent(s, rho, "cauchy", 1.0);
 }
 
@@ -79,8 +82,10 @@ std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, in
                 "forgetting does not apply to the batch estimator '{}' (it weighs every sample of the record)", name);
   IDENT_REQUIRE(!s.prior, "a prior does not apply to the batch estimator '{}'", name);
   IDENT_REQUIRE(!s.exact, "exact does not apply to the batch estimator '{}'", name);
-  IDENT_REQUIRE(!s.lock_in.any(), "the lock-in options apply to the robust recursive estimators (cauchy, student), "
-                "not to '{}'", name);
+  IDENT_REQUIRE(!s.lock_in.any(),
+                "the lock-in options apply to the robust recursive estimators (cauchy, student), "
+                "not to '{}'",
+                name);
   BatchRegressionOptions options;
   options.method = method;
   return std::make_unique<RegressionEstimatorModel<BatchRegressionEstimator>>(name, rho, options);
@@ -97,7 +102,8 @@ const std::vector<Entry>& Registry() {
       {"rls", MakeRls, {.data_scaled_prior = true}},
       {"cauchy", MakeCauchy, {.lock_in = true}},
       {"student", MakeStudentT, {.lock_in = true}},
-      {"huber", [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); },
+      {"huber",
+       [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); },
        {}},
       {"cauchy-ml",
        [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); },
@@ -109,8 +115,8 @@ const std::vector<Entry>& Registry() {
 const Entry& Find(std::string_view name) {
   for (const Entry& entry : Registry())
     if (entry.name == name) return entry;
-  throw InvalidArgument(fmt::format("unknown estimator '{}' (known: {})", name,
-                                    fmt::join(RegressionEstimatorNames(), ", ")));
+  throw InvalidArgument(
+      fmt::format("unknown estimator '{}' (known: {})", name, fmt::join(RegressionEstimatorNames(), ", ")));
 }
 
 }  // namespace
@@ -131,8 +137,7 @@ EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings ba
   return base;
 }
 
-std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings,
-                                                                int num_parameters) {
+std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings, int num_parameters) {
   return Find(settings.name).factory(settings, num_parameters);
 }
 

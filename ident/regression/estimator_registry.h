@@ -52,8 +52,7 @@ struct EstimatorSettings {
 EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base = {});
 
 // Builds the estimator; throws InvalidArgument naming the option for an unknown name or bad option.
-std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings,
-                                                                int num_parameters);
+std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings, int num_parameters);
 
 // The registered names, in the order they are documented.
 std::vector<std::string> RegressionEstimatorNames();

@@ -32,8 +32,10 @@ class LockInMonitor {
   // Adds the normalised weight νβ of one updated sample (NaN counts as low). Returns flagged().
   bool Add(double nu_beta) noexcept {
     const bool low = !(nu_beta >= threshold_);
-    if (count_ == window()) num_low_ -= low_[next_];
-    else ++count_;
+    if (count_ == window())
+      num_low_ -= low_[next_];
+    else
+      ++count_;
     low_[next_] = low;
     num_low_ += low;
     next_ = next_ + 1 == window() ? 0 : next_ + 1;
@@ -46,9 +48,7 @@ class LockInMonitor {
   double low_fraction() const noexcept { return count_ ? static_cast<double>(num_low_) / count_ : 0.0; }
   int window() const noexcept { return static_cast<int>(low_.size()); }
   double threshold() const noexcept { return threshold_; }
-  void Clear() noexcept {
-    count_ = num_low_ = next_ = 0;
-  }
+  void Clear() noexcept { count_ = num_low_ = next_ = 0; }
 
  private:
   std::vector<char> low_;

@@ -42,31 +42,31 @@ concept RegressionEstimator = requires(E& e, const E& ce, double y, const Eigen:
   { ce.nu() } -> std::convertible_to<double>;
   { ce.Dy() } -> std::convertible_to<double>;
   { ce.noise_std() } -> std::convertible_to<double>;
-  { e.Reset() };
+  {e.Reset()};
 };
 
 // One restart of a robust estimator's lock-in safeguard (ident/regression/safe_student_regression.h).
 struct RestartEvent {
-  long update = 0;                  // the update (1-based) at which the monitor flagged the lock-in
-  long replayed = 0;                // samples the restarted estimator was run on (all kept samples)
-  long dropped = 0;                 // samples seen but no longer kept (history limit), not replayed
-  double low_weight_before = 0;     // share of the monitor window with νβ < threshold, at the flag
-  double low_weight_after = 0;      // the same over the last window of the replay
-  bool resolved = true;             // false: still more than half low after the replay (heavy tails, not
-                                    // a lock-in); the next restart then waits twice as long
+  long update = 0;               // the update (1-based) at which the monitor flagged the lock-in
+  long replayed = 0;             // samples the restarted estimator was run on (all kept samples)
+  long dropped = 0;              // samples seen but no longer kept (history limit), not replayed
+  double low_weight_before = 0;  // share of the monitor window with νβ < threshold, at the flag
+  double low_weight_after = 0;   // the same over the last window of the replay
+  bool resolved = true;          // false: still more than half low after the replay (heavy tails, not
+                                 // a lock-in); the next restart then waits twice as long
 };
 
 // The state of a robust estimator's lock-in safeguard (ident/regression/lock_in_monitor.h, docs/kh.md "Lock-in"):
 // the monitor flags a lock-in when more than half of the last `window` updated samples had a normalised
 // weight νβ below `threshold`; with `restart` the estimator then restarts from the recent samples.
 struct LockInStatus {
-  int window = 0;                  // M, samples watched
-  double threshold = 0;            // νβ below this counts as a low weight
-  bool restart = true;             // restart when flagged (else: flag only)
-  int flagged = 0;                 // updates at which the monitor was flagged (without restart: every
-                                   // update of a lasting lock-in; with restart: each one restarts)
-  int restarts = 0;                // restarts made because of it
-  double low_weight_fraction = 0;  // share of the current window with νβ < threshold
+  int window = 0;                    // M, samples watched
+  double threshold = 0;              // νβ below this counts as a low weight
+  bool restart = true;               // restart when flagged (else: flag only)
+  int flagged = 0;                   // updates at which the monitor was flagged (without restart: every
+                                     // update of a lasting lock-in; with restart: each one restarts)
+  int restarts = 0;                  // restarts made because of it
+  double low_weight_fraction = 0;    // share of the current window with νβ < threshold
   std::vector<RestartEvent> events;  // one per restart, in order
   // The robust start: the update after which it was made (0: none, the prior was given) and the samples
   // its window fit used; `start_at_end`: made when the data ended (FinishStartup), from every sample.
@@ -131,7 +131,9 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
     else
       return std::nullopt;
   }
-  bool judges_outliers() const override { return requires { e_.lock_in(); }; }
+  bool judges_outliers() const override {
+    return requires { e_.lock_in(); };
+  }
   bool in_startup() const override {
     if constexpr (requires { e_.in_startup(); })
       return e_.in_startup();

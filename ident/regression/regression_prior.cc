@@ -23,17 +23,16 @@ RegressionPrior RegressionPrior::Diagonal(int rho, double nu0, double vy0, doubl
   return prior;
 }
 
-RegressionPrior RegressionPrior::FromGuess(const Eigen::VectorXd& theta0, const Eigen::MatrixXd& P0,
-                                           double sigma0, double nu0, int delta) {
+RegressionPrior RegressionPrior::FromGuess(const Eigen::VectorXd& theta0, const Eigen::MatrixXd& P0, double sigma0,
+                                           double nu0, int delta) {
   const int rho = static_cast<int>(theta0.size());
-  IDENT_REQUIRE(rho >= 1 && P0.rows() == rho && P0.cols() == rho,
-                "prior covariance P0 is {}x{}; need {}x{}", P0.rows(), P0.cols(), rho, rho);
+  IDENT_REQUIRE(rho >= 1 && P0.rows() == rho && P0.cols() == rho, "prior covariance P0 is {}x{}; need {}x{}", P0.rows(),
+                P0.cols(), rho, rho);
   IDENT_REQUIRE(std::isfinite(sigma0) && sigma0 > 0, "sigma0 = {}; need a positive noise scale", sigma0);
   IDENT_REQUIRE(nu0 > rho + delta, "nu0 = {}; need nu0 > rho + delta = {}", nu0, rho + delta);
   Eigen::LLT<Eigen::MatrixXd> llt(P0);
   IDENT_REQUIRE(llt.info() == Eigen::Success, "prior covariance P0 is not positive definite");
-  const Eigen::MatrixXd Vz =
-      sigma0 * sigma0 * llt.solve(Eigen::MatrixXd::Identity(rho, rho)) / (nu0 - delta - rho);
+  const Eigen::MatrixXd Vz = sigma0 * sigma0 * llt.solve(Eigen::MatrixXd::Identity(rho, rho)) / (nu0 - delta - rho);
   RegressionPrior prior;
   prior.nu0 = nu0;
   prior.V0.resize(rho + 1, rho + 1);
@@ -104,7 +103,8 @@ RegressionPrior RegressionPrior::Flat(int rho) {
 }
 
 RegressionPrior RegressionPrior::Flat(const Eigen::VectorXd& mean_squares) {
-  IDENT_REQUIRE(mean_squares.size() >= 2, "{} mean squares; need y's and at least one regressor's", mean_squares.size());
+  IDENT_REQUIRE(mean_squares.size() >= 2, "{} mean squares; need y's and at least one regressor's",
+                mean_squares.size());
   for (Eigen::Index i = 0; i < mean_squares.size(); ++i)
     IDENT_REQUIRE(mean_squares(i) >= 1e-280 && mean_squares(i) <= 1e280,
                   "mean square {} of coordinate {} is outside [1e-280, 1e280]; rescale the data or give a prior",

@@ -23,8 +23,8 @@ struct RegressionPrior {
 
   // From a prior mean Θ0, covariance P0 of Θ, noise scale σ0 and weight ν0 > ρ+δ [spec §8]:
   //   V_z(0) = σ0² P0^{-1}/(ν0−δ−ρ),  V_zy(0) = V_z(0)Θ0,  V_y(0) = σ0² + Θ0'V_z(0)Θ0.
-  static RegressionPrior FromGuess(const Eigen::VectorXd& theta0, const Eigen::MatrixXd& P0, double sigma0,
-                                   double nu0, int delta);
+  static RegressionPrior FromGuess(const Eigen::VectorXd& theta0, const Eigen::MatrixXd& P0, double sigma0, double nu0,
+                                   int delta);
 
   // The data-driven prior from a window of samples (row t = (y(t), z(t)')), spec §8 recipe with
   //   Θ0 = theta0 (empty: 0),  σ0 = noise_scale (0: s_y),  P0 = (10·s_y)²·M⁻¹,  M = Z'Z/n,

@@ -52,10 +52,10 @@
 
 #include "common/error.h"
 #include "common/step_report.h"
-#include "ident/regression/internal/extended_information.h"
 #include "ident/regression/forgetting.h"
-#include "ident/regression/regression_prior.h"
+#include "ident/regression/internal/extended_information.h"
 #include "ident/regression/internal/step_driver.h"
+#include "ident/regression/regression_prior.h"
 
 namespace ident {
 
@@ -95,9 +95,9 @@ class BasicRecursiveLeastSquares {
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     if (!enabled_) return {StepStatus::kSkipped};
-    const DrivenStep s =
-        driver_.template Run</*WithXi=*/false>(stats_, {options_.forgetting.factor, options_.forgetting.stabilised, kWindupFloor}, prior_.nu0,
-                    prior_factor_, y, z, [](double nu, const Innovation&) { return 1 / nu; });  // β = 1/ν [spec §7c]
+    const DrivenStep s = driver_.template Run</*WithXi=*/false>(
+        stats_, {options_.forgetting.factor, options_.forgetting.stabilised, kWindupFloor}, prior_.nu0, prior_factor_,
+        y, z, [](double nu, const Innovation&) { return 1 / nu; });  // β = 1/ν [spec §7c]
     if (s.report.updated()) samples_ = s.lambda * samples_ + 1;
     return s.report;
   }
@@ -127,8 +127,7 @@ class BasicRecursiveLeastSquares {
   // Throws InvalidArgument only if `out` has the wrong size.
   void CovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
     IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
-                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(),
-                  num_parameters());
+                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(), num_parameters());
     stats_.ScaledVzInverse(noise_variance() / stats_.nu(), out);
   }
   const ExtendedInformation<kDim>& statistics() const { return stats_; }

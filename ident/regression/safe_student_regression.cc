@@ -121,7 +121,8 @@ SafeStudentRegression::SafeStudentRegression(int num_parameters, const SafeStude
   const double k = options.base.dof, top = (k + 1) / k;
   IDENT_REQUIRE(options.lock_in_threshold < top,
                 "lock-in threshold = {}; need 0 < threshold < (k+1)/k = {} (the weight nu*beta of a sample fitted "
-                "exactly)", options.lock_in_threshold, top);
+                "exactly)",
+                options.lock_in_threshold, top);
   IDENT_REQUIRE(options.startup_window == 0 || options.startup_window >= 2,
                 "startup_window = {}; need 0 (automatic) or at least 2 samples", options.startup_window);
   IDENT_REQUIRE(options.history_limit == 0 || options.history_limit >= std::max(2, monitor_.window()),
@@ -133,8 +134,7 @@ SafeStudentRegression::SafeStudentRegression(int num_parameters, const SafeStude
   if (!options_.base.prior)
     startup_window_ = options_.startup_window > 0 ? options_.startup_window : std::max(20, 4 * num_parameters);
   const long reserve = std::max<long>({options_.history_reserve, startup_window_, monitor_.window()});
-  history_.resize(num_parameters + 1,
-                  options_.history_limit > 0 ? std::min(reserve, options_.history_limit) : reserve);
+  history_.resize(num_parameters + 1, options_.history_limit > 0 ? std::min(reserve, options_.history_limit) : reserve);
 }
 
 void SafeStudentRegression::Grow() noexcept {
@@ -149,8 +149,13 @@ long SafeStudentRegression::RecentWindow() const {
 
 std::optional<LockInStatus> SafeStudentRegression::lock_in() const {
   if (options_.base.exact) return std::nullopt;
-  LockInStatus status{monitor_.window(), monitor_.threshold(), options_.restart_on_lock_in, lock_ins_,
-                      restarts(),        monitor_.low_fraction(), events_};
+  LockInStatus status{monitor_.window(),
+                      monitor_.threshold(),
+                      options_.restart_on_lock_in,
+                      lock_ins_,
+                      restarts(),
+                      monitor_.low_fraction(),
+                      events_};
   status.start_update = start_update_;
   status.start_window = start_window_;
   status.start_at_end = start_at_end_;

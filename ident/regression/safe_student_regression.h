@@ -103,7 +103,8 @@ class SafeStudentRegression {
   int restarts() const { return static_cast<int>(events_.size()); }
   const std::vector<RestartEvent>& restart_events() const { return events_; }
   const LockInMonitor& monitor() const { return monitor_; }
-  // The same for the common interface (ident/regression/regression_estimator.h); nullopt with `base.exact` (no monitor).
+  // The same for the common interface (ident/regression/regression_estimator.h); nullopt with `base.exact` (no
+  // monitor).
   std::optional<LockInStatus> lock_in() const;
 
   int num_parameters() const { return est_->num_parameters(); }
@@ -180,7 +181,7 @@ class SafeStudentRegression {
   int startup_window_ = 0;  // 0 = no start-up (explicit prior or exact)
   bool started_ = false;
   LockInMonitor monitor_;
-  Eigen::MatrixXd history_;  // (ρ+1) x capacity: y, z of every updated sample (column = sample)
+  Eigen::MatrixXd history_;          // (ρ+1) x capacity: y, z of every updated sample (column = sample)
   Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the last (re)start window
   long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
   int lock_ins_ = 0;

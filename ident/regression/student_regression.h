@@ -47,17 +47,17 @@
 #include <optional>
 #include <string>
 
-#include <Eigen/Core>
 #include <fmt/core.h>
+#include <Eigen/Core>
 
 #include "approx/weight_fast_path.h"
 #include "approx/weighting_polynomial.h"
 #include "common/error.h"
 #include "common/step_report.h"
-#include "ident/regression/internal/extended_information.h"
 #include "ident/regression/forgetting.h"
-#include "ident/regression/regression_prior.h"
+#include "ident/regression/internal/extended_information.h"
 #include "ident/regression/internal/step_driver.h"
+#include "ident/regression/regression_prior.h"
 
 namespace ident {
 
@@ -240,11 +240,10 @@ class BasicStudentRegression {
     ForgettingOptions f = options_.forgetting;
     f.factor = lambda;
     std::string error = f.Validate();
-    if (error.empty())
-      error = ForgettingAdmissibility(num_parameters(), prior_.nu0, f, options_.dof, options_.delta);
+    if (error.empty()) error = ForgettingAdmissibility(num_parameters(), prior_.nu0, f, options_.dof, options_.delta);
     if (error.empty()) {
-      const double nu_next = f.stabilised ? lambda * stats_.nu() + (1 - lambda) * prior_.nu0 + 1
-                                          : lambda * stats_.nu() + 1;
+      const double nu_next =
+          f.stabilised ? lambda * stats_.nu() + (1 - lambda) * prior_.nu0 + 1 : lambda * stats_.nu() + 1;
       if (!(nu_next > nu_hard_))
         error = fmt::format("forgetting = {} is inadmissible now: the next step has nu = {} <= nu_hard = {}", lambda,
                             nu_next, nu_hard_);
@@ -384,8 +383,7 @@ class BasicStudentRegression {
   // out = s·V_z⁻¹, or +inf entries unless s is positive and finite. Throws only for a wrong size.
   void ScaledVzInverseOrInfinity(double s, Eigen::Ref<Eigen::MatrixXd> out) const {
     IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
-                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(),
-                  num_parameters());
+                  "covariance output is {}x{}; need {}x{}", out.rows(), out.cols(), num_parameters(), num_parameters());
     if (!(s > 0 && std::isfinite(s)))
       out.setConstant(std::numeric_limits<double>::infinity());
     else
@@ -412,7 +410,7 @@ class BasicStudentRegression {
   int window_size_ = 0, window_count_ = 0;  // data-driven start-up (0 = off)
   Eigen::MatrixXd window_;                  // W x (ρ+1): y, z of the first W samples
   Eigen::VectorXd scratch_;
-  RegressionPrior provisional_prior_;       // the prior before the start-up window (for Reset)
+  RegressionPrior provisional_prior_;  // the prior before the start-up window (for Reset)
   LdFactor<kDim> provisional_factor_;
   Eigen::Matrix<double, kDim, 1> prior_diagonal_;  // Restart() workspace
 };

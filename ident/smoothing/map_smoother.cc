@@ -23,10 +23,14 @@ const models::Penalty& MapSmootherProblem::ft(int t) const {
 
 const char* ToString(MapSmootherStatus status) {
   switch (status) {
-    case MapSmootherStatus::kConverged: return "converged";
-    case MapSmootherStatus::kMaxIterations: return "max_iterations";
-    case MapSmootherStatus::kInfeasible: return "infeasible";
-    case MapSmootherStatus::kNumericalFailure: return "numerical_failure";
+    case MapSmootherStatus::kConverged:
+      return "converged";
+    case MapSmootherStatus::kMaxIterations:
+      return "max_iterations";
+    case MapSmootherStatus::kInfeasible:
+      return "infeasible";
+    case MapSmootherStatus::kNumericalFailure:
+      return "numerical_failure";
   }
   return "?";
 }
@@ -44,8 +48,8 @@ void ValidateMapSmootherProblem(const MapSmootherProblem& p) {
   IDENT_REQUIRE(p.z.rows() >= 1, "z has no measurement rows");
   IDENT_REQUIRE(p.z.allFinite(), "z has a non-finite entry");
   const int T = p.T();
-  IDENT_REQUIRE(p.H.size() == 1 || static_cast<int>(p.H.size()) == T + 1,
-                "H has {} matrices; need 1 or T+1 = {}", p.H.size(), T + 1);
+  IDENT_REQUIRE(p.H.size() == 1 || static_cast<int>(p.H.size()) == T + 1, "H has {} matrices; need 1 or T+1 = {}",
+                p.H.size(), T + 1);
   const int n = p.state_dim(), nz = p.measurement_dim();
   IDENT_REQUIRE(n >= 1, "H has no columns (state dimension 0)");
   for (size_t t = 0; t < p.H.size(); ++t) {
@@ -92,12 +96,12 @@ double PrimalObjective(const MapSmootherProblem& p, const Eigen::MatrixXd& x, do
 
 Eigen::MatrixXd DualStates(const MapSmootherProblem& p, const Eigen::MatrixXd& u) {
   ValidateMapSmootherProblem(p);
-  IDENT_REQUIRE(u.rows() == p.measurement_dim() && u.cols() == p.T() + 1, "u is {}x{}; need {}x{}", u.rows(),
-                u.cols(), p.measurement_dim(), p.T() + 1);
+  IDENT_REQUIRE(u.rows() == p.measurement_dim() && u.cols() == p.T() + 1, "u is {}x{}; need {}x{}", u.rows(), u.cols(),
+                p.measurement_dim(), p.T() + 1);
   const int T = p.T();
   Eigen::MatrixXd y(p.state_dim(), T + 1);
   y.col(T) = p.Ht(T).transpose() * u.col(T);  // y_T = H_T'u_T
-  for (int t = T - 1; t >= 0; --t)              // y_t = F_t'y_{t+1} + H_t'u_t   [BCW Thm 2.5, A'y = H'u]
+  for (int t = T - 1; t >= 0; --t)            // y_t = F_t'y_{t+1} + H_t'u_t   [BCW Thm 2.5, A'y = H'u]
     y.col(t) = p.Ft(t).transpose() * y.col(t + 1) + p.Ht(t).transpose() * u.col(t);
   return y;
 }

@@ -65,12 +65,12 @@ struct MapSmootherProblem {
 void ValidateMapSmootherProblem(const MapSmootherProblem& problem);
 
 struct MapSmootherOptions {
-  int max_iterations = 100;     // interior-point (Newton) iterations
-  double tolerance = 1e-10;     // on complementarity and the scaled KKT residuals
+  int max_iterations = 100;      // interior-point (Newton) iterations
+  double tolerance = 1e-10;      // on complementarity and the scaled KKT residuals
   double step_fraction = 0.995;  // fraction-to-boundary factor for s, q > 0
-  // Use the fused fast path (ident/smoothing/internal/map_smoother_fast_path.h) when the problem has its structure: bound-free
-  // (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties,
-  // n <= 4. Same iteration and result up to rounding; false forces the general path (tests compare both).
+  // Use the fused fast path (ident/smoothing/internal/map_smoother_fast_path.h) when the problem has its structure:
+  // bound-free (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties, n
+  // <= 4. Same iteration and result up to rounding; false forces the general path (tests compare both).
   bool fast_path = true;
   std::string Validate() const;  // "" if valid
 };
@@ -87,14 +87,14 @@ struct MapSmootherResult {
   MapSmootherStatus status = MapSmootherStatus::kNumericalFailure;
   std::string message;
   int iterations = 0;
-  double kkt_residual = 0;  // max(mu, |R3|/(1+|z|), |R4|/scale) at the returned iterate
-  Eigen::MatrixXd x;  // n x (T+1) MAP states
-  Eigen::MatrixXd w;  // n x (T+1) process noise w_t = x_t - F_{t-1} x_{t-1}, w_0 = x_0
-  Eigen::MatrixXd u;  // nz x (T+1) dual controls of (D)
-  Eigen::MatrixXd y;  // n x (T+1) dual states, from u by the dynamics of (D)
-  double primal = 0;  // (P) at x
-  double dual = 0;    // (D) at (u, y)
-  double gap = 0;     // primal - dual (>= 0 up to rounding)
+  double kkt_residual = 0;          // max(mu, |R3|/(1+|z|), |R4|/scale) at the returned iterate
+  Eigen::MatrixXd x;                // n x (T+1) MAP states
+  Eigen::MatrixXd w;                // n x (T+1) process noise w_t = x_t - F_{t-1} x_{t-1}, w_0 = x_0
+  Eigen::MatrixXd u;                // nz x (T+1) dual controls of (D)
+  Eigen::MatrixXd y;                // n x (T+1) dual states, from u by the dynamics of (D)
+  double primal = 0;                // (P) at x
+  double dual = 0;                  // (D) at (u, y)
+  double gap = 0;                   // primal - dual (>= 0 up to rounding)
   double relative_gap = 0;          // gap / max(1, |primal|)
   double dual_infeasibility = 0;    // max distance of u_t, y_t outside dom g_t*, dom f_t* before projection
   Eigen::MatrixXd x_from_dual;      // states rebuilt from y: w_t in d f_t*(y_t), then the dynamics

@@ -99,8 +99,8 @@ OutlierSpec OutlierSpec::Parse(const std::string& text) {
     } catch (const std::exception&) {
       used = 0;
     }
-    IDENT_REQUIRE(used == s.size() && !s.empty() && std::isfinite(v), "--outliers '{}': {} '{}' is not a number",
-                  text, what, s);
+    IDENT_REQUIRE(used == s.size() && !s.empty() && std::isfinite(v), "--outliers '{}': {} '{}' is not a number", text,
+                  what, s);
     return v;
   };
   spec.rate = number(parts[0], "RATE");
@@ -275,15 +275,16 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
     score.has_simulation = !simulation[e].empty();
     score.simulation = Spread::Of(simulation[e]);
     score.theta_distance = Spread::Of(distance[e]);
-    score.ns_per_update = ns[e].empty() ? std::numeric_limits<double>::quiet_NaN() : Spread::Of(ns[e]).min;  // the least disturbed by other processes
+    score.ns_per_update = ns[e].empty() ? std::numeric_limits<double>::quiet_NaN()
+                                        : Spread::Of(ns[e]).min;  // the least disturbed by other processes
     score.cleaned = Spread::Of(cleaned[e]).mean;
     result.scores.push_back(std::move(score));
   }
   bool any = false;
   for (std::size_t e = 0; e < estimators.size(); ++e) any = any || failed[e] < options.trials;
   if (!any)
-    throw DataError(fmt::format("{}: every estimator failed on every trial ({}, {})", data.source, labels[0],
-                                failures[0]));
+    throw DataError(
+        fmt::format("{}: every estimator failed on every trial ({}, {})", data.source, labels[0], failures[0]));
   auto key = [](const EstimatorScore& s) { return std::isnan(s.one_step.mean) ? -HUGE_VAL : s.one_step.mean; };
   std::stable_sort(result.scores.begin(), result.scores.end(),
                    [&key](const EstimatorScore& a, const EstimatorScore& b) { return key(a) > key(b); });

@@ -5,9 +5,9 @@
 // fit (RLS with the flat prior = batch LS) on the estimation part gives θ_LS and the residual std σ.
 // Each trial adds ±SIZE·σ (random sign) to y at ⌊RATE·N_est + ½⌋ distinct estimation rows drawn with
 // seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the
-// untouched (uncorrupted) validation rows — with split = 1 the clean estimation rows themselves: fit % one-step and simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and
-// time per update (the recorded update sequence replayed on a fresh estimator, timed as one block;
-// the fastest of the first 5 trials, the one least disturbed by other processes).
+// untouched (uncorrupted) validation rows — with split = 1 the clean estimation rows themselves: fit % one-step and
+// simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and time per update (the recorded update sequence replayed on a fresh
+// estimator, timed as one block; the fastest of the first 5 trials, the one least disturbed by other processes).
 //
 // Example:
 //   OutlierSpec spec = OutlierSpec::Parse("0.05:20:1");
@@ -21,15 +21,15 @@
 
 #include <Eigen/Core>
 
-#include "ident/regression/estimator_registry.h"
 #include "ident/io/csv.h"
+#include "ident/regression/estimator_registry.h"
 #include "ident/workflow/fit.h"
 
 namespace ident::workflow {
 
 struct OutlierSpec {
-  double rate = 0.05;        // fraction of estimation samples, in [0, 1)
-  double size = 20;          // in units of the clean LS residual std, >= 0
+  double rate = 0.05;  // fraction of estimation samples, in [0, 1)
+  double size = 20;    // in units of the clean LS residual std, >= 0
   std::uint64_t seed = 1;
   // "RATE:SIZE[:SEED]" (e.g. "0.05:20", "0.1:10:7") or "none". Throws InvalidArgument naming --outliers.
   static OutlierSpec Parse(const std::string& text);
@@ -51,7 +51,7 @@ struct Spread {
 };
 
 struct CompareOptions {
-  FitOptions fit;            // split, detrend, outlier decision for regressor cleaning, passes
+  FitOptions fit;  // split, detrend, outlier decision for regressor cleaning, passes
   OutlierSpec outliers;
   int trials = 1;
   // Called after each (trial, estimator) run with (done, total).
@@ -59,26 +59,26 @@ struct CompareOptions {
 };
 
 struct EstimatorScore {
-  std::string estimator;           // as given ("student:3")
-  std::string kind;                // "recursive" or "batch"
-  int passes = 1;                  // passes over the estimation part that ran (FitOptions::passes)
-  Eigen::VectorXd theta;           // mean over trials
+  std::string estimator;  // as given ("student:3")
+  std::string kind;       // "recursive" or "batch"
+  int passes = 1;         // passes over the estimation part that ran (FitOptions::passes)
+  Eigen::VectorXd theta;  // mean over trials
   Spread one_step, simulation, theta_distance;
   std::vector<double> one_step_per_trial;
   bool has_simulation = false;
-  double ns_per_update = 0;        // fastest timed replay (first 5 trials)
-  double cleaned = 0;              // mean number of outputs cleaned in the regressors
-  int failed_trials = 0;           // trials whose estimate failed or was unusable (left out of the spreads)
-  std::string failure;             // the first such trial's reason, "" if none
+  double ns_per_update = 0;  // fastest timed replay (first 5 trials)
+  double cleaned = 0;        // mean number of outputs cleaned in the regressors
+  int failed_trials = 0;     // trials whose estimate failed or was unusable (left out of the spreads)
+  std::string failure;       // the first such trial's reason, "" if none
 };
 
 struct CompareResult {
   std::string structure;
   std::vector<std::string> parameter_names;
   Segment estimation, validation;
-  Eigen::VectorXd theta_ls;        // clean-data least squares
-  double sigma = 0;                // its residual std (the outlier unit)
-  FitScores reference;             // its validation scores
+  Eigen::VectorXd theta_ls;  // clean-data least squares
+  double sigma = 0;          // its residual std (the outlier unit)
+  FitScores reference;       // its validation scores
   int outliers_per_trial = 0;
   std::vector<EstimatorScore> scores;  // sorted by mean one-step fit, best first
 };

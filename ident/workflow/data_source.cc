@@ -61,7 +61,8 @@ class StaticSource final : public DataSource {
   std::unique_ptr<DataSource> Clone() const override { return std::make_unique<StaticSource>(*this); }
   int num_parameters() const override { return regression_.num_parameters(); }
   std::string structure() const override {
-    return fmt::format("static({}){}", fmt::join(regression_.regressors, ","), regression_.intercept ? "+intercept" : "");
+    return fmt::format("static({}){}", fmt::join(regression_.regressors, ","),
+                       regression_.intercept ? "+intercept" : "");
   }
   std::vector<std::string> parameter_names() const override { return regression_.ParameterNames(); }
   bool dynamic() const override { return false; }

@@ -25,12 +25,12 @@ class DataSource {
   // An independent copy (same structure and columns, same walking state).
   virtual std::unique_ptr<DataSource> Clone() const = 0;
   virtual int num_parameters() const = 0;
-  virtual std::string structure() const = 0;              // "ARX(2,2,3)", "static(x1,x2)+intercept"
+  virtual std::string structure() const = 0;  // "ARX(2,2,3)", "static(x1,x2)+intercept"
   virtual std::vector<std::string> parameter_names() const = 0;
-  virtual bool dynamic() const = 0;                       // simulation applies
-  virtual int first_regression_index() const = 0;         // t0 within a segment
+  virtual bool dynamic() const = 0;                // simulation applies
+  virtual int first_regression_index() const = 0;  // t0 within a segment
   virtual int output_column() const = 0;
-  virtual std::vector<int> used_columns() const = 0;      // every column the model reads
+  virtual std::vector<int> used_columns() const = 0;  // every column the model reads
   virtual void Reset() = 0;
   virtual bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) = 0;
   virtual void PushOutput(double y) = 0;
@@ -53,7 +53,8 @@ class DataSource {
 // Throws DataError for an unknown column, InvalidArgument for bad orders.
 std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& columns, const std::string& output,
                                           const std::vector<std::string>& inputs, const models::ArxStructure& arx,
-                                          const std::string& source, const models::OutputCleaningOptions& cleaning = {});
+                                          const std::string& source,
+                                          const models::OutputCleaningOptions& cleaning = {});
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,
                                              const models::StaticRegression& regression, const std::string& source);
 

@@ -7,8 +7,8 @@
 #include <iterator>
 #include <memory>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
+#include <Eigen/Eigenvalues>
 
 #include "common/error.h"
 
@@ -16,8 +16,7 @@ namespace ident::workflow {
 namespace {
 
 // The estimation and validation segments of an n-row record; checks they are long enough.
-std::pair<Segment, Segment> Split(int n, const DataSource& source, const FitOptions& options,
-                                  const std::string& name) {
+std::pair<Segment, Segment> Split(int n, const DataSource& source, const FitOptions& options, const std::string& name) {
   IDENT_REQUIRE(std::isfinite(options.split) && options.split > 0 && options.split <= 1,
                 "split = {}; need 0 < split <= 1", options.split);
   const int n_est = options.split == 1 ? n : static_cast<int>(std::floor(options.split * n));
@@ -29,9 +28,8 @@ std::pair<Segment, Segment> Split(int n, const DataSource& source, const FitOpti
                 "{}: the estimation part has {} rows; {} with {} parameters needs at least {} (lower the orders or "
                 "raise --split)",
                 name, estimation.count, source.structure(), rho, t0 + rho + 1);
-  IDENT_REQUIRE(validation.count - t0 >= 2,
-                "{}: the validation part has {} rows; {} needs at least {} (lower --split)", name,
-                validation.count, source.structure(), t0 + 2);
+  IDENT_REQUIRE(validation.count - t0 >= 2, "{}: the validation part has {} rows; {} needs at least {} (lower --split)",
+                name, validation.count, source.structure(), t0 + 2);
   return {estimation, validation};
 }
 
@@ -105,8 +103,12 @@ class Estimation {
         if (on_update_) on_update_(r, estimator_);
         if (trace_) {
           const Eigen::VectorXd theta = estimator_.parameters();
-          WriteTraceRow(trace_, {.t = r + 1, .nu = report.nu, .beta = report.weight,
-                                 .pred_err = report.prediction_error, .theta = &theta, .Dy = estimator_.Dy()});
+          WriteTraceRow(trace_, {.t = r + 1,
+                                 .nu = report.nu,
+                                 .beta = report.weight,
+                                 .pred_err = report.prediction_error,
+                                 .theta = &theta,
+                                 .Dy = estimator_.Dy()});
         }
       } else {
         ++rejected_;
@@ -170,8 +172,8 @@ class Estimation {
   Eigen::VectorXd z_, z_measured_;
   Eigen::MatrixXd ZtZ_;
   Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)
-  bool judged_;  // the estimator gives outlier verdicts (cleaning applies)
-  bool in_startup_;  // the estimator is in its start-up (asked after each update only while true)
+  bool judged_;              // the estimator gives outlier verdicts (cleaning applies)
+  bool in_startup_;          // the estimator is in its start-up (asked after each update only while true)
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
 };
 
@@ -321,34 +323,40 @@ std::string UnusableResult(const AnyRegressionEstimator& estimator, const std::v
                                                         : fmt::format("theta{}", i + 1);
   };
   if (updates < rho + 1)
-    return fmt::format("only {} updates were accepted, fewer than the {} parameters + 1; the estimate rests on the "
-                       "prior, not on the data",
-                       updates, rho);
+    return fmt::format(
+        "only {} updates were accepted, fewer than the {} parameters + 1; the estimate rests on the "
+        "prior, not on the data",
+        updates, rho);
   if (estimator.in_startup())
-    return fmt::format("the estimator's start-up did not complete: its robust start needs a window of samples "
-                       "(at least 20, and 4 per parameter) with identifiable regressors, and the {} updates did not "
-                       "give one; the estimate is its prior's (fit a longer record, or use rls or huber)",
-                       updates);
+    return fmt::format(
+        "the estimator's start-up did not complete: its robust start needs a window of samples "
+        "(at least 20, and 4 per parameter) with identifiable regressors, and the {} updates did not "
+        "give one; the estimate is its prior's (fit a longer record, or use rls or huber)",
+        updates);
   const Eigen::VectorXd theta = estimator.parameters();
   for (int i = 0; i < rho; ++i)
     if (!std::isfinite(theta(i))) return fmt::format("parameter '{}' is {}", name(i), theta(i));
   const double noise = estimator.noise_std();
   if (!std::isfinite(noise)) {
     if (estimator.nu() <= rho + 1)
-      return fmt::format("the noise std is {}: the estimate rests on the information of nu = {:.3g} samples, not "
-                         "more than the {} parameters + 1 (a forgetting factor f keeps about 1/(1 - f) samples; "
-                         "raise --forgetting)",
-                         noise, estimator.nu(), rho);
+      return fmt::format(
+          "the noise std is {}: the estimate rests on the information of nu = {:.3g} samples, not "
+          "more than the {} parameters + 1 (a forgetting factor f keeps about 1/(1 - f) samples; "
+          "raise --forgetting)",
+          noise, estimator.nu(), rho);
     return fmt::format("the noise std is {} (values too large: rescale the data)", noise);
   }
   const Eigen::VectorXd variance = estimator.covariance().diagonal();
   for (int i = 0; i < rho; ++i)
     if (!std::isfinite(variance(i)) || variance(i) < 0)
-      return fmt::format("the standard error of parameter '{}' (estimate {:.3g}) is {}: its variance {} (columns "
-                         "whose scales are too far apart: rescale the data; or, for a robust estimator, most samples "
-                         "weighted as outliers: a prior noise scale far below the residuals?)",
-                         name(i), theta(i), std::sqrt(variance(i)),
-                         std::isnan(variance(i)) ? "is undefined" : variance(i) < 0 ? "is negative" : "is infinite");
+      return fmt::format(
+          "the standard error of parameter '{}' (estimate {:.3g}) is {}: its variance {} (columns "
+          "whose scales are too far apart: rescale the data; or, for a robust estimator, most samples "
+          "weighted as outliers: a prior noise scale far below the residuals?)",
+          name(i), theta(i), std::sqrt(variance(i)),
+          std::isnan(variance(i)) ? "is undefined"
+          : variance(i) < 0       ? "is negative"
+                                  : "is infinite");
   return "";
 }
 
@@ -383,8 +391,7 @@ void WriteTraceRow(std::FILE* trace, const TraceRow& row) {
 }
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace,
-                             const OutlierDecision& decision,
+                             AnyRegressionEstimator& estimator, std::FILE* trace, const OutlierDecision& decision,
                              const std::function<void(int row, const AnyRegressionEstimator&)>& on_update) {
   FitOptions options;
   options.trace = trace;
@@ -524,8 +531,7 @@ auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) 
   } catch (const InvalidArgument&) {
     io::CsvReader reader(path, csv);
     Eigen::VectorXd row(reader.num_columns());
-    while (reader.Next(row)) {
-    }
+    while (reader.Next(row)) {}
     throw;
   }
 }

@@ -34,15 +34,15 @@ namespace ident::workflow {
 enum class Detrend { kMean, kNone };
 
 struct FitOptions {
-  double split = 0.5;                 // fraction of rows for estimation, in (0, 1]
+  double split = 0.5;  // fraction of rows for estimation, in (0, 1]
   Detrend detrend = Detrend::kMean;
-  std::FILE* trace = nullptr;         // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
+  std::FILE* trace = nullptr;  // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
   // Each regressor's Σ z_i² over the estimation part must reach this, else InvalidArgument: the
   // default flat prior carries information 1e-12 per parameter (RegressionPrior::Flat) and would bias
   // θ̂ on data of tiny scale (values near 1e-150) by more than 1e-6 relative. 0 disables the check
   // (the command line does so when an explicit prior is given).
   double min_regressor_information = 1e-6;
-  OutlierDecision decision;           // which updates count as outliers for regressor cleaning
+  OutlierDecision decision;  // which updates count as outliers for regressor cleaning
   // Passes over the estimation part (AnyRegressionEstimator::BeginPass): each further pass re-runs the
   // recursion from the previous pass's estimate, regressor cleaning included; estimators for which a
   // further pass cannot change the result (RLS, batch) run once. The trace shows the last pass.
@@ -52,11 +52,11 @@ struct FitOptions {
 };
 
 struct FitScores {
-  double one_step = 0;                // fit %
+  double one_step = 0;  // fit %
   double rms_one_step = 0;
-  std::optional<double> simulation;   // fit % (dynamic models only)
+  std::optional<double> simulation;  // fit % (dynamic models only)
   std::optional<double> rms_simulation;
-  int scored = 0;                     // validation samples scored
+  int scored = 0;  // validation samples scored
 };
 
 struct FitResult {
@@ -67,10 +67,10 @@ struct FitResult {
   double noise_std = 0;
   double nu = 0, Dy = 0;
   int samples_estimation = 0, samples_validation = 0;
-  std::string kind;                   // "recursive" or "batch"
-  int passes = 1;                     // passes over the estimation part that ran
-  int updates = 0, rejected = 0;      // estimator steps taken / rejected (missing or invalid samples), last pass
-  long cleaned = 0;                   // outputs cleaned in later regressors (--clean-regressors on)
+  std::string kind;                     // "recursive" or "batch"
+  int passes = 1;                       // passes over the estimation part that ran
+  int updates = 0, rejected = 0;        // estimator steps taken / rejected (missing or invalid samples), last pass
+  long cleaned = 0;                     // outputs cleaned in later regressors (--clean-regressors on)
   std::optional<LockInStatus> lock_in;  // the robust estimators' lock-in safeguard at the end of estimation
   FitScores validation;
 };
@@ -92,8 +92,7 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
 // InvalidArgument if the regressors of the segment are constant or collinear (the model is not
 // identifiable from them).
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace,
-                             const OutlierDecision& decision = {},
+                             AnyRegressionEstimator& estimator, std::FILE* trace, const OutlierDecision& decision = {},
                              const std::function<void(int row, const AnyRegressionEstimator&)>& on_update = {});
 
 // The same with every option of `options` that applies (trace, decision, on_update, min_regressor_information,

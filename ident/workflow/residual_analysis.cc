@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include <boost/math/distributions/chi_squared.hpp>
 #include <fmt/format.h>
+#include <boost/math/distributions/chi_squared.hpp>
 
 #include "common/error.h"
 
@@ -35,7 +35,8 @@ std::vector<double> Autocorrelation(const std::vector<double>& e_in, int max_lag
   std::vector<double> r;
   for (int tau = 1; tau <= max_lag; ++tau) {
     double s = 0;
-    for (std::size_t t = static_cast<std::size_t>(tau); t < e.size(); ++t) s += e[t] * e[t - static_cast<std::size_t>(tau)];
+    for (std::size_t t = static_cast<std::size_t>(tau); t < e.size(); ++t)
+      s += e[t] * e[t - static_cast<std::size_t>(tau)];
     r.push_back(ee > 0 ? s / ee : 0.0);
   }
   return r;
@@ -43,14 +44,15 @@ std::vector<double> Autocorrelation(const std::vector<double>& e_in, int max_lag
 
 std::vector<double> CrossCorrelation(const std::vector<double>& e_in, const std::vector<double>& u_in, int max_lag) {
   IDENT_REQUIRE(e_in.size() == u_in.size(), "{} residuals but {} input samples", e_in.size(), u_in.size());
-  IDENT_REQUIRE(max_lag >= 0 && static_cast<std::size_t>(max_lag) < e_in.size(),
-                "max_lag = {}; need 0 <= max_lag < {}", max_lag, e_in.size());
+  IDENT_REQUIRE(max_lag >= 0 && static_cast<std::size_t>(max_lag) < e_in.size(), "max_lag = {}; need 0 <= max_lag < {}",
+                max_lag, e_in.size());
   const std::vector<double> e = Centred(e_in), u = Centred(u_in);
   const double norm = std::sqrt(SumSquares(e) * SumSquares(u));
   std::vector<double> r;
   for (int tau = 0; tau <= max_lag; ++tau) {
     double s = 0;
-    for (std::size_t t = static_cast<std::size_t>(tau); t < e.size(); ++t) s += e[t] * u[t - static_cast<std::size_t>(tau)];
+    for (std::size_t t = static_cast<std::size_t>(tau); t < e.size(); ++t)
+      s += e[t] * u[t - static_cast<std::size_t>(tau)];
     r.push_back(norm > 0 ? s / norm : 0.0);
   }
   return r;
@@ -91,9 +93,10 @@ bool ResidualAnalysis::Independent() const {
 }
 
 std::string ResidualAnalysis::Verdict() const {
-  std::string whiteness = White() ? "residuals look white" : "residuals are NOT white (the noise model misses dynamics)";
+  std::string whiteness =
+      White() ? "residuals look white" : "residuals are NOT white (the noise model misses dynamics)";
   std::string independence = Independent() ? "independent of the input"
-                                            : "correlated with the input (the model misses input dynamics or delay)";
+                                           : "correlated with the input (the model misses input dynamics or delay)";
   return fmt::format("verdict: {}, {}", whiteness, independence);
 }
 

@@ -26,20 +26,20 @@
 namespace ident::workflow {
 
 struct ResidualAnalysis {
-  int samples = 0;                       // N
-  double band = 0;                       // 2.58/√N
-  std::vector<double> autocorrelation;   // r_ee(1..L)
-  std::vector<std::string> input_names;  // one per input (ARX) or regressor column (static)
+  int samples = 0;                                     // N
+  double band = 0;                                     // 2.58/√N
+  std::vector<double> autocorrelation;                 // r_ee(1..L)
+  std::vector<std::string> input_names;                // one per input (ARX) or regressor column (static)
   std::vector<std::vector<double>> cross_correlation;  // r_eu_i(0..L)
-  int OutsideAuto() const;               // lags of r_ee outside the band
+  int OutsideAuto() const;                             // lags of r_ee outside the band
   int OutsideCross(std::size_t input) const;
-  double QAuto() const;                  // Q_ee
+  double QAuto() const;  // Q_ee
   double QCross(std::size_t input) const;
-  double QAutoLimit() const;             // 99 % quantile of χ²(L)
-  double QCrossLimit() const;            // 99 % quantile of χ²(L+1)
+  double QAutoLimit() const;   // 99 % quantile of χ²(L)
+  double QCrossLimit() const;  // 99 % quantile of χ²(L+1)
   bool White() const { return QAuto() <= QAutoLimit(); }
-  bool Independent() const;              // every input: Q_eu below its limit
-  std::string Verdict() const;           // one line
+  bool Independent() const;     // every input: Q_eu below its limit
+  std::string Verdict() const;  // one line
 };
 
 // Correlation coefficients as defined above for plain sequences (exposed for tests).

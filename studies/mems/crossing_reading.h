@@ -18,7 +18,8 @@
 //   ident::StepReport r = ident::CorrectReadingChange(f, m_before, P_before, model, sensor, y_prev, y);
 //
 // Cost: the orthant probability by Owen's T (two owens_t; adaptive quadrature only for a wedge of mass
-// < 1e-5) and a few exp/erfc, only at changes of the reading (≈ 2 per event). Fixed-size filters allocate nothing; the dynamic one allocates a n × 2 work array.
+// < 1e-5) and a few exp/erfc, only at changes of the reading (≈ 2 per event). Fixed-size filters allocate nothing; the
+// dynamic one allocates a n × 2 work array.
 //
 // [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
 #pragma once
@@ -48,10 +49,10 @@ inline ReadingChangeRegion ThresholdChangeRegion(double threshold, double y_prev
   for (int i = 0; i < 2; ++i) {
     const double r = readings[i], other = readings[1 - i];
     if (r != 0) {
-      region.sides(i) = r;                 // s ≥ T (r = 1) or s ≤ −T (r = −1)
+      region.sides(i) = r;  // s ≥ T (r = 1) or s ≤ −T (r = −1)
       region.bounds(i) = r * threshold;
     } else {
-      region.sides(i) = -other;            // inside, on the side facing the other reading: s·o < T
+      region.sides(i) = -other;  // inside, on the side facing the other reading: s·o < T
       region.bounds(i) = other * threshold;
     }
   }
@@ -77,8 +78,8 @@ StepReport CorrectReadingChange(BasicLcGaussianFilter<N>& filter, const Eigen::R
   if (!region.ok) return {StepStatus::kRejectedInvalid};
   Eigen::Matrix<double, N, 2> cross(n, 2);
   Eigen::Matrix<double, N, 1> p_before_c = cov_before * c;
-  cross.col(0).noalias() = model.A * p_before_c;                      // Cov(x(k), c'x(k−1)) = A P⁻ c
-  cross.col(1).noalias() = filter.covariance() * c;                   // Cov(x(k), c'x(k))   = P c
+  cross.col(0).noalias() = model.A * p_before_c;     // Cov(x(k), c'x(k−1)) = A P⁻ c
+  cross.col(1).noalias() = filter.covariance() * c;  // Cov(x(k), c'x(k))   = P c
   const Eigen::Vector2d prior_mean(c.dot(mean_before), c.dot(filter.mean()));
   Eigen::Matrix2d prior_cov;
   prior_cov << c.dot(p_before_c), c.dot(cross.col(0)), c.dot(cross.col(0)), c.dot(cross.col(1));

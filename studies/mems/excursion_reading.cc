@@ -7,9 +7,9 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.h"
+#include "models/truncated_bivariate_normal.h"
 #include "studies/mems/crossing_reading.h"
 #include "studies/mems/ep_site_change.h"
-#include "models/truncated_bivariate_normal.h"
 
 namespace ident {
 namespace {
@@ -48,7 +48,7 @@ ExcursionReading::ExcursionReading(const models::ThresholdSensor& sensor, int nu
 
 void ExcursionReading::Propagate(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u) {
   const int n = n_, l = length_;
-  work_v_.head(n).noalias() = model.A * mu_.head(n);                       // μ_x ← A μ_x + B u
+  work_v_.head(n).noalias() = model.A * mu_.head(n);  // μ_x ← A μ_x + B u
   if (model.num_inputs() > 0) work_v_.head(n).noalias() += model.B * u;
   mu_.head(n) = work_v_.head(n);
   // Σ_xs ← A Σ_xs, Σ_xx ← A Σ_xx A' + P_N (factors depend on s only, so this is the posterior's time update).
@@ -63,7 +63,7 @@ void ExcursionReading::Propagate(const models::LinearStateSpace& model, const Ei
 
 void ExcursionReading::AppendReadingCoordinate() {
   const int n = n_, d = n_ + length_, j = d;
-  mu_(j) = c_.dot(mu_.head(n));                                             // s_k = c'x(k)
+  mu_(j) = c_.dot(mu_.head(n));  // s_k = c'x(k)
   work_v_.head(d).noalias() = sigma_.topRows(n).leftCols(d).transpose() * c_;
   sigma_.row(j).head(d) = work_v_.head(d).transpose();
   sigma_.col(j).head(d) = work_v_.head(d);
@@ -73,14 +73,14 @@ void ExcursionReading::AppendReadingCoordinate() {
 
 void ExcursionReading::SetMarginal(const Factor& f, const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov) {
   const int d = n_ + length_, a = n_ + f.first, k = f.dim;
-  const Eigen::Matrix2d sigma_aa = k == 2 ? Eigen::Matrix2d(sigma_.block(a, a, 2, 2))
-                                          : Eigen::Matrix2d{{sigma_(a, a), 0}, {0, 0}};
+  const Eigen::Matrix2d sigma_aa =
+      k == 2 ? Eigen::Matrix2d(sigma_.block(a, a, 2, 2)) : Eigen::Matrix2d{{sigma_(a, a), 0}, {0, 0}};
   const Eigen::Matrix2d inv = InverseBlock(sigma_aa, k);
   // K = Σ_{·A} Σ_AA⁻¹ (d × k); μ ← μ + K(μ_A' − μ_A); Σ ← Σ + K(Σ_AA' − Σ_AA)K'.
   gain_.leftCols(k).topRows(d).noalias() = sigma_.block(0, a, d, k) * inv.topLeftCorner(k, k);
   const Eigen::Vector2d dm = mean - (k == 2 ? Eigen::Vector2d(mu_.segment(a, 2)) : Eigen::Vector2d(mu_(a), 0));
   const Eigen::Matrix2d dc = cov - sigma_aa;
-  if (dm.head(k).isZero(0.0) && dc.topLeftCorner(k, k).isZero(0.0)) return;   // an inactive factor: nothing moves
+  if (dm.head(k).isZero(0.0) && dc.topLeftCorner(k, k).isZero(0.0)) return;  // an inactive factor: nothing moves
   mu_.head(d).noalias() += gain_.leftCols(k).topRows(d) * dm.head(k);
   work_m_.leftCols(k).topRows(d).noalias() = gain_.leftCols(k).topRows(d) * dc.topLeftCorner(k, k);
   sigma_.topLeftCorner(d, d).noalias() += work_m_.leftCols(k).topRows(d) * gain_.leftCols(k).topRows(d).transpose();
@@ -88,11 +88,11 @@ void ExcursionReading::SetMarginal(const Factor& f, const Eigen::Vector2d& mean,
 
 void ExcursionReading::Cavity(const Factor& f, Eigen::Vector2d& mean, Eigen::Matrix2d& cov) const {
   const int a = n_ + f.first, k = f.dim;
-  const Eigen::Matrix2d sigma_aa = k == 2 ? Eigen::Matrix2d(sigma_.block(a, a, 2, 2))
-                                          : Eigen::Matrix2d{{sigma_(a, a), 0}, {0, 0}};
+  const Eigen::Matrix2d sigma_aa =
+      k == 2 ? Eigen::Matrix2d(sigma_.block(a, a, 2, 2)) : Eigen::Matrix2d{{sigma_(a, a), 0}, {0, 0}};
   const Eigen::Vector2d mu_a = k == 2 ? Eigen::Vector2d(mu_.segment(a, 2)) : Eigen::Vector2d(mu_(a), 0);
   const Eigen::Matrix2d prec = InverseBlock(sigma_aa, k);
-  Eigen::Matrix2d cav_prec = prec - f.lambda;                               // cavity = posterior / site
+  Eigen::Matrix2d cav_prec = prec - f.lambda;  // cavity = posterior / site
   if (k == 1) cav_prec(0, 1) = cav_prec(1, 0) = cav_prec(1, 1) = 0;
   const Eigen::Vector2d cav_h = prec * mu_a - f.eta;
   cov = InverseBlock(cav_prec, k);
@@ -127,7 +127,7 @@ double ExcursionReading::Refit(Factor& f) {
   Eigen::Vector2d mt = Eigen::Vector2d::Zero();
   Eigen::Matrix2d vt = Eigen::Matrix2d::Zero();
   if (f.dim == 2) {
-    const auto t = models::TruncatedBivariateNormalMoments(mc, vc, f.bounds, f.sides);   // Tallis
+    const auto t = models::TruncatedBivariateNormalMoments(mc, vc, f.bounds, f.sides);  // Tallis
     if (!t.ok) return -1;
     mt = t.mean;
     vt = t.covariance;
@@ -190,9 +190,9 @@ StepReport ExcursionReading::Step(LcGaussianFilter& filter, const Eigen::Ref<con
                                   const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                                   double y_prev, double y) {
   auto valid = [](double r) { return r == -1.0 || r == 0.0 || r == 1.0; };
-  if (!valid(y_prev) || !valid(y) || filter.num_states() != n_ || mean_before.size() != n_ ||
-      cov_before.rows() != n_ || cov_before.cols() != n_ || model.A.rows() != n_ || model.A.cols() != n_ ||
-      model.process_noise.rows() != n_ || u.size() != model.num_inputs()) {
+  if (!valid(y_prev) || !valid(y) || filter.num_states() != n_ || mean_before.size() != n_ || cov_before.rows() != n_ ||
+      cov_before.cols() != n_ || model.A.rows() != n_ || model.A.cols() != n_ || model.process_noise.rows() != n_ ||
+      u.size() != model.num_inputs()) {
     return {StepStatus::kRejectedInvalid};
   }
   auto new_factor = [](int first, int dim) {
@@ -218,7 +218,7 @@ StepReport ExcursionReading::Step(LcGaussianFilter& filter, const Eigen::Ref<con
     Propagate(model, u);
     AppendReadingCoordinate();
     Factor entry = new_factor(0, 2);
-    const ReadingChangeRegion region = ThresholdChangeRegion(threshold_, y_prev, y);   // x1(k−1) < T ≤ x1(k)
+    const ReadingChangeRegion region = ThresholdChangeRegion(threshold_, y_prev, y);  // x1(k−1) < T ≤ x1(k)
     entry.bounds = region.bounds;
     entry.sides = region.sides;
     factors_.push_back(entry);
@@ -226,14 +226,14 @@ StepReport ExcursionReading::Step(LcGaussianFilter& filter, const Eigen::Ref<con
     return Sweep(filter);
   }
   if (y_prev != side_ || (y != side_ && y != 0) || length_ + 1 > options_.max_length) {
-    length_ = 0;                                    // close the excursion; the filter keeps its state
+    length_ = 0;  // close the excursion; the filter keeps its state
     factors_.clear();
     return {StepStatus::kRejectedInvalid};
   }
   Propagate(model, u);
   AppendReadingCoordinate();
-  const int last = length_ - 1;                     // index of s_k
-  if (y == side_) {                                 // repeated reading: y s_k ≥ T
+  const int last = length_ - 1;  // index of s_k
+  if (y == side_) {              // repeated reading: y s_k ≥ T
     Factor f = new_factor(last, 1);
     f.sides(0) = side_;
     f.bounds(0) = side_ * threshold_;

@@ -33,8 +33,8 @@
 //
 // Cost per step inside an excursion of length L: sweeps × L factor refits, each O((L + n)²). The joint's
 // storage for max_length readings is allocated at construction, but the time update allocates small
-// temporaries: not for hard real time (unlike BasicLcGaussianFilter). Past max_length steps the excursion is closed (the state kept) and later
-// readings of it are left to the caller (Step returns kRejectedInvalid).
+// temporaries: not for hard real time (unlike BasicLcGaussianFilter). Past max_length steps the excursion is closed
+// (the state kept) and later readings of it are left to the caller (Step returns kRejectedInvalid).
 //
 // [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
 // [2] T. P. Minka, "Expectation propagation for approximate Bayesian inference", UAI 2001.
@@ -52,9 +52,9 @@
 namespace ident {
 
 struct ExcursionOptions {
-  int max_length = 64;         // stacked readings kept (an excursion longer than this is closed)
-  int max_sweeps = 50;         // EP sweeps per step
-  double tolerance = 1e-10;    // stop when no site mean/variance target moves by more than this (relative)
+  int max_length = 64;       // stacked readings kept (an excursion longer than this is closed)
+  int max_sweeps = 50;       // EP sweeps per step
+  double tolerance = 1e-10;  // stop when no site mean/variance target moves by more than this (relative)
 };
 
 class ExcursionReading {
@@ -73,7 +73,7 @@ class ExcursionReading {
                   const Eigen::Ref<const Eigen::VectorXd>& u, double y_prev, double y);
 
   bool active() const { return length_ > 0; }
-  int length() const { return length_; }          // stacked readings s (0 when no excursion is open)
+  int length() const { return length_; }            // stacked readings s (0 when no excursion is open)
   int last_sweeps() const { return last_sweeps_; }  // EP sweeps of the last Step
   bool last_converged() const { return last_converged_; }
   // Posterior moments of the joint (x(k), s) after the last Step: first n entries x(k), then s.
@@ -82,14 +82,14 @@ class ExcursionReading {
 
  private:
   struct Factor {
-    int first = 0;                 // index of its first s (0-based in s)
-    int dim = 0;                   // 1 or 2 (2: s_first, s_first+1)
-    Eigen::Vector2d bounds, sides; // region {sides_i (s_i − bounds_i) > 0}
-    Eigen::Matrix2d lambda;        // site precision (dim × dim block used)
-    Eigen::Vector2d eta;           // site precision × mean
-    Eigen::Vector2d last_mean;     // tilted moments of the last refit (convergence check)
+    int first = 0;                  // index of its first s (0-based in s)
+    int dim = 0;                    // 1 or 2 (2: s_first, s_first+1)
+    Eigen::Vector2d bounds, sides;  // region {sides_i (s_i − bounds_i) > 0}
+    Eigen::Matrix2d lambda;         // site precision (dim × dim block used)
+    Eigen::Vector2d eta;            // site precision × mean
+    Eigen::Vector2d last_mean;      // tilted moments of the last refit (convergence check)
     Eigen::Matrix2d last_cov;
-    Eigen::Vector2d cavity_mean;   // cavity of the last refit: an unchanged cavity needs no refit
+    Eigen::Vector2d cavity_mean;  // cavity of the last refit: an unchanged cavity needs no refit
     Eigen::Matrix2d cavity_cov;
   };
   // Refit factor f (EP step); returns the largest relative change of its tilted moments, or −1 if the
@@ -109,7 +109,7 @@ class ExcursionReading {
   ExcursionOptions options_;
   int n_ = 0, length_ = 0, last_sweeps_ = 0;
   bool last_converged_ = false;
-  double side_ = 0;                       // +1 / −1: the threshold of the open excursion
+  double side_ = 0;  // +1 / −1: the threshold of the open excursion
   Eigen::VectorXd mu_, work_v_;
   Eigen::MatrixXd sigma_, gain_, work_m_;
   std::vector<Factor> factors_;

@@ -5,21 +5,21 @@
 #include <memory>
 #include <random>
 
-#include <Eigen/Cholesky>
 #include <fmt/format.h>
+#include <Eigen/Cholesky>
 
 #include "common/error.h"
 #include "ident/observers/covariance_bound.h"
-#include "studies/mems/crossing_reading.h"
-#include "studies/mems/excursion_reading.h"
-#include "studies/mems/jackknife.h"
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "ident/observers/truncated_gaussian_filter.h"
-#include "studies/mems/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
+#include "studies/mems/crossing_reading.h"
+#include "studies/mems/excursion_reading.h"
+#include "studies/mems/jackknife.h"
+#include "studies/mems/window_ep_filter.h"
 
 namespace ident {
 
@@ -37,14 +37,16 @@ std::string MemsStudyOptions::Validate() const {
   // At least one expected event in the scored part of the run (its mean spacing is t_target).
   const double scored_time = (steps - burn_in) * h;
   if (!(scored_time >= t_target))
-    return fmt::format("(steps - burn_in)·h = {:.3g} simulated seconds after the burn-in is shorter than t_target = "
-                       "{}, the mean time between events; need at least one expected event",
-                       scored_time, t_target);
+    return fmt::format(
+        "(steps - burn_in)·h = {:.3g} simulated seconds after the burn-in is shorter than t_target = "
+        "{}, the mean time between events; need at least one expected event",
+        scored_time, t_target);
   return "";
 }
 
 const MemsObserverResult& MemsStudyResult::Get(const std::string& name) const {
-  for (const auto& o : observers) if (o.name == name) return o;
+  for (const auto& o : observers)
+    if (o.name == name) return o;
   IDENT_REQUIRE(false, "no observer named '{}' in the MEMS study", name);
   return observers.front();  // unreachable
 }
@@ -93,7 +95,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   result.sigma_m2 = o.sigma_m2 > 0 ? o.sigma_m2 : (2 * o.h * v_ref) * (2 * o.h * v_ref) / 3;
   result.sigma_o = TunedSigmaO(1 / std::sqrt(3.0), o.noise_intensity);
   const double sigma_o13 = TunedSigmaO(1.0 / 3.0, o.noise_intensity);
-  const double r_zero = result.sigma_o * result.sigma_o / o.h;        // measurement variance σ_o² h⁻¹
+  const double r_zero = result.sigma_o * result.sigma_o / o.h;  // measurement variance σ_o² h⁻¹
   const double r_zero13 = sigma_o13 * sigma_o13 / o.h;
 
   const Eigen::Vector2d m0(0.0, v_ref);
@@ -167,8 +169,8 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     for (int i = 0; i < 2; ++i) w(i) = normal(rng);
     x = model.A * x + model.B * u + L * w;
     const double y = sensor->Measure(x);
-    const bool crossing = y != 0 && y_prev == 0;   // an event: 0 → ±1
-    const bool leaving = y == 0 && y_prev != 0;    // back inside: ±1 → 0
+    const bool crossing = y != 0 && y_prev == 0;  // an event: 0 → ±1
+    const bool leaving = y == 0 && y_prev != 0;   // back inside: ±1 → 0
     if (crossing) {
       direction = -y;
       if (k >= o.burn_in) ++events_counted;
@@ -179,9 +181,12 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     for (KalmanFilter* kf : {&tuned, &tuned13}) {
       kf->Predict(model, u);
       const double rz = kf == &tuned ? r_zero : r_zero13;
-      if (crossing) kf->Correct(c, result.sigma_m2, y * o.threshold);
-      else if (leaving) kf->Correct(c, result.sigma_m2, y_prev * o.threshold);
-      else kf->Correct(c, rz, y * o.threshold);   // y = 0: x1 = 0; outside: x1 = ±T, both σ_o² h⁻¹
+      if (crossing)
+        kf->Correct(c, result.sigma_m2, y * o.threshold);
+      else if (leaving)
+        kf->Correct(c, result.sigma_m2, y_prev * o.threshold);
+      else
+        kf->Correct(c, rz, y * o.threshold);  // y = 0: x1 = 0; outside: x1 = ±T, both σ_o² h⁻¹
     }
     plain.Predict(model, u);
     plain.Correct(*sensor, y);
@@ -198,8 +203,8 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     // states (fixed-lag EP, studies/mems/excursion_reading.h); repeated y = 0 as in lc_wedge.
     bool excursion_done = false;
     if (crossing || leaving || excursion.active()) {
-      excursion_done = excursion.Step(excursion_filter, excursion_mean_before, excursion_cov_before, model, u, y_prev, y)
-                           .updated();
+      excursion_done =
+          excursion.Step(excursion_filter, excursion_mean_before, excursion_cov_before, model, u, y_prev, y).updated();
       if (excursion_done && !excursion.last_converged()) ++result.excursion_unconverged;
       if (!excursion_done && (crossing || leaving)) {
         ++result.excursion_fallbacks;
@@ -233,7 +238,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
         first_passage(wedge, side, outward);
       }
     } else {
-      gaussian_reading(event, y * o.threshold, r_zero13);   // y = 0: x1 = 0; outside: x1 = ±T
+      gaussian_reading(event, y * o.threshold, r_zero13);  // y = 0: x1 = 0; outside: x1 = ±T
       gaussian_reading(wedge, y * o.threshold, r_zero13);
       event_trunc.Correct(*sensor, y);
       capped_reading(event_capped, y);
@@ -245,7 +250,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     // interval (every reading exact, the hard edge kept in the family; ident/observers/truncated_gaussian_filter.h).
     truncated_filter.Step(model, u, y);
     bound.Predict(model);
-    if (crossing) bound.UpdateStrength(c, 1.0 / result.sigma_m2);   // modified event measurement
+    if (crossing) bound.UpdateStrength(c, 1.0 / result.sigma_m2);  // modified event measurement
     // Control law (causal in u and y): push back while outside, else track ∓v_ref with the tuned
     // Kalman filter's velocity estimate.
     u(0) = y != 0 ? -y * 2 * v_ref / tau : -(tuned.mean()(1) - direction * v_ref) / tau;
@@ -280,8 +285,8 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     }
   }
   result.events = events_counted;
-  result.t_mean = events_counted > 0 ? (o.steps - o.burn_in) * o.h / events_counted
-                                     : std::numeric_limits<double>::infinity();
+  result.t_mean =
+      events_counted > 0 ? (o.steps - o.burn_in) * o.h / events_counted : std::numeric_limits<double>::infinity();
   result.observers.push_back(acc_grid.Result("grid"));
   result.observers.push_back(acc_tuned.Result("tuned_kalman"));
   result.observers.push_back(acc_tuned13.Result("tuned_kalman_13"));

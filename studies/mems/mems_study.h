@@ -27,15 +27,18 @@
 //                   lagged pair (x1(k−1), x1(k)), e.g. x1(k−1) < T ≤ x1(k) (studies/mems/crossing_reading.h: a
 //                   log-concave reading of the augmented state, Tallis moments, exact update of x(k));
 //                   every repeated reading is the σ_o reading of lc_event (p11 = 1/3)
-//   lc_excursion    (the CLI's lc_gaussian in session 5) as lc_wedge, but an excursion past a threshold (entry wedge, repeated ±1 readings, exit
+//   lc_excursion    (the CLI's lc_gaussian in session 5) as lc_wedge, but an excursion past a threshold (entry wedge,
+//   repeated ±1 readings, exit
 //                   wedge) is one log-concave reading of the stacked states x(k_e − 1 … k): fixed-lag
 //                   expectation propagation with exact 1-D/2-D factor moments (studies/mems/excursion_reading.h)
 //   lc_excursion_silent  diagnostic: lc_excursion with no reading at repeated y = 0 (prediction only
 //                   between excursions), to see what the σ_o reading contributes
-//   lc_window       (the CLI's lc_gaussian in sessions 6–7) every reading of the last W = ep_window steps an exact site of the state chain (repeated
+//   lc_window       (the CLI's lc_gaussian in sessions 6–7) every reading of the last W = ep_window steps an exact site
+//   of the state chain (repeated
 //                   y = 0 as 1{|x1| < T}, repeated ±1 as half-lines, changes as the wedge of lc_wedge), refined
 //                   jointly by banded sliding-window EP; older sites frozen (studies/mems/window_ep_filter.h). No σ_o.
-//   lc_truncated    (the CLI's lc_gaussian since session 8) assumed-density filter in the family of Gaussians restricted to the current
+//   lc_truncated    (the CLI's lc_gaussian since session 8) assumed-density filter in the family of Gaussians
+//   restricted to the current
 //                   reading's interval: each step the exact moments of the pushed-forward restricted density on
 //                   the rectangle R(y(k−1)) × R(y(k)), then the KL projection back onto the family
 //                   (ident/observers/truncated_gaussian_filter.h). No σ_o, no window.
@@ -54,25 +57,25 @@
 namespace ident {
 
 struct MemsStudyOptions {
-  double h = 0.01;                 // sampling period
-  double noise_intensity = 1.0;    // σ²
-  double threshold = 1.0;          // T
-  double t_target = 1.0;           // control law's target time between events
-  int steps = 10000;               // simulated steps
-  int burn_in = 500;               // steps excluded from the statistics
+  double h = 0.01;               // sampling period
+  double noise_intensity = 1.0;  // σ²
+  double threshold = 1.0;        // T
+  double t_target = 1.0;         // control law's target time between events
+  int steps = 10000;             // simulated steps
+  int burn_in = 500;             // steps excluded from the statistics
   unsigned seed = 1;
-  int grid_points = 128;           // per axis of the 2-D grid observer
-  double sigma_m2 = 0.0;           // σ_M² of the modified event measurement; 0 = (2 h v_ref)²/3
-  bool record_trace = false;       // keep per-step variances (Fig. 8)
-  int ep_window = 16;              // lc_window's EP window W (readings refined jointly)
+  int grid_points = 128;      // per axis of the 2-D grid observer
+  double sigma_m2 = 0.0;      // σ_M² of the modified event measurement; 0 = (2 h v_ref)²/3
+  bool record_trace = false;  // keep per-step variances (Fig. 8)
+  int ep_window = 16;         // lc_window's EP window W (readings refined jointly)
   std::string Validate() const;
 };
 
 struct MemsObserverResult {
   std::string name;
-  double rms = 0;            // RMS velocity error (bound: √ mean P̄22)
-  double calibration = 0;    // mean predicted var(x2) / mean squared error (bound: mean P̄22 / grid MSE)
-  double calibration_se = 0; // its jackknife standard error over 10 contiguous blocks of the run (bound: 0)
+  double rms = 0;             // RMS velocity error (bound: √ mean P̄22)
+  double calibration = 0;     // mean predicted var(x2) / mean squared error (bound: mean P̄22 / grid MSE)
+  double calibration_se = 0;  // its jackknife standard error over 10 contiguous blocks of the run (bound: 0)
 };
 
 struct MemsTrace {
@@ -80,18 +83,18 @@ struct MemsTrace {
 };
 
 struct MemsStudyResult {
-  double t_mean = 0;         // measured mean time between events
+  double t_mean = 0;  // measured mean time between events
   int events = 0;
-  std::vector<MemsObserverResult> observers;   // in the order listed in the header comment
-  double sigma_o = 0;        // σ_o used by tuned_kalman (p11 = 1/√3)
+  std::vector<MemsObserverResult> observers;  // in the order listed in the header comment
+  double sigma_o = 0;                         // σ_o used by tuned_kalman (p11 = 1/√3)
   double sigma_m2 = 0;
-  int wedge_fallbacks = 0;   // changes of reading where lc_wedge's wedge had no mass (first-passage reading used)
+  int wedge_fallbacks = 0;        // changes of reading where lc_wedge's wedge had no mass (first-passage reading used)
   int excursion_fallbacks = 0;    // changes of reading lc_excursion left to lc_wedge's update (no mass / too long)
   int excursion_unconverged = 0;  // lc_excursion steps whose EP sweeps hit the limit
   long window_failures = 0;       // lc_window site refits with no mass under the cavity (site kept)
   int window_unconverged = 0;     // lc_window steps whose EP sweeps hit the limit
   long truncated_failures = 0;    // lc_truncated steps whose rectangle had no mass (fallback)
-  long truncated_projection_failures = 0;   // lc_truncated projections without a parent (see its header)
+  long truncated_projection_failures = 0;  // lc_truncated projections without a parent (see its header)
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };

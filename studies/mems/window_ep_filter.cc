@@ -8,9 +8,9 @@
 #include <Eigen/LU>
 
 #include "common/error.h"
+#include "models/truncated_bivariate_normal.h"
 #include "studies/mems/crossing_reading.h"
 #include "studies/mems/ep_site_change.h"
-#include "models/truncated_bivariate_normal.h"
 
 namespace ident {
 namespace {
@@ -35,8 +35,9 @@ WindowEpFilter::WindowEpFilter(const models::ThresholdSensor& sensor, const Eige
   IDENT_REQUIRE(options.max_sweeps >= 1, "WindowEpFilter: max_sweeps = {}; need >= 1", options.max_sweeps);
   IDENT_REQUIRE(options.tolerance > 0, "WindowEpFilter: tolerance = {}; need > 0", options.tolerance);
   IDENT_REQUIRE(mean.allFinite() && covariance.allFinite(), "WindowEpFilter: prior mean/covariance not finite");
-  IDENT_REQUIRE((covariance - covariance.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1 + covariance.cwiseAbs().maxCoeff()),
-                "WindowEpFilter: prior covariance not symmetric");
+  IDENT_REQUIRE(
+      (covariance - covariance.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1 + covariance.cwiseAbs().maxCoeff()),
+      "WindowEpFilter: prior covariance not symmetric");
   IDENT_REQUIRE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues().minCoeff() >= 0,
                 "WindowEpFilter: prior covariance not positive semidefinite");
   h_ << sensor.c()(0), sensor.c()(1), 0.0;
@@ -92,7 +93,7 @@ double WindowEpFilter::Refit(Slot& s) {
       const auto t = models::TruncatedNormalMoments(m, v, s.lo, s.hi);
       if (!t.ok) return -1;
       const double lam = std::max(1 / t.variance - 1 / v, 0.0);
-      const double vq = 1 / (1 / v + lam);            // posterior variance on s(j) after the refit
+      const double vq = 1 / (1 / v + lam);  // posterior variance on s(j) after the refit
       s.lambda << lam, 0, 0, 0;
       s.eta << t.mean / vq - m / v, 0;
       mt << t.mean, 0;
@@ -124,7 +125,7 @@ double WindowEpFilter::Refit(Slot& s) {
     }
     s.cav_mean = mu;
     s.cav_cov = vc;
-    const auto t = models::TruncatedBivariateNormalMoments(mu, vc, s.bounds, s.sides);   // Tallis
+    const auto t = models::TruncatedBivariateNormalMoments(mu, vc, s.bounds, s.sides);  // Tallis
     if (!t.ok) return -1;
     const Eigen::Matrix2d pc = vc.inverse(), pt = t.covariance.inverse();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig;
@@ -132,7 +133,7 @@ double WindowEpFilter::Refit(Slot& s) {
     const Eigen::Matrix2d lam =
         eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
     s.lambda = lam;
-    s.eta = (pc + lam) * t.mean - pc * mu;   // posterior mean on (s(j−1), s(j)) = μ_t
+    s.eta = (pc + lam) * t.mean - pc * mu;  // posterior mean on (s(j−1), s(j)) = μ_t
     mt = t.mean;
     vt = t.covariance;
   }
@@ -248,8 +249,7 @@ StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eig
   }
   // A change of reading: the wedge of (s(k−1), s(k)) takes over the reading of step k−1 if that step's
   // site is a 1-D reading still inside the window after this step (W ≥ 2).
-  const bool takeover =
-      options_.window >= 2 && have_prev_ && y != y_prev_ && count_ >= 1 && At(count_ - 1).dim == 1;
+  const bool takeover = options_.window >= 2 && have_prev_ && y != y_prev_ && count_ >= 1 && At(count_ - 1).dim == 1;
   if (takeover) {
     Slot& p = At(count_ - 1);
     p.dim = 0;
@@ -292,8 +292,10 @@ StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eig
     head_ = (head_ + 1) % capacity_;
     --count_;
   }
-  if (count_ == 1) Forward(s, base_m_, base_P_);
-  else Forward(s, At(count_ - 2).filt_m, At(count_ - 2).filt_P);
+  if (count_ == 1)
+    Forward(s, base_m_, base_P_);
+  else
+    Forward(s, At(count_ - 2).filt_m, At(count_ - 2).filt_P);
   s.filt_m = s.pred_m;
   s.filt_P = s.pred_P;
   // The new site's first fit (the assumed-density step, β = 0). If it is the identity (bounds > 8.5 sd
@@ -315,7 +317,7 @@ StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eig
   const int L = count_;
   for (last_sweeps_ = 1; last_sweeps_ <= options_.max_sweeps; ++last_sweeps_) {
     double change = 0;
-    int first_changed = L;   // oldest slot whose site this pass changed
+    int first_changed = L;  // oldest slot whose site this pass changed
     for (int i = L - 1; i >= 0; --i) {
       Slot& si = At(i);
       if (i == L - 1) {
@@ -325,8 +327,10 @@ StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eig
       const Eigen::Matrix2d lambda = si.lambda;
       const Eigen::Vector2d eta = si.eta;
       const double c = Refit(si);
-      if (c < 0) ++failures_;
-      else change = std::max(change, c);
+      if (c < 0)
+        ++failures_;
+      else
+        change = std::max(change, c);
       if (si.lambda != lambda || si.eta != eta) first_changed = i;
       if (i > 0) Backward(si, At(i - 1));
     }
@@ -336,8 +340,10 @@ StepReport WindowEpFilter::Step(const models::LinearStateSpace& model, const Eig
     // α_j depends on the sites ≤ j only, so the messages older than the oldest changed site stand (exact).
     for (int i = first_changed; i < L; ++i) {
       Slot& si = At(i);
-      if (i == 0) Forward(si, base_m_, base_P_);
-      else Forward(si, At(i - 1).filt_m, At(i - 1).filt_P);
+      if (i == 0)
+        Forward(si, base_m_, base_P_);
+      else
+        Forward(si, At(i - 1).filt_m, At(i - 1).filt_P);
       Filtered(si);
     }
     if (last_converged_) break;

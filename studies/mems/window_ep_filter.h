@@ -72,10 +72,10 @@
 namespace ident {
 
 struct WindowEpOptions {
-  int window = 16;            // readings refined jointly (W ≥ 1); older sites are frozen
-  int max_sweeps = 20;        // EP sweeps per step
-  double tolerance = 1e-6;    // convergence of the sites' tilted moments (relative to their sd / variance);
-                              // a site whose cavity moved less than this is not refitted
+  int window = 16;          // readings refined jointly (W ≥ 1); older sites are frozen
+  int max_sweeps = 20;      // EP sweeps per step
+  double tolerance = 1e-6;  // convergence of the sites' tilted moments (relative to their sd / variance);
+                            // a site whose cavity moved less than this is not refitted
 };
 
 class WindowEpFilter {
@@ -94,31 +94,31 @@ class WindowEpFilter {
   // previous value (zero if new) and is counted in failures(); the step is still kUpdated.
   StepReport Step(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u, double y);
 
-  Eigen::Vector2d mean() const;          // filtering mean of x(k)
-  Eigen::Matrix2d covariance() const;    // filtering covariance of x(k)
+  Eigen::Vector2d mean() const;        // filtering mean of x(k)
+  Eigen::Matrix2d covariance() const;  // filtering covariance of x(k)
   // EP's smoothed marginal of x(k − lag), lag = 0 … length() − 1 (lag 0 = mean()/covariance()).
   void SmoothedMarginal(int lag, Eigen::Vector2d& mean, Eigen::Matrix2d& covariance) const;
 
-  int length() const { return count_; }            // readings in the window
+  int length() const { return count_; }  // readings in the window
   int last_sweeps() const { return last_sweeps_; }
   bool last_converged() const { return last_converged_; }
-  long failures() const { return failures_; }       // site refits with no mass
-  long refits() const { return refits_; }           // tilted-moment evaluations so far (cost diagnostic)
+  long failures() const { return failures_; }  // site refits with no mass
+  long refits() const { return refits_; }      // tilted-moment evaluations so far (cost diagnostic)
 
  private:
   struct Slot {
     Mat3 F, Q;
     Vec3 b;
-    int dim = 0;                       // 0: no site, 1: s(j) ∈ [lo, hi], 2: quadrant of (s(j−1), s(j))
+    int dim = 0;  // 0: no site, 1: s(j) ∈ [lo, hi], 2: quadrant of (s(j−1), s(j))
     double lo = 0, hi = 0;
     Eigen::Vector2d bounds, sides;
-    Eigen::Matrix2d lambda;            // site precision on (s) or (s(j−1), s(j))
+    Eigen::Matrix2d lambda;  // site precision on (s) or (s(j−1), s(j))
     Eigen::Vector2d eta;
-    Eigen::Vector2d last_mean;         // tilted moments of the last refit (NaN before the first)
+    Eigen::Vector2d last_mean;  // tilted moments of the last refit (NaN before the first)
     Eigen::Matrix2d last_cov;
-    Eigen::Vector2d cav_mean;          // cavity (on the site's coordinates) of the last refit
+    Eigen::Vector2d cav_mean;  // cavity (on the site's coordinates) of the last refit
     Eigen::Matrix2d cav_cov;
-    Vec3 pred_m, filt_m, omega;        // α⁻_j, α_j (moment form), β_j (information form)
+    Vec3 pred_m, filt_m, omega;  // α⁻_j, α_j (moment form), β_j (information form)
     Mat3 pred_P, filt_P, Omega;
   };
   Slot& At(int j) { return ring_[static_cast<size_t>((head_ + j) % capacity_)]; }
@@ -126,16 +126,16 @@ class WindowEpFilter {
   // Refit slot's site against the cavity α⁻ · β; returns the largest relative move of the tilted moments
   // (0 for an unchanged site), or −1 if the region has no mass under the cavity (site kept).
   double Refit(Slot& s);
-  void Forward(Slot& s, const Vec3& m_prev, const Mat3& P_prev);   // α⁻_j and α_j from α_{j−1}
-  void Filtered(Slot& s);                                          // α_j from α⁻_j and the site
-  void Backward(const Slot& s, Slot& prev);                        // β_{j−1} from β_j and site j
+  void Forward(Slot& s, const Vec3& m_prev, const Mat3& P_prev);  // α⁻_j and α_j from α_{j−1}
+  void Filtered(Slot& s);                                         // α_j from α⁻_j and the site
+  void Backward(const Slot& s, Slot& prev);                       // β_{j−1} from β_j and site j
 
-  Eigen::Vector3d h_;                  // H row of s(j) in z: (c, 0)
+  Eigen::Vector3d h_;  // H row of s(j) in z: (c, 0)
   double threshold_ = 0;
   WindowEpOptions options_;
   std::vector<Slot> ring_;
   int capacity_ = 0, head_ = 0, count_ = 0;
-  Vec3 base_m_;                        // filtering distribution of z at the step before the window
+  Vec3 base_m_;  // filtering distribution of z at the step before the window
   Mat3 base_P_;
   double y_prev_ = 0;
   bool have_prev_ = false;

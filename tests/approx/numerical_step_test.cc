@@ -43,7 +43,8 @@ TEST(NumericalStep, AgreesWithTheCubicRootForCauchyAndStudent) {
     const LogModelFn log_m = StudentModel(c.k);
     const OneSidedStepResult num = NumericalStep(s, h, log_m, StudentShape{c.k}, 1);
     const OneSidedStepResult closed = StudentClass{c.k, 1}.Step(s, h);
-    EXPECT_NEAR(num.beta / closed.beta, 1, 2e-7)  /* seen: up to 9.2e-8 */ << "k=" << c.k << " nu=" << c.nu << " outlier=" << c.outlier;
+    EXPECT_NEAR(num.beta / closed.beta, 1, 2e-7)
+        /* seen: up to 9.2e-8 */ << "k=" << c.k << " nu=" << c.nu << " outlier=" << c.outlier;
     // The numerical log γ and log ∫ at the closed-form β match the closed forms of spec §2–§3.
     const OneSidedStepResult at = NumericalEvaluate(s, h, closed.beta, log_m, StudentShape{c.k}, 1);
     EXPECT_NEAR(at.log_integral, closed.log_integral, 1e-7);
@@ -104,7 +105,8 @@ TEST(NumericalStep, RhoTwoClosedFormRootIsTheMaximumOfTheNumericalObjective) {
   const double d = 1e-3;
   double J[3];
   for (int i = 0; i < 3; ++i)
-    J[i] = NumericalEvaluate(s, h, closed.beta * std::exp((i - 1) * d), StudentModel(1), StudentShape{1}, 1).objective();
+    J[i] =
+        NumericalEvaluate(s, h, closed.beta * std::exp((i - 1) * d), StudentModel(1), StudentShape{1}, 1).objective();
   EXPECT_GT(J[1], J[0]);
   EXPECT_GT(J[1], J[2]);
   const double vertex = d * (J[0] - J[2]) / (2 * (J[0] - 2 * J[1] + J[2]));  // in log β, relative to the root

@@ -65,7 +65,8 @@ TEST(OneSidedFramework, StudentStepMaximisesTheTradeOffOverBothBranches) {
     const int rho = 1 + i % 4;
     const StudentClass cls{.k = i % 3 == 0 ? 3.0 : 1.0, .delta = i % 5 == 0 ? 0 : 1};
     Eigen::MatrixXd A = Eigen::MatrixXd::Random(rho + 1, rho + 1);
-    const NormalisedStatistics s{rho + 2.5 + i % 7, A * A.transpose() + 0.1 * Eigen::MatrixXd::Identity(rho + 1, rho + 1)};
+    const NormalisedStatistics s{rho + 2.5 + i % 7,
+                                 A * A.transpose() + 0.1 * Eigen::MatrixXd::Identity(rho + 1, rho + 1)};
     const Eigen::VectorXd h = RandomH(rng, rho, i % 2 ? 20.0 : 0.0);
     const OneSidedStepResult best = cls.Step(s, h);
     // log-spaced grid over (0, 1) with golden-section refinement of the framework's objective.
@@ -81,7 +82,10 @@ TEST(OneSidedFramework, StudentStepMaximisesTheTradeOffOverBothBranches) {
     const double g = (std::sqrt(5.0) - 1) / 2;
     for (int it = 0; it < 100; ++it) {
       const double x1 = b - g * (b - a), x2 = a + g * (b - a);
-      if (f(x1) < f(x2)) a = x1; else b = x2;
+      if (f(x1) < f(x2))
+        a = x1;
+      else
+        b = x2;
     }
     EXPECT_NEAR(0.5 * (a + b) / best.beta, 1, 1e-6) << "case " << i;
   }

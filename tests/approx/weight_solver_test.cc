@@ -26,8 +26,8 @@ using testing::EvalP;
 
 std::string Describe(const WeightingProblem& p) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "nu=%.17g xi=%.17g xi_z=%.17g rho=%d k=%.17g delta=%d", p.nu, p.xi, p.xi_z, p.rho,
-                p.k, p.delta);
+  std::snprintf(buf, sizeof buf, "nu=%.17g xi=%.17g xi_z=%.17g rho=%d k=%.17g delta=%d", p.nu, p.xi, p.xi_z, p.rho, p.k,
+                p.delta);
   return buf;
 }
 
@@ -47,7 +47,7 @@ std::vector<WeightingProblem> ExtremeProblems(unsigned seed, int count) {
     p.delta = u(rng) < 0.7 ? 1 : 0;
     const double hard = NuHard(p.rho, p.k, p.delta);
     const double nr = u(rng);
-    p.nu = nr < 0.2 ? hard * (1 + log_uniform(-4, -1))  // near admissibility
+    p.nu = nr < 0.2   ? hard * (1 + log_uniform(-4, -1))  // near admissibility
            : nr < 0.9 ? hard * (1 + log_uniform(-1, 2))
                       : hard * log_uniform(2, 7);  // large ν (long memory)
     const double zr = u(rng);
@@ -71,9 +71,7 @@ double Condition(const WeightingProblem& p, double beta) {
 // P evaluated in long double (64-bit mantissa: 2000× less rounding than double).
 long double LongDoubleRoot(const WeightingProblem& p, double beta) {
   const std::array<double, 4> mu = WeightingCoefficients(p);
-  auto P = [&](long double b) {
-    return ((static_cast<long double>(mu[3]) * b + mu[2]) * b + mu[1]) * b + mu[0];
-  };
+  auto P = [&](long double b) { return ((static_cast<long double>(mu[3]) * b + mu[2]) * b + mu[1]) * b + mu[0]; };
   long double lo = beta, hi = beta, w = beta * 1e-15L;
   for (int i = 0; i < 200 && !(P(lo) > 0); ++i) lo -= w, w *= 2;  // P decreases through a maximum's root
   w = beta * 1e-15L;
@@ -124,11 +122,12 @@ TEST(WeightSolver, AgreesWithTheSpecAlgorithmOnExtremeRandomProblems) {
   EXPECT_LT(ill_conditioned, static_cast<int>(problems.size()) / 20);
   EXPECT_LT(fast_iterations, reference_iterations);
   RecordProperty("worst_relative_difference_well_conditioned", std::to_string(worst_well));
-  std::printf("fast vs reference over %zu problems (%d with two maxima): worst relative difference %.3g where "
-              "cond <= 1e3; %d ill-conditioned (cond > 1e3): worst difference %.3g, worst fast error vs the "
-              "long-double root %.3g eps*cond; iterations per call %.2f (fast) vs %.2f (reference)\n",
-              problems.size(), two_maxima, worst_well, ill_conditioned, worst_ill, worst_oracle,
-              fast_iterations / double(problems.size()), reference_iterations / double(problems.size()));
+  std::printf(
+      "fast vs reference over %zu problems (%d with two maxima): worst relative difference %.3g where "
+      "cond <= 1e3; %d ill-conditioned (cond > 1e3): worst difference %.3g, worst fast error vs the "
+      "long-double root %.3g eps*cond; iterations per call %.2f (fast) vs %.2f (reference)\n",
+      problems.size(), two_maxima, worst_well, ill_conditioned, worst_ill, worst_oracle,
+      fast_iterations / double(problems.size()), reference_iterations / double(problems.size()));
 }
 
 TEST(WeightSolver, MatchesTheLongDoubleRootOnTheEstimatorsTypicalProblems) {
@@ -194,8 +193,8 @@ TEST(WeightSolver, ConvergesWhenAnIterateLandsOnTheRootExactly) {
   // Met by the Cauchy estimator at ρ = 32 (kh_benchmark's stream, t = 131): ξ_z ≈ 1 − ρ is the normal
   // state there. The third iterate has P = +2e−16, becomes the lower bracket end, and its zero step must
   // end the search instead of triggering ~40 bisections.
-  const WeightingProblem p{.nu = 82.485827516651426, .xi = -26.612085208868031, .xi_z = -26.608029358443186,
-                           .rho = 32, .k = 1, .delta = 1};
+  const WeightingProblem p{
+      .nu = 82.485827516651426, .xi = -26.612085208868031, .xi_z = -26.608029358443186, .rho = 32, .k = 1, .delta = 1};
   const WeightSolution fast = SolveWeight(p);
   EXPECT_LE(fast.iterations, 4);
   EXPECT_NEAR(fast.beta / SolveWeightReference(p).beta, 1, 1e-14);

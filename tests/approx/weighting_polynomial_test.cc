@@ -48,8 +48,10 @@ double ArgmaxByGrid(const WeightingProblem& p) {
   const double g = (std::sqrt(5.0) - 1) / 2;
   double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = LogHFull(p, x1), f2 = LogHFull(p, x2);
   for (int it = 0; it < 200 && b - a > 1e-17 * b; ++it) {
-    if (f1 < f2) a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = LogHFull(p, x2);
-    else b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = LogHFull(p, x1);
+    if (f1 < f2)
+      a = x1, x1 = x2, f1 = f2, x2 = a + g * (b - a), f2 = LogHFull(p, x2);
+    else
+      b = x2, x2 = x1, f2 = f1, x1 = b - g * (b - a), f1 = LogHFull(p, x1);
   }
   return 0.5 * (a + b);
 }
@@ -65,8 +67,8 @@ TEST(WeightingPolynomial, RootMaximisesTheFullObjectiveOnADenseGridOverBothBranc
     EXPECT_GE(LogHFull(p, s.beta), LogHFull(p, grid) - 1e-13 * (1 + std::abs(LogHFull(p, grid))));
     const double rel = std::abs(s.beta - grid) / s.beta;
     worst = std::max(worst, rel);
-    EXPECT_LT(rel, 1e-7) << "nu=" << p.nu << " rho=" << p.rho << " k=" << p.k << " delta=" << p.delta
-                         << " xi=" << p.xi << " xi_z=" << p.xi_z << " beta=" << s.beta << " grid=" << grid;
+    EXPECT_LT(rel, 1e-7) << "nu=" << p.nu << " rho=" << p.rho << " k=" << p.k << " delta=" << p.delta << " xi=" << p.xi
+                         << " xi_z=" << p.xi_z << " beta=" << s.beta << " grid=" << grid;
     ++checked;
   }
   EXPECT_EQ(checked, 300);

@@ -67,8 +67,10 @@ TEST(LogConcaveMle, ConjugateOfTheNegativeLogDensityEqualsItsSupByNumericalMaxim
     auto fn = [&](double r) { return v * r + mle.LogDensity(r); };  // v r - g(r), concave
     for (int i = 0; i < 300; ++i) {
       const double m1 = a + (b - a) / 3, m2 = b - (b - a) / 3;
-      if (fn(m1) < fn(m2)) a = m1;
-      else b = m2;
+      if (fn(m1) < fn(m2))
+        a = m1;
+      else
+        b = m2;
     }
     EXPECT_NEAR(mle.ConjugateOfNegativeLogDensity(v), fn(0.5 * (a + b)), 1e-10) << v;
     EXPECT_NEAR(g.Conjugate(Eigen::VectorXd::Constant(1, v)), mle.ConjugateOfNegativeLogDensity(v), 1e-12);
@@ -124,7 +126,8 @@ TEST(LogConcaveMle, MatchesRLogcondensGoldenValues) {
     }
     const std::vector<double> cx = Column(name + "_cdf.csv", 0), cF = Column(name + "_cdf.csv", 1);
     double max_cdf_difference = 0;
-    for (size_t i = 0; i < cx.size(); ++i) max_cdf_difference = std::max(max_cdf_difference, std::abs(mle.Cdf(cx[i]) - cF[i]));
+    for (size_t i = 0; i < cx.size(); ++i)
+      max_cdf_difference = std::max(max_cdf_difference, std::abs(mle.Cdf(cx[i]) - cF[i]));
     EXPECT_LT(max_cdf_difference, 1e-4) << name;  // measured: <= 2.6e-5
   }
 }

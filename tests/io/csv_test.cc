@@ -59,7 +59,8 @@ TEST(CsvReader, NonNumericValueNamesLineAndColumn) {
 }
 TEST(CsvReader, NanAndInfAreRejectedByDefault) {
   ExpectDataError(WriteFile("nan.csv", "t,u,y\n0,1,nan\n"), "nan.csv:2: column 3 ('y'): 'nan' is not a finite number");
-  ExpectDataError(WriteFile("inf.csv", "t,u,y\n0,-inf,1\n"), "inf.csv:2: column 2 ('u'): '-inf' is not a finite number");
+  ExpectDataError(WriteFile("inf.csv", "t,u,y\n0,-inf,1\n"),
+                  "inf.csv:2: column 2 ('u'): '-inf' is not a finite number");
   ExpectDataError(WriteFile("e.csv", "t,u,y\n0,,1\n"), "e.csv:2: column 2 ('u') is empty");
 }
 TEST(CsvReader, NanInfAndEmptyBecomeMissingWhenAsked) {
@@ -76,7 +77,9 @@ TEST(CsvReader, OutOfRangeValue) {
 TEST(CsvReader, DuplicateColumnNames) {
   ExpectDataError(WriteFile("d.csv", "t,u,u\n0,1,2\n"), "d.csv:1: duplicate column name 'u' (columns 2 and 3)");
 }
-TEST(CsvReader, EmptyColumnName) { ExpectDataError(WriteFile("en.csv", "t,,y\n0,1,2\n"), "en.csv:1: column 2 has an empty name"); }
+TEST(CsvReader, EmptyColumnName) {
+  ExpectDataError(WriteFile("en.csv", "t,,y\n0,1,2\n"), "en.csv:1: column 2 has an empty name");
+}
 TEST(CsvReader, UnknownColumnListsTheColumns) {
   const DataTable t = ReadCsv(WriteFile("c.csv", "t,u,y\n0,1,2\n"));
   try {
@@ -107,7 +110,8 @@ TEST(CsvReader, ReadsCrOnlyLineEnds) {
   EXPECT_EQ(t.values(1, 1), -2);
   EXPECT_EQ(t.values(2, 1), 7);
   EXPECT_EQ(t.values(3, 1), 9);
-  ExpectDataError(WriteFile("cr_bad.csv", "t,u\r0,1\r\n1,x\r2,3\r"), "cr_bad.csv:3: column 2 ('u'): 'x' is not a number");
+  ExpectDataError(WriteFile("cr_bad.csv", "t,u\r0,1\r\n1,x\r2,3\r"),
+                  "cr_bad.csv:3: column 2 ('u'): 'x' is not a number");
 }
 
 // A CRLF split across the reader's 64 KiB blocks is one line end.
@@ -127,7 +131,8 @@ TEST(CsvReader, CrlfAcrossBlockBoundariesIsOneLineEnd) {
 }
 
 TEST(CsvReader, BlankLineBetweenDataRowsIsAGap) {
-  ExpectDataError(WriteFile("gap.csv", "t,u\n0,1\n1,2\n\n2,3\n"), "gap.csv:4: blank line inside the data (a gap in the record?)");
+  ExpectDataError(WriteFile("gap.csv", "t,u\n0,1\n1,2\n\n2,3\n"),
+                  "gap.csv:4: blank line inside the data (a gap in the record?)");
   ExpectDataError(WriteFile("gap2.csv", "t,u\r\n0,1\r\n \t\r\n\r\n2,3\r\n"), "gap2.csv:3: blank line inside the data");
   // Blank lines before the header, between it and the first row, and at the end stay allowed.
   EXPECT_EQ(ReadCsv(WriteFile("ends.csv", "\n\nt,u\n\n0,1\n1,2\n\n \n")).num_rows(), 2);
@@ -148,7 +153,8 @@ TEST(CsvReader, LinesAreLimitedTo1MiB) {
   const DataTable t = ReadCsv(WriteFile("at_limit.csv", "t,u\n" + at_limit + "\n"));
   EXPECT_EQ(t.values(0, 1), 5);
   ExpectDataError(WriteFile("over.csv", "t,u\n0,1\n" + at_limit + "0\n"), "over.csv:3: line longer than 1048576 bytes");
-  ExpectDataError(WriteFile("zeros.csv", std::string(kMaxCsvLineBytes + 1, '\0')), "zeros.csv:1: line longer than 1048576 bytes");
+  ExpectDataError(WriteFile("zeros.csv", std::string(kMaxCsvLineBytes + 1, '\0')),
+                  "zeros.csv:1: line longer than 1048576 bytes");
 }
 
 // A long cell is shown by its first 32 bytes and its length: the message stays short.
@@ -159,8 +165,10 @@ TEST(CsvReader, LongCellIsEchoedTruncatedWithItsLength) {
     FAIL() << "no error";
   } catch (const DataError& e) {
     const std::string message = e.what();
-    EXPECT_NE(message.find("long_cell.csv:2: column 2 ('u'): '" + std::string(32, 'x') + "...' (100000 bytes) is not a number"),
-              std::string::npos) << message;
+    EXPECT_NE(message.find("long_cell.csv:2: column 2 ('u'): '" + std::string(32, 'x') +
+                           "...' (100000 bytes) is not a number"),
+              std::string::npos)
+        << message;
     EXPECT_LT(message.size(), 200u) << message;
   }
   EXPECT_EQ(ShowCell(std::string(32, 'a')), "'" + std::string(32, 'a') + "'");
@@ -170,7 +178,10 @@ TEST(CsvReader, LongCellIsEchoedTruncatedWithItsLength) {
 }
 
 TEST(CsvReader, NulBytesAreReportedNotCutTheMessage) {
-  const std::string cell_nul("t,u,y\n0,1\0" "2,3\n", 14);
+  const std::string cell_nul(
+      "t,u,y\n0,1\0"
+      "2,3\n",
+      14);
   try {
     ReadCsv(WriteFile("nul.csv", cell_nul));
     FAIL() << "no error";
@@ -197,7 +208,8 @@ TEST(CsvReader, WideHeadersUpToTheColumnLimit) {
   EXPECT_EQ(t.ColumnIndex("c77777"), 77777);
   std::string dup = header;
   dup.replace(dup.rfind(','), std::string::npos, ",c0");  // the last column repeats the first
-  ExpectDataError(WriteFile("wide_dup.csv", dup + "\n" + row + "\n"), "wide_dup.csv:1: duplicate column name 'c0' (columns 1 and 100000)");
+  ExpectDataError(WriteFile("wide_dup.csv", dup + "\n" + row + "\n"),
+                  "wide_dup.csv:1: duplicate column name 'c0' (columns 1 and 100000)");
   ExpectDataError(WriteFile("too_wide.csv", header + ",extra\n" + row + ",1\n"),
                   "too_wide.csv:1: the header has 100001 columns; at most 100000 are supported");
   // An unknown column lists the first 20 names and the number of columns.

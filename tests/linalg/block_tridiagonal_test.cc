@@ -3,8 +3,8 @@
 
 #include <random>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 namespace ident {
 namespace {

@@ -58,7 +58,7 @@ TEST(ArxRegressor, RejectsMisuse) {
   ArxRegressor reg(ArxStructure(1, {1}, {1}));
   Eigen::VectorXd z(2);
   EXPECT_THROW(reg.Next(Eigen::Vector2d(1, 1), z), InvalidArgument);  // two inputs for one
-  EXPECT_THROW(reg.PushOutput(1.0), InvalidArgument);                  // output before Next
+  EXPECT_THROW(reg.PushOutput(1.0), InvalidArgument);                 // output before Next
 }
 
 TEST(StaticRegression, PutsTheInterceptFirst) {

@@ -26,9 +26,11 @@ TiltedMoments TrapezoidTilt(const ProjectedMeasurement& m, double y, double mean
   double z = 0, s1 = 0, s2 = 0;
   for (int i = 0; i <= n; ++i) {
     const double s = a + i * h;
-    const double w = (i == 0 || i == n ? 0.5 : 1.0) *
-                     std::exp(m.LogLikelihoodScalar(y, s) - 0.5 * (s - mean) * (s - mean) / var);
-    z += w; s1 += w * s; s2 += w * s * s;
+    const double w =
+        (i == 0 || i == n ? 0.5 : 1.0) * std::exp(m.LogLikelihoodScalar(y, s) - 0.5 * (s - mean) * (s - mean) / var);
+    z += w;
+    s1 += w * s;
+    s2 += w * s * s;
   }
   const double mu = s1 / z;
   return {std::log(z * h / std::sqrt(2 * std::numbers::pi * var)), mu, s2 / z - mu * mu, true};
@@ -86,8 +88,8 @@ TEST(TiltedMoments, QuadratureForLaplaceAndOptimalQuantizerMatchesFineTrapezoid)
   LaplaceMeasurement lap(kC, 0.3);
   OptimalQuantizer oq(kC);
   for (double mean : {-0.7, 0.2, 1.9}) {
-    for (const ProjectedMeasurement* m : {static_cast<const ProjectedMeasurement*>(&lap),
-                                          static_cast<const ProjectedMeasurement*>(&oq)}) {
+    for (const ProjectedMeasurement* m :
+         {static_cast<const ProjectedMeasurement*>(&lap), static_cast<const ProjectedMeasurement*>(&oq)}) {
       const double y = 1.0;
       const TiltedMoments a = m->Tilt(y, mean, 0.5), b = TrapezoidTilt(*m, y, mean, 0.5);
       ASSERT_TRUE(a.ok);
@@ -102,10 +104,10 @@ TEST(TiltedMoments, ReadingFarInTheTailStaysFiniteInLogSpaceAndBadInputThrows) {
   ThresholdSensor sensor(kC, 1.0);
   const TiltedMoments t = sensor.Tilt(1.0, -1e6, 1e-6);  // threshold 10^9 sd above the prior mean
   ASSERT_TRUE(t.ok);
-  EXPECT_NEAR(t.mean, 1.0, 1e-9);                          // mass piles up just past the threshold
+  EXPECT_NEAR(t.mean, 1.0, 1e-9);  // mass piles up just past the threshold
   EXPECT_GE(t.variance, 0.0);
   EXPECT_LT(t.variance, 1e-20);
-  EXPECT_LT(t.log_normalizer, -4.9e17);                    // ≈ −a²/2, a = 10^9
+  EXPECT_LT(t.log_normalizer, -4.9e17);  // ≈ −a²/2, a = 10^9
   EXPECT_THROW(sensor.Tilt(2.0, 0.0, 1.0), ident::InvalidArgument);
   EXPECT_THROW(sensor.Tilt(0.0, 0.0, -1.0), ident::InvalidArgument);
   EXPECT_THROW(ThresholdSensor(kC, 0.0), ident::InvalidArgument);
@@ -148,7 +150,8 @@ TEST(TruncatedMoments, InfiniteBoundsGiveTheClosedForms) {
   EXPECT_NEAR(all.variance, 1.0, 1e-15);
   // Half-normal: Z = 1/2, mean ±√(2/π), variance 1 − 2/π.
   const double half_mean = std::sqrt(2 / std::numbers::pi), half_var = 1 - 2 / std::numbers::pi;
-  for (const auto& [a, b, sign] : {std::tuple{0.0, inf, 1.0}, std::tuple{-inf, 0.0, -1.0}, std::tuple{-inf, -0.0, -1.0}}) {
+  for (const auto& [a, b, sign] :
+       {std::tuple{0.0, inf, 1.0}, std::tuple{-inf, 0.0, -1.0}, std::tuple{-inf, -0.0, -1.0}}) {
     const TiltedMoments t = StandardTruncatedMoments(a, b);
     ASSERT_TRUE(t.ok) << a << " " << b;
     EXPECT_NEAR(t.log_normalizer, std::log(0.5), 1e-14) << a << " " << b;
@@ -228,7 +231,9 @@ TEST(OptimalQuantizer, PosteriorVarianceAfterNReadingsIsBelowOneOver8NLn2) {
         const double t = -1.0 + 3.0 * (i + 0.5) / grid;
         double w = 1;
         for (double y : ys) w *= OptimalQuantizer::Density(t - y);
-        z += w; s1 += w * t; s2 += w * t * t;
+        z += w;
+        s1 += w * t;
+        s2 += w * t * t;
       }
       const double var = s2 / z - (s1 / z) * (s1 / z);
       EXPECT_LE(var, 1.0 / (8 * n * std::log(2.0)) * (1 + 1e-6)) << "trial " << trial << " n " << n;

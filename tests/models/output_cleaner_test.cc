@@ -43,7 +43,7 @@ TEST(OutputCleaner, StoredValuesNeverLeaveTheRangeOfTheMeasurements) {
   OutputCleaner c({.enabled = true, .clip = 3.0, .max_run = 100, .warm_up = 1});
   c.Clean(1.0, 0.0, 1.0, false);
   c.Clean(-1.0, 0.0, 1.0, false);
-  EXPECT_DOUBLE_EQ(c.Clean(0.5, 1e6, 1.0, true), 1.0);     // a wild prediction is clamped (eq. (2))
+  EXPECT_DOUBLE_EQ(c.Clean(0.5, 1e6, 1.0, true), 1.0);  // a wild prediction is clamped (eq. (2))
   EXPECT_DOUBLE_EQ(c.Clean(0.5, -1e6, 1.0, true), -1.0);
 }
 
@@ -137,7 +137,7 @@ TEST(OutputCleaner, AfterWarmUpOnlyGrossFlaggedErrorsAreCleaned) {
   OutputCleaner c({.enabled = true, .clip = 2.0, .max_run = 5, .warm_up = 1, .gross = 5});
   c.Clean(0.0, 0.0, 1.0, false);
   for (int t = 0; t < 16; ++t) c.Clean(t % 2 ? 0.1 : -0.1, 0.0, 1.0, false);  // errors ±0.1: scale 0.148
-  EXPECT_EQ(c.Clean(0.5, 0.0, 0.05, true), 0.5);  // flagged, but 0.5 < 5·0.148
+  EXPECT_EQ(c.Clean(0.5, 0.0, 0.05, true), 0.5);                              // flagged, but 0.5 < 5·0.148
   EXPECT_EQ(c.cleaned(), 0);
   EXPECT_DOUBLE_EQ(c.Clean(0.9, 0.05, 0.05, true), 0.05);  // gross: ψ = 0, the prediction ŷ, in range
   EXPECT_EQ(c.cleaned(), 1);
@@ -171,7 +171,7 @@ TEST(ArxRegressorCleaning, MeasuredRegressorAndRestoreAfterACleanedOutput) {
     r.PushCheckedOutput(y, 0.0, 1.0, false);
   }
   EXPECT_TRUE(r.Next(u, z));
-  EXPECT_FALSE(r.MeasuredRegressor(zm));  // nothing cleaned
+  EXPECT_FALSE(r.MeasuredRegressor(zm));                             // nothing cleaned
   EXPECT_DOUBLE_EQ(r.PushCheckedOutput(50.0, 2.5, 0.5, true), 3.0);  // 2.5 + clip(47.5, ±0.5), range [1, 3]
   EXPECT_TRUE(r.Next(u, z));
   EXPECT_EQ(z, Eigen::Vector3d(-3.0, -3.0, 0.5));
@@ -186,9 +186,9 @@ TEST(ArxRegressorCleaning, MeasuredRegressorAndRestoreAfterACleanedOutput) {
 }
 
 TEST(OutlierDecision, FlagsSmallRelativeWeightsOnlyOnUpdatedSteps) {
-  const OutlierDecision d;  // 0.2
-  EXPECT_FALSE(d.Flags({StepStatus::kUpdated, 0.01, 100.0, 0.0}));   // νβ = 1 (RLS)
-  EXPECT_TRUE(d.Flags({StepStatus::kUpdated, 0.001, 100.0, 0.0}));   // νβ = 0.1
+  const OutlierDecision d;                                          // 0.2
+  EXPECT_FALSE(d.Flags({StepStatus::kUpdated, 0.01, 100.0, 0.0}));  // νβ = 1 (RLS)
+  EXPECT_TRUE(d.Flags({StepStatus::kUpdated, 0.001, 100.0, 0.0}));  // νβ = 0.1
   EXPECT_FALSE(d.Flags({StepStatus::kRejectedInvalid, 0.001, 100.0, 0.0}));
   EXPECT_FALSE(d.Flags({StepStatus::kUpdated}));  // NaN weight
   EXPECT_NE(OutlierDecision{1.5}.Validate(), "");

@@ -6,8 +6,8 @@
 #include <cmath>
 #include <random>
 
-#include <Eigen/LU>
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
 #include "common/error.h"
 
@@ -35,8 +35,10 @@ template <class Fn>
 double MaximiseConcave(Fn fn, double a, double b) {
   for (int i = 0; i < 300; ++i) {
     const double m1 = a + (b - a) / 3, m2 = b - (b - a) / 3;
-    if (fn(m1) < fn(m2)) a = m1;
-    else b = m2;
+    if (fn(m1) < fn(m2))
+      a = m1;
+    else
+      b = m2;
   }
   return fn(0.5 * (a + b));
 }

@@ -8,16 +8,16 @@
 #include <numbers>
 #include <vector>
 
+#include <gtest/gtest.h>
+#include <boost/math/distributions/normal.hpp>
 #include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <boost/math/special_functions/owens_t.hpp>
-#include <boost/math/distributions/normal.hpp>
-#include <gtest/gtest.h>
 
-#include "studies/mems/crossing_reading.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "models/truncated_bivariate_normal.h"
+#include "studies/mems/crossing_reading.h"
 #include "tests/support/sanitizer.h"
 
 namespace ident::models {
@@ -31,11 +31,12 @@ template <class F>
 double Integrate(F f, double a, double b, std::vector<double> cuts = {}) {
   if (!(b > a)) return 0.0;
   std::vector<double> pts{a};
-  for (double c : cuts) if (c > a && c < b) pts.push_back(c);
+  for (double c : cuts)
+    if (c > a && c < b) pts.push_back(c);
   pts.push_back(b);
   std::sort(pts.begin(), pts.end());
   double sum = 0;
-  for (size_t i = 0; i + 1 < pts.size(); ++i) {   // mapped onto [−1, 1] (Boost compares an unscaled error)
+  for (size_t i = 0; i + 1 < pts.size(); ++i) {  // mapped onto [−1, 1] (Boost compares an unscaled error)
     const double half = 0.5 * (pts[i + 1] - pts[i]), mid = 0.5 * (pts[i + 1] + pts[i]);
     sum += half * GK::integrate([&](double t) { return f(mid + half * t); }, -1.0, 1.0, 12, 1e-13);
   }
@@ -49,22 +50,30 @@ struct Reference {
 };
 
 // Nested 2-D quadrature of N(s; μ, Σ) 1{side_i (s_i − b_i) > 0}: outer over s1 (marginal density), inner
-// over s2 | s1 ~ N(μc(s1), σc²) on its ±12 σc window clipped to the region (outside: below e^(−72)). Moments are central (two passes).
+// over s2 | s1 ~ N(μc(s1), σc²) on its ±12 σc window clipped to the region (outside: below e^(−72)). Moments are
+// central (two passes).
 Reference QuadratureMoments(const Eigen::Vector2d& mu, const Eigen::Matrix2d& S, const Eigen::Vector2d& b,
                             const Eigen::Vector2d& side) {
   const double s1 = std::sqrt(S(0, 0)), beta = S(0, 1) / S(0, 0);
   const double sc = std::sqrt(S(1, 1) - S(0, 1) * S(0, 1) / S(0, 0));
   // Range of s1: the region's side of b1, within 12 sd of max/min(μ1, b1).
   double lo1 = mu(0) - 12 * s1, hi1 = mu(0) + 12 * s1;
-  if (side(0) > 0) lo1 = std::max(lo1, b(0)), hi1 = std::max(hi1, b(0) + 12 * s1);
-  else hi1 = std::min(hi1, b(0)), lo1 = std::min(lo1, b(0) - 12 * s1);
-  auto inner = [&](double x1, auto g) {   // ∫ g(x2) N(x2; μc, σc²) over the region's side of b2
+  if (side(0) > 0)
+    lo1 = std::max(lo1, b(0)), hi1 = std::max(hi1, b(0) + 12 * s1);
+  else
+    hi1 = std::min(hi1, b(0)), lo1 = std::min(lo1, b(0) - 12 * s1);
+  auto inner = [&](double x1, auto g) {  // ∫ g(x2) N(x2; μc, σc²) over the region's side of b2
     const double mc = mu(1) + beta * (x1 - mu(0));
     double lo = mc - 12 * sc, hi = mc + 12 * sc;
-    if (side(1) > 0) lo = std::max(lo, b(1)); else hi = std::min(hi, b(1));
-    return Integrate([&](double x2) {
-      return g(x2) * std::exp(-0.5 * (x2 - mc) * (x2 - mc) / (sc * sc)) / (sc * std::sqrt(2 * std::numbers::pi));
-    }, lo, hi, {mc});
+    if (side(1) > 0)
+      lo = std::max(lo, b(1));
+    else
+      hi = std::min(hi, b(1));
+    return Integrate(
+        [&](double x2) {
+          return g(x2) * std::exp(-0.5 * (x2 - mc) * (x2 - mc) / (sc * sc)) / (sc * std::sqrt(2 * std::numbers::pi));
+        },
+        lo, hi, {mc});
   };
   auto marginal = [&](double x1) {
     return std::exp(-0.5 * (x1 - mu(0)) * (x1 - mu(0)) / S(0, 0)) / (s1 * std::sqrt(2 * std::numbers::pi));
@@ -73,8 +82,8 @@ Reference QuadratureMoments(const Eigen::Vector2d& mu, const Eigen::Matrix2d& S,
   std::vector<double> cuts{mu(0)};
   if (beta != 0) cuts.push_back(mu(0) + (b(1) - mu(1)) / beta);
   auto outer = [&](auto g) {
-    return Integrate([&](double x1) { return marginal(x1) * inner(x1, [&](double x2) { return g(x1, x2); }); },
-                     lo1, hi1, cuts);
+    return Integrate([&](double x1) { return marginal(x1) * inner(x1, [&](double x2) { return g(x1, x2); }); }, lo1,
+                     hi1, cuts);
   };
   const double z = outer([](double, double) { return 1.0; });
   const double m1 = outer([](double x1, double) { return x1; }) / z;
@@ -114,8 +123,10 @@ TEST(TruncatedBivariateNormal, TallisMomentsEqualTwoDimensionalQuadratureTo1e10)
                            Eigen::Vector2d(o & 1 ? -1 : 1, o & 2 ? -1 : 1)});
       }
   // MEMS crossing 0 → +1: s1 = x1(k−1) < 1 ≤ s2 = x1(k), ρ ≈ 0.998; and the way back, +1 → 0.
-  cases.push_back({Eigen::Vector2d(0.97, 1.0), Cov(0.004, 0.0041, 0.998), Eigen::Vector2d(1, 1), Eigen::Vector2d(-1, 1)});
-  cases.push_back({Eigen::Vector2d(1.02, 0.99), Cov(0.001, 0.0012, 0.9995), Eigen::Vector2d(1, 1), Eigen::Vector2d(1, -1)});
+  cases.push_back(
+      {Eigen::Vector2d(0.97, 1.0), Cov(0.004, 0.0041, 0.998), Eigen::Vector2d(1, 1), Eigen::Vector2d(-1, 1)});
+  cases.push_back(
+      {Eigen::Vector2d(1.02, 0.99), Cov(0.001, 0.0012, 0.9995), Eigen::Vector2d(1, 1), Eigen::Vector2d(1, -1)});
   // Tails: the quadrant is 5-7 sd away (probability ~1e-7 … 1e-12).
   cases.push_back({Eigen::Vector2d(0, 0), Cov(1, 1, 0.6), Eigen::Vector2d(5, 5.5), Eigen::Vector2d(1, 1)});
   cases.push_back({Eigen::Vector2d(0, 0), Cov(1, 4, -0.4), Eigen::Vector2d(4, -7), Eigen::Vector2d(1, -1)});
@@ -152,7 +163,7 @@ TEST(TruncatedBivariateNormal, OrthantProbabilityEqualsOwensTClosedForm) {
   for (double rho : {-0.99, -0.5, 0.0, 0.3, 0.9, 0.999})
     for (double h : {-2.5, -0.4, 0.7, 1.9})
       for (double k : {-1.2, 0.35, 2.2}) {
-        const double owen = OwenBivariateCdf(-h, -k, rho);   // P(X > h, Y > k) = Φ2(−h, −k; ρ)
+        const double owen = OwenBivariateCdf(-h, -k, rho);  // P(X > h, Y > k) = Φ2(−h, −k; ρ)
         EXPECT_NEAR(std::exp(LogUpperOrthantProbability(h, k, rho)), owen, 1e-12) << h << " " << k << " " << rho;
       }
 }
@@ -167,11 +178,14 @@ TEST(TruncatedBivariateNormal, OwensTBranchEqualsTheAdaptiveQuadratureTo1e10) {
       for (double k : {-2.9, -1.2, -0.03, 0.02, 0.35, 2.2, 3.6}) {
         const double quad = LogUpperOrthantProbabilityByQuadrature(h, k, rho);
         const double log_p = LogUpperOrthantProbability(h, k, rho);
-        if (!std::isfinite(quad)) { EXPECT_FALSE(log_p > quad) << h << " " << k << " " << rho; continue; }
+        if (!std::isfinite(quad)) {
+          EXPECT_FALSE(log_p > quad) << h << " " << k << " " << rho;
+          continue;
+        }
         EXPECT_NEAR(log_p, quad, 1e-10) << h << " " << k << " " << rho;
         if (quad >= std::log(1e-5)) ++closed_form;
       }
-  EXPECT_GT(closed_form, 200);   // most cases exercise the closed form
+  EXPECT_GT(closed_form, 200);  // most cases exercise the closed form
 }
 
 TEST(TruncatedBivariateNormal, OneUnboundedSideIsTheOneDimensionalTruncationAndItsRegression) {
@@ -194,7 +208,8 @@ TEST(TruncatedBivariateNormal, OneUnboundedSideIsTheOneDimensionalTruncationAndI
 
 TEST(TruncatedBivariateNormal, IndependentPairIsTheProductOfOneDimensionalTruncations) {
   const Eigen::Vector2d mu(1.0, 2.0);
-  const auto t = TruncatedBivariateNormalMoments(mu, Cov(2.0, 0.3, 0.0), Eigen::Vector2d(1.5, 1.8), Eigen::Vector2d(1, -1));
+  const auto t =
+      TruncatedBivariateNormalMoments(mu, Cov(2.0, 0.3, 0.0), Eigen::Vector2d(1.5, 1.8), Eigen::Vector2d(1, -1));
   const auto a = TruncatedNormalMoments(1.0, 2.0, 1.5, kInf), b = TruncatedNormalMoments(2.0, 0.3, -kInf, 1.8);
   ASSERT_TRUE(t.ok);
   EXPECT_NEAR(t.log_probability, a.log_normalizer + b.log_normalizer, 1e-13);
@@ -208,20 +223,22 @@ TEST(TruncatedBivariateNormal, IndependentPairIsTheProductOfOneDimensionalTrunca
 TEST(TruncatedBivariateNormal, InvalidInputOrNoMassIsNotOk) {
   const Eigen::Vector2d mu(0, 0), b(0, 0), side(1, 1);
   const Eigen::Matrix2d S = Cov(1, 1, 0.5);
-  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, Cov(1, 1, 1.0), b, side).ok);                  // singular
+  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, Cov(1, 1, 1.0), b, side).ok);  // singular
   EXPECT_FALSE(TruncatedBivariateNormalMoments(Eigen::Vector2d(NAN, 0), S, b, side).ok);
   EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, S, Eigen::Vector2d(NAN, 0), side).ok);
-  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, S, b, Eigen::Vector2d(0.5, 1)).ok);             // side not ±1
-  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, S, Eigen::Vector2d(kInf, 0), side).ok);         // empty
+  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, S, b, Eigen::Vector2d(0.5, 1)).ok);      // side not ±1
+  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, S, Eigen::Vector2d(kInf, 0), side).ok);  // empty
   EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, Cov(-1, 1, 0), b, side).ok);
-  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, S, Eigen::Vector2d(60, 60), side).ok);          // e^(−1800)
+  EXPECT_FALSE(TruncatedBivariateNormalMoments(mu, S, Eigen::Vector2d(60, 60), side).ok);  // e^(−1800)
   EXPECT_TRUE(std::isnan(LogUpperOrthantProbability(0, 0, 1.0)));
   EXPECT_EQ(LogUpperOrthantProbability(kInf, 0, 0.2), -kInf);
 }
 
 TEST(TruncatedBivariateNormal, ThresholdChangeRegions) {
   // (y_prev, y) → quadrant of (x1(k−1), x1(k)), threshold 1.
-  struct Row { double y_prev, y, b1, b2, s1, s2; };
+  struct Row {
+    double y_prev, y, b1, b2, s1, s2;
+  };
   for (const Row& r : {Row{0, 1, 1, 1, -1, 1}, Row{0, -1, -1, -1, 1, -1}, Row{1, 0, 1, 1, 1, -1},
                        Row{-1, 0, -1, -1, -1, 1}, Row{-1, 1, -1, 1, -1, 1}, Row{1, -1, 1, -1, 1, -1}}) {
     const auto q = ThresholdChangeRegion(1.0, r.y_prev, r.y);
@@ -252,13 +269,13 @@ TEST(CrossingReading, UpdateEqualsQuadratureOfTheBackwardFormTo1e9) {
     f.Predict(model, Eigen::VectorXd::Constant(1, u));
     const Eigen::Vector2d m = f.mean();
     const Eigen::Matrix2d P = f.covariance();
-    const StepReport rep = ident::CorrectReadingChange(f, m_before, P_before, model,
-                                                       ThresholdSensor(Eigen::Vector2d(1, 0), T), 0.0, 1.0);
+    const StepReport rep =
+        ident::CorrectReadingChange(f, m_before, P_before, model, ThresholdSensor(Eigen::Vector2d(1, 0), T), 0.0, 1.0);
     ASSERT_TRUE(rep.updated());
     // Joint of (x(k), x1(k−1)): Cov(x(k), x1(k−1)) = A P⁻ e1.
     const Eigen::Vector2d cross = model.A * P_before.col(0);
-    const Eigen::Vector2d g = P.inverse() * cross;                        // E[x1(k−1) | x] = m⁻1 + g'(x − m)
-    const double vb = P_before(0, 0) - cross.dot(g);                      // Var[x1(k−1) | x(k)]
+    const Eigen::Vector2d g = P.inverse() * cross;    // E[x1(k−1) | x] = m⁻1 + g'(x − m)
+    const double vb = P_before(0, 0) - cross.dot(g);  // Var[x1(k−1) | x(k)]
     const boost::math::normal n;
     const Eigen::Matrix2d Pi = P.inverse();
     auto w = [&](double x1, double x2) {
@@ -269,10 +286,12 @@ TEST(CrossingReading, UpdateEqualsQuadratureOfTheBackwardFormTo1e9) {
     // x2 | x1 under N(m, P): mean m2 + P21/P11 (x1 − m1), sd √(P22 − P21²/P11).
     const double sc = std::sqrt(P(1, 1) - P(0, 1) * P(0, 1) / P(0, 0));
     auto outer = [&](auto fn) {
-      return Integrate([&](double x1) {
-        const double mc = m(1) + P(0, 1) / P(0, 0) * (x1 - m(0));
-        return Integrate([&](double x2) { return fn(x1, x2) * w(x1, x2); }, mc - 12 * sc, mc + 12 * sc, {mc});
-      }, T, T + 12 * std::sqrt(P(0, 0)));
+      return Integrate(
+          [&](double x1) {
+            const double mc = m(1) + P(0, 1) / P(0, 0) * (x1 - m(0));
+            return Integrate([&](double x2) { return fn(x1, x2) * w(x1, x2); }, mc - 12 * sc, mc + 12 * sc, {mc});
+          },
+          T, T + 12 * std::sqrt(P(0, 0)));
     };
     const double z = outer([](double, double) { return 1.0; });
     const double e1 = outer([](double x1, double) { return x1; }) / z;

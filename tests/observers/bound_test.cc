@@ -5,22 +5,24 @@
 #include <cstdio>
 #include <random>
 
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "approx/strong_log_concavity.h"
 #include "ident/observers/covariance_bound.h"
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
-#include "studies/mems/mems_study.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
+#include "studies/mems/mems_study.h"
 #include "tests/support/sanitizer.h"
 
 namespace ident {
 namespace {
 
-double MinEig(const Eigen::MatrixXd& M) { return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues().minCoeff(); }
+double MinEig(const Eigen::MatrixXd& M) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues().minCoeff();
+}
 
 // Random log-concave factor f0(x) = exp(−a|b'x − c| − softplus(g'x)) · 1[d'x ≤ e].
 struct RandomLogConcave {
@@ -29,9 +31,17 @@ struct RandomLogConcave {
   RandomLogConcave(std::mt19937_64& rng, int n) {
     std::normal_distribution<double> N;
     std::uniform_real_distribution<double> U(0, 2);
-    a = U(rng); c = N(rng); e = 0.5 * N(rng) + 0.3;
-    b = Eigen::VectorXd(n); g = Eigen::VectorXd(n); d = Eigen::VectorXd(n);
-    for (int i = 0; i < n; ++i) { b(i) = N(rng); g(i) = 2 * N(rng); d(i) = N(rng); }
+    a = U(rng);
+    c = N(rng);
+    e = 0.5 * N(rng) + 0.3;
+    b = Eigen::VectorXd(n);
+    g = Eigen::VectorXd(n);
+    d = Eigen::VectorXd(n);
+    for (int i = 0; i < n; ++i) {
+      b(i) = N(rng);
+      g(i) = 2 * N(rng);
+      d(i) = N(rng);
+    }
   }
   double Log(const Eigen::VectorXd& x) const {
     if (d.dot(x) > e) return -std::numeric_limits<double>::infinity();
@@ -53,7 +63,9 @@ TEST(Theorem2, CovarianceOfRandomStronglyLogConcaveDensitiesIsBelowP1D) {
     for (int i = 0; i < n; ++i) {
       x(0) = -L + (i + 0.5) * h;
       const double w = std::exp(-0.5 * x(0) * x(0) / p + f0.Log(x));
-      z += w; s1 += w * x(0); s2 += w * x(0) * x(0);
+      z += w;
+      s1 += w * x(0);
+      s2 += w * x(0) * x(0);
     }
     if (!(z > 0)) continue;
     const double var = s2 / z - (s1 / z) * (s1 / z);
@@ -81,7 +93,9 @@ TEST(Theorem2, CovarianceOfRandomStronglyLogConcaveDensitiesIsBelowP2D) {
       for (int j = 0; j < n; ++j) {
         x << -L0 + (i + 0.5) * 2 * L0 / n, -L1 + (j + 0.5) * 2 * L1 / n;
         const double w = std::exp(-0.5 * x.dot(Pinv * x) + f0.Log(x));
-        z += w; s1 += w * x; s2 += w * x * x.transpose();
+        z += w;
+        s1 += w * x;
+        s2 += w * x * x.transpose();
       }
     if (!(z > 0)) continue;
     const Eigen::Matrix2d V = s2 / z - (s1 / z) * (s1 / z).transpose();
@@ -100,7 +114,8 @@ TEST(Theorem2, BoundIsTightForTheCorrespondingGaussian) {
   double z = 0, s2 = 0;
   for (int i = 0; i < n; ++i) {
     const double x = -L + (i + 0.5) * h, w = std::exp(-0.5 * x * x / p);
-    z += w; s2 += w * x * x;
+    z += w;
+    s2 += w * x * x;
   }
   EXPECT_NEAR(s2 / z, p, 1e-9);
 }
@@ -226,7 +241,10 @@ TEST(MemsStudy, TunedKalmanAndBoundBehaveAsThePaperSays) {
     const double ratio = tr.var_bound[k] / tr.var_grid[k];
     all += ratio;
     if (tr.y[k] != 0 && tr.y[k - 1] == 0)
-      for (size_t j = k; j < std::min(tr.t.size(), k + 5); ++j) { after += tr.var_bound[j] / tr.var_grid[j]; ++n_after; }
+      for (size_t j = k; j < std::min(tr.t.size(), k + 5); ++j) {
+        after += tr.var_bound[j] / tr.var_grid[j];
+        ++n_after;
+      }
   }
   after /= n_after;
   all /= static_cast<double>(tr.t.size() - o.burn_in);
@@ -235,7 +253,7 @@ TEST(MemsStudy, TunedKalmanAndBoundBehaveAsThePaperSays) {
   std::printf("bound/grid variance: %.3f in the 5 steps after events, %.3f overall\n", after, all);
   EXPECT_LT(after, 0.8 * all);
   EXPECT_GT(r.events, 20);
-  EXPECT_GT(r.Get("bound").calibration, 1.0);     // mean P̄22 ≥ grid MSE
+  EXPECT_GT(r.Get("bound").calibration, 1.0);  // mean P̄22 ≥ grid MSE
   EXPECT_LT(r.Get("tuned_kalman").rms, 1.4 * r.Get("grid").rms);
   EXPECT_GT(r.Get("grid").calibration, 0.7);
   EXPECT_LT(r.Get("grid").calibration, 1.6);

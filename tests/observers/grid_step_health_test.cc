@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "common/step_report.h"
 #include "ident/observers/grid_observer.h"

@@ -5,9 +5,9 @@
 #include <numbers>
 #include <random>
 
+#include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <gtest/gtest.h>
 
 #include "common/error.h"
 #include "ident/observers/grid_observer.h"
@@ -29,7 +29,8 @@ Sim Simulate(const models::LinearStateSpace& model, const Eigen::VectorXd& c, do
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal;
   const int n = model.num_states();
-  const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(model.process_noise + 1e-300 * Eigen::MatrixXd::Identity(n, n)).matrixL();
+  const Eigen::MatrixXd L =
+      Eigen::LLT<Eigen::MatrixXd>(model.process_noise + 1e-300 * Eigen::MatrixXd::Identity(n, n)).matrixL();
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n), w(n);
   Sim s;
   for (int k = 0; k < steps; ++k) {
@@ -59,7 +60,7 @@ TEST(KalmanFilter, SquareRootFormMatchesTextbookCovarianceFormAndBatchLikelihood
   Eigen::MatrixXd P = P0;
   for (int k = 0; k < steps; ++k) {
     ASSERT_TRUE(kf.Update({sim.u[k], sim.y[k]}).updated());
-    x = model.A * x + model.B * sim.u[k];                       // textbook form
+    x = model.A * x + model.B * sim.u[k];  // textbook form
     P = model.A * P * model.A.transpose() + model.process_noise;
     const double s = c.dot(P * c) + r;
     const Eigen::VectorXd K = P * c / s;
@@ -71,7 +72,7 @@ TEST(KalmanFilter, SquareRootFormMatchesTextbookCovarianceFormAndBatchLikelihood
   // Batch: y_{1:T} is jointly Gaussian; its mean and covariance from the model by brute force.
   const int n = 2;
   Eigen::MatrixXd Phi = Eigen::MatrixXd::Identity(n, n);  // x_k = Phi_k x0 + drift_k + Σ_j Psi_kj v_j
-  std::vector<Eigen::MatrixXd> Psi;  // Psi[j] for current k
+  std::vector<Eigen::MatrixXd> Psi;                       // Psi[j] for current k
   Eigen::VectorXd drift = Eigen::VectorXd::Zero(n), ymean(steps);
   std::vector<Eigen::MatrixXd> rows_x0(steps), rows_v(steps);
   Eigen::MatrixXd Ycov(steps, steps);
@@ -145,7 +146,10 @@ void ExpectGridAgreesWithKalman(const models::LinearStateSpace& model, const Eig
     kf.Update({sim.u[k], sim.y[k]});
     ASSERT_TRUE(grid.Update({sim.u[k], sim.y[k]}).updated());
     double d2 = 0, dmax = 0;
-    for (int i = 0; i < n; ++i) { d2 = std::max(d2, grid.spacing(i) * grid.spacing(i)); dmax = std::max(dmax, grid.spacing(i)); }
+    for (int i = 0; i < n; ++i) {
+      d2 = std::max(d2, grid.spacing(i) * grid.spacing(i));
+      dmax = std::max(dmax, grid.spacing(i));
+    }
     const Eigen::MatrixXd P = kf.covariance();
     max_mean_err = std::max(max_mean_err, (grid.mean() - kf.mean()).cwiseAbs().maxCoeff() / dmax);
     max_cov_err = std::max(max_cov_err, (grid.covariance() - P).cwiseAbs().maxCoeff() / d2);
@@ -156,7 +160,9 @@ void ExpectGridAgreesWithKalman(const models::LinearStateSpace& model, const Eig
 
 TEST(GridObserver, AgreesWithKalmanFilterIn1D) {
   Eigen::MatrixXd A(1, 1), B(1, 1), Q(1, 1);
-  A << 0.9; B << 0.5; Q << 0.2;
+  A << 0.9;
+  B << 0.5;
+  Q << 0.2;
   ExpectGridAgreesWithKalman(models::LinearStateSpace::Make(A, B, Q), Eigen::VectorXd::Ones(1), 256, 3);
 }
 

@@ -62,7 +62,7 @@ TYPED_TEST(KalmanRealtime, StepsAreNoexceptAndAllocateNothingOver10kSteps) {
     testing::AllocationCounter count;
     for (const auto& d : data.items) {
       updated += kf.Update(d).updated();
-      updated += twin.Predict(model, d.u).updated();      // explicit Predict + scalar Correct
+      updated += twin.Predict(model, d.u).updated();  // explicit Predict + scalar Correct
       updated += twin.Correct(c, 0.2, d.y).updated();
       kf.CovarianceInto(P);
     }
@@ -124,10 +124,10 @@ TYPED_TEST(KalmanRealtime, RejectedOrFailedStepsLeaveTheStateBitIdentical) {
   Eigen::VectorXd nan_u(1);
   nan_u(0) = std::nan("");
   EXPECT_EQ(kf.Predict(model, nan_u).status, StepStatus::kRejectedInvalid);
-  models::LinearStateSpace blow_up = model;   // A x overflows to Inf
+  models::LinearStateSpace blow_up = model;  // A x overflows to Inf
   blow_up.A = 1e300 * Eigen::Matrix2d::Identity();
   EXPECT_EQ(kf.Predict(blow_up, Eigen::VectorXd::Zero(1)).status, StepStatus::kNumericalFailure);
-  const Eigen::Vector2d huge_c(-1e298, 0.0);                                        // y − c'x overflows
+  const Eigen::Vector2d huge_c(-1e298, 0.0);  // y − c'x overflows
   EXPECT_EQ(kf.Correct(huge_c, 1.0, 1e308).status, StepStatus::kNumericalFailure);
   EXPECT_EQ(kf.Update({Eigen::VectorXd::Zero(1), 1.0}).status, StepStatus::kRejectedInvalid);  // no stored model
   EXPECT_TRUE(unchanged());
@@ -245,7 +245,7 @@ TYPED_TEST(LcGaussianRealtime, RejectedOrFailedStepsLeaveTheStateBitIdentical) {
     return SameBits(Eigen::Vector2d(f.mean()), m) && SameBits(Eigen::Matrix2d(f.covariance()), P) &&
            SameBits(Eigen::Matrix<double, 1, 1>(ll), Eigen::Matrix<double, 1, 1>(f.log_likelihood()));
   };
-  EXPECT_EQ(f.Correct(sensor, 0.5).status, StepStatus::kRejectedInvalid);             // not a sensor output
+  EXPECT_EQ(f.Correct(sensor, 0.5).status, StepStatus::kRejectedInvalid);  // not a sensor output
   EXPECT_EQ(f.Correct(sensor, std::nan("")).status, StepStatus::kRejectedInvalid);
   EXPECT_EQ(f.Correct(ThrowingMeasurement(), 0.0).status, StepStatus::kNumericalFailure);
   EXPECT_EQ(f.ApplyTilt(c, models::TiltedMoments{}).status, StepStatus::kNumericalFailure);  // ok = false
@@ -281,13 +281,13 @@ TEST(TruncatedGaussianRealtime, UpdateAllocatesNothingOver10kSteps) {
     testing::AllocationCounter count;
     for (const auto& d : items) {
       updated += f.Update(d).updated();
-      updated += registered->Update(d).updated();   // through AnyStateObserver
+      updated += registered->Update(d).updated();  // through AnyStateObserver
       events += d.y != 0;
     }
     EXPECT_EQ(count.allocations(), 0);
   }
   EXPECT_EQ(updated, 20000);
-  EXPECT_GT(events, 100);   // many ±1 readings: changes of reading and repeated ±1, not only y = 0
+  EXPECT_GT(events, 100);  // many ±1 readings: changes of reading and repeated ±1, not only y = 0
   EXPECT_TRUE(f.mean().allFinite() && f.covariance().allFinite());
 }
 
@@ -303,12 +303,12 @@ TEST(TruncatedGaussianRealtime, RejectedItemsLeaveTheStateBitIdentical) {
     return SameBits(f.mean(), m) && SameBits(f.covariance(), P) && SameBits(f.parent_mean(), pm) &&
            SameBits(f.parent_covariance(), pP);
   };
-  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(2), 0.0}).status, StepStatus::kRejectedInvalid);   // u of wrong size
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(2), 0.0}).status, StepStatus::kRejectedInvalid);  // u of wrong size
   EXPECT_EQ(f.Update({Eigen::VectorXd(), 0.0}).status, StepStatus::kRejectedInvalid);
   EXPECT_EQ(f.Update({Eigen::VectorXd::Constant(1, std::nan("")), 0.0}).status, StepStatus::kRejectedInvalid);
   const double inf = std::numeric_limits<double>::infinity();
   EXPECT_EQ(f.Update({Eigen::VectorXd::Constant(1, inf), 0.0}).status, StepStatus::kRejectedInvalid);
-  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), 0.5}).status, StepStatus::kRejectedInvalid);   // not a reading
+  EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), 0.5}).status, StepStatus::kRejectedInvalid);  // not a reading
   EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), std::nan("")}).status, StepStatus::kRejectedInvalid);
   EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), 2.0}).status, StepStatus::kRejectedInvalid);
   EXPECT_TRUE(unchanged());
@@ -331,15 +331,17 @@ TEST(GridObserverRealtime, StepsAllocateNothingAfterConstruction) {
     const auto mems = models::MemsAccelerometerDynamics(0.01, 1.0);
     models::LinearStateSpace model = mems;
     Eigen::VectorXd c = Eigen::VectorXd::Unit(dim, 0);
-    if (dim == 1) model = models::LinearStateSpace::Make(Eigen::MatrixXd::Constant(1, 1, 0.99),
-                                                         Eigen::MatrixXd::Constant(1, 1, 0.1),
-                                                         Eigen::MatrixXd::Constant(1, 1, 0.01));
+    if (dim == 1)
+      model =
+          models::LinearStateSpace::Make(Eigen::MatrixXd::Constant(1, 1, 0.99), Eigen::MatrixXd::Constant(1, 1, 0.1),
+                                         Eigen::MatrixXd::Constant(1, 1, 0.01));
     auto sensor = std::make_shared<models::ThresholdSensor>(c, 1.0);
     GridObserverOptions opt;
     opt.points.assign(dim, 32);
     GridObserver grid(model, sensor, Eigen::VectorXd::Zero(dim), 0.3 * Eigen::MatrixXd::Identity(dim, dim), opt);
     std::vector<StateSpaceItem> items;
-    for (int k = 0; k < 300; ++k) items.push_back({Eigen::VectorXd::Constant(1, std::sin(0.05 * k)), k % 50 == 0 ? 1.0 : 0.0});
+    for (int k = 0; k < 300; ++k)
+      items.push_back({Eigen::VectorXd::Constant(1, std::sin(0.05 * k)), k % 50 == 0 ? 1.0 : 0.0});
     int updated = 0;
     {
       testing::AllocationCounter count;

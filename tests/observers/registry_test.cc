@@ -8,8 +8,8 @@
 #include <random>
 #include <string>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "common/error.h"
 #include "ident/observers/grid_observer.h"
@@ -81,7 +81,7 @@ TEST(ObserverRegistry, EachNameBuildsTheDocumentedObserver) {
   EXPECT_LT((kalman->mean() - x).norm(), 1e-10);
   EXPECT_LT((lc->mean() - x).norm(), 1e-10);
   EXPECT_LT((lc->covariance() - P).norm(), 1e-12);
-  EXPECT_LT((grid->mean() - grid_direct.mean()).norm(), 1e-15);   // options reached the grid observer
+  EXPECT_LT((grid->mean() - grid_direct.mean()).norm(), 1e-15);  // options reached the grid observer
   // Grid against the Kalman filter to its discretisation error (as in observers_agree_test).
   const auto& g = static_cast<StateObserverModel<GridObserver>&>(*grid).get();
   const double d2 = std::max(g.spacing(0) * g.spacing(0), g.spacing(1) * g.spacing(1));
@@ -96,7 +96,7 @@ TEST(ObserverRegistry, GridTakesPointsPerAxisAndItsOtherOptions) {
   const auto& g = static_cast<StateObserverModel<GridObserver>&>(*grid).get();
   EXPECT_EQ(g.points(0), 40);
   EXPECT_EQ(g.points(1), 24);
-  EXPECT_NEAR(g.axis(0, 39) - g.axis(0, 0), 2 * 7.0, 1e-12);   // prior sd 1, ±initial_sigmas
+  EXPECT_NEAR(g.axis(0, 39) - g.axis(0, 0), 2 * 7.0, 1e-12);  // prior sd 1, ±initial_sigmas
 }
 
 TEST(ObserverRegistry, BadSpecsOptionsAndProblemsNameTheObserverAndOption) {
@@ -149,7 +149,7 @@ TEST(ObserverRegistry, LcTruncatedEqualsTheDirectlyDrivenFilterBitForBit) {
     ASSERT_TRUE(direct.Step(model, d.u, d.y).updated());
     events += d.y != 0;
   }
-  EXPECT_GT(events, 5);   // the record crosses the thresholds
+  EXPECT_GT(events, 5);  // the record crosses the thresholds
   const Eigen::VectorXd m = obs->mean(), md = direct.mean();
   const Eigen::MatrixXd P = obs->covariance(), Pd = direct.covariance();
   EXPECT_EQ(std::memcmp(m.data(), md.data(), 2 * sizeof(double)), 0) << m.transpose() << " vs " << md.transpose();
@@ -160,15 +160,17 @@ TEST(ObserverRegistry, LcTruncatedEqualsTheDirectlyDrivenFilterBitForBit) {
 TEST(ObserverRegistry, LcTruncatedNeedsATwoStateThresholdSensorAndTakesNoOptions) {
   auto mems = GaussianProblem();
   mems.model = models::MemsAccelerometerDynamics(0.01, 1.0);
-  EXPECT_EQ(ErrorOf("lc_truncated", mems), "observer 'lc_truncated' needs a threshold sensor on 2 states; "
-                                           "'gaussian' is not (use lc_gaussian or grid)");
+  EXPECT_EQ(ErrorOf("lc_truncated", mems),
+            "observer 'lc_truncated' needs a threshold sensor on 2 states; "
+            "'gaussian' is not (use lc_gaussian or grid)");
   mems.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
   EXPECT_EQ(ErrorOf("lc_truncated:points=3", mems), "observer 'lc_truncated' takes no options; got 'points'");
   EXPECT_NO_THROW(MakeStateObserver(ParseObserverSpec("lc_truncated"), mems));
   auto three = mems;
   three.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector3d(1, 0, 0), 1.0);
-  EXPECT_EQ(ErrorOf("lc_truncated", three), "observer 'lc_truncated' needs a threshold sensor on 2 states; "
-                                            "'threshold' is not (use lc_gaussian or grid)");
+  EXPECT_EQ(ErrorOf("lc_truncated", three),
+            "observer 'lc_truncated' needs a threshold sensor on 2 states; "
+            "'threshold' is not (use lc_gaussian or grid)");
   auto bad_prior = mems;
   bad_prior.P0 = Eigen::Matrix2d::Zero();
   EXPECT_CONTAINS(ErrorOf("lc_truncated", bad_prior), "prior covariance not positive definite");

@@ -2,8 +2,8 @@
 // and dynamic size) and checks the estimate against the closed-form simple-regression solution
 //   b = Σ(x−x̄)(y−ȳ) / Σ(x−x̄)²,   a = ȳ − b x̄.
 // Exit code 0 if both agree to 1e-8, 1 otherwise.
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include <Eigen/Core>
@@ -32,8 +32,8 @@ int main() {
   }
   const double err = std::max({std::abs(fixed.parameters()(0) - a), std::abs(fixed.parameters()(1) - b),
                                std::abs(dynamic.parameters()(0) - a), std::abs(dynamic.parameters()(1) - b)});
-  std::printf("closed form a = %.12f b = %.12f; RLS a = %.12f b = %.12f; max error %.3g\n", a, b,
-              fixed.parameters()(0), fixed.parameters()(1), err);
+  std::printf("closed form a = %.12f b = %.12f; RLS a = %.12f b = %.12f; max error %.3g\n", a, b, fixed.parameters()(0),
+              fixed.parameters()(1), err);
   bool threw = false;  // the error type is usable from the package too
   try {
     ident::RecursiveLeastSquares bad(0);

@@ -5,8 +5,8 @@
 #include <memory>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "tests/support/alloc_counter.h"
 

@@ -99,11 +99,12 @@ TEST(BatchLeastSquaresSmallUnits, ScaledFlatPriorRefusesMeanSquaresOutOfRange) {
   EXPECT_EQ(p.V0, Eigen::Vector3d(4, 2e-10, 3e5).asDiagonal().toDenseMatrix());
 }
 
-INSTANTIATE_TEST_SUITE_P(RealRecords, BatchLeastSquares,
-                         ::testing::Values(ArxCase{"dryer.csv", 2, 2, 3, {-1.27654, 0.396711, 0.0651903, 0.0451792}, 5e-6},
-                                           ArxCase{"gas_furnace.csv", 2, 2, 3, {-1.071, 0.286356, -0.882687, 0.185909}, 5e-4},
-                                           ArxCase{"exchanger.csv", 2, 2, 1, {-1.19472, 0.242377, -0.0427583, -0.398151}, 5e-6}),
-                         [](const auto& info) { return std::string(info.param.file).substr(0, 5); });
+INSTANTIATE_TEST_SUITE_P(
+    RealRecords, BatchLeastSquares,
+    ::testing::Values(ArxCase{"dryer.csv", 2, 2, 3, {-1.27654, 0.396711, 0.0651903, 0.0451792}, 5e-6},
+                      ArxCase{"gas_furnace.csv", 2, 2, 3, {-1.071, 0.286356, -0.882687, 0.185909}, 5e-4},
+                      ArxCase{"exchanger.csv", 2, 2, 1, {-1.19472, 0.242377, -0.0427583, -0.398151}, 5e-6}),
+    [](const auto& info) { return std::string(info.param.file).substr(0, 5); });
 
 }  // namespace
 }  // namespace ident

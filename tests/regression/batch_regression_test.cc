@@ -1,5 +1,5 @@
-// The batch robust regressions (ident/regression/batch_regression.h) against R on the bundled records, and checks that do
-// not need R: the estimating equations at the solution, a brute-force multi-start search for a better Cauchy
+// The batch robust regressions (ident/regression/batch_regression.h) against R on the bundled records, and checks that
+// do not need R: the estimating equations at the solution, a brute-force multi-start search for a better Cauchy
 // optimum, invariances, the estimator adapter, input validation and the run time.
 //
 // References: bench/compare_batch_robust.R (R 4.2, MASS 7.3): "tight" = rlm(acc = 1e-13, maxit = 1000) and the
@@ -20,8 +20,8 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 
-#include "ident/regression/batch_regression.h"
 #include "common/error.h"
+#include "ident/regression/batch_regression.h"
 #include "ident/regression/regression_estimator.h"
 #include "tests/support/sanitizer.h"
 #include "tests/support/test_data.h"
@@ -85,19 +85,33 @@ struct HuberCase {
   Record (*load)();
   Eigen::VectorXd tight_theta, tight_se;  // R, converged
   double tight_scale;
-  std::vector<double> table;              // the task's reference
-  int table_iterations;                   // the rlm iterate that the table's values are (0: tight)
+  std::vector<double> table;  // the task's reference
+  int table_iterations;       // the rlm iterate that the table's values are (0: tight)
 };
 
 std::vector<HuberCase> HuberCases() {
   return {
-      {"stackloss", Stackloss, Vec({-41.02648537, 0.8293857703, 0.9260594155, -0.127846318}),
-       Vec({9.806872294, 0.1111749623, 0.3033934033, 0.1288463457}), 2.440489046,
-       {-41.027, 0.82937, 0.92611, -0.12785}, 9},
-      {"starsCYG", StarsCyg, Vec({6.865894525, -0.4285247707}), Vec({1.264095409, 0.2926422876}), 0.7025892484,
-       {6.8659, -0.42852}, 0},
-      {"telef", Telef, Vec({-397.7770523, 0.2039600466}), Vec({84.13639533, 0.04289363824}), 0.9009028306,
-       {-398.12, 0.20414}, 33},
+      {"stackloss",
+       Stackloss,
+       Vec({-41.02648537, 0.8293857703, 0.9260594155, -0.127846318}),
+       Vec({9.806872294, 0.1111749623, 0.3033934033, 0.1288463457}),
+       2.440489046,
+       {-41.027, 0.82937, 0.92611, -0.12785},
+       9},
+      {"starsCYG",
+       StarsCyg,
+       Vec({6.865894525, -0.4285247707}),
+       Vec({1.264095409, 0.2926422876}),
+       0.7025892484,
+       {6.8659, -0.42852},
+       0},
+      {"telef",
+       Telef,
+       Vec({-397.7770523, 0.2039600466}),
+       Vec({84.13639533, 0.04289363824}),
+       0.9009028306,
+       {-398.12, 0.20414},
+       33},
   };
 }
 
@@ -107,13 +121,13 @@ TEST(HuberRegression, MatchesConvergedRlmCoefficientsScaleAndStandardErrors) {
     const BatchRegressionResult h = HuberRegression(d.Z, d.y);
     EXPECT_TRUE(h.converged) << c.name;
     const double rel = MaxRelativeDifference(h.theta, c.tight_theta);
-    std::printf("[ measured ] huber %s: theta %s, s = %.10g, %d iterations; max rel diff vs R (tight) %.2e, "
-                "vs the table %.2e\n",
-                c.name, Join(h.theta).c_str(),
-                h.scale, h.iterations, rel,
-                ((h.theta - Eigen::Map<const Eigen::VectorXd>(c.table.data(), h.theta.size())).cwiseAbs().array() /
-                 h.theta.cwiseAbs().array())
-                    .maxCoeff());
+    std::printf(
+        "[ measured ] huber %s: theta %s, s = %.10g, %d iterations; max rel diff vs R (tight) %.2e, "
+        "vs the table %.2e\n",
+        c.name, Join(h.theta).c_str(), h.scale, h.iterations, rel,
+        ((h.theta - Eigen::Map<const Eigen::VectorXd>(c.table.data(), h.theta.size())).cwiseAbs().array() /
+         h.theta.cwiseAbs().array())
+            .maxCoeff());
     EXPECT_LE(rel, 1e-7) << c.name;
     EXPECT_NEAR(h.scale, c.tight_scale, 1e-7 * c.tight_scale) << c.name;
     EXPECT_LE(MaxRelativeDifference(h.covariance.diagonal().cwiseSqrt(), c.tight_se), 1e-6) << c.name;
@@ -130,8 +144,8 @@ TEST(HuberRegression, MatchesConvergedRlmCoefficientsScaleAndStandardErrors) {
 TEST(HuberRegression, RlmIteratesReproduceTheTable) {
   for (const HuberCase& c : HuberCases()) {
     const Record d = c.load();
-    const HuberOptions o = c.table_iterations == 0 ? HuberOptions{}
-                                                   : HuberOptions{.tolerance = 0, .max_iterations = c.table_iterations};
+    const HuberOptions o =
+        c.table_iterations == 0 ? HuberOptions{} : HuberOptions{.tolerance = 0, .max_iterations = c.table_iterations};
     ExpectPrinted(HuberRegression(d.Z, d.y, o).theta, c.table, c.name);
   }
   const Record d = Telef();
@@ -140,8 +154,7 @@ TEST(HuberRegression, RlmIteratesReproduceTheTable) {
   EXPECT_LE(MaxRelativeDifference(rlm_default.theta, Vec({-410.5620825, 0.2105067569})), 1e-8);
   const BatchRegressionResult stack_default = HuberRegression(Stackloss().Z, Stackloss().y, {.tolerance = 1e-4});
   EXPECT_EQ(stack_default.iterations, 9);
-  EXPECT_LE(MaxRelativeDifference(stack_default.theta,
-                                  Vec({-41.02653105, 0.8293738689, 0.9261081841, -0.1278491603})),
+  EXPECT_LE(MaxRelativeDifference(stack_default.theta, Vec({-41.02653105, 0.8293738689, 0.9261081841, -0.1278491603})),
             1e-8);
 }
 
@@ -176,10 +189,13 @@ struct CauchyCase {
 
 std::vector<CauchyCase> CauchyCases() {
   return {
-      {"stackloss", Stackloss, Vec({-38.63206279, 0.8519060897, 0.4887969883, -0.06830406872}), 0.8732455781,
-       49.58101993, {-38.632, 0.85191, 0.4888, -0.068304, 0.87325}},
-      {"starsCYG", StarsCyg, Vec({-5.284011538, 2.327276362}), 0.3017027207, 49.51505334,
-       {-5.2840, 2.3273, 0.30170}},
+      {"stackloss",
+       Stackloss,
+       Vec({-38.63206279, 0.8519060897, 0.4887969883, -0.06830406872}),
+       0.8732455781,
+       49.58101993,
+       {-38.632, 0.85191, 0.4888, -0.068304, 0.87325}},
+      {"starsCYG", StarsCyg, Vec({-5.284011538, 2.327276362}), 0.3017027207, 49.51505334, {-5.2840, 2.3273, 0.30170}},
       {"telef", Telef, Vec({-218.7348152, 0.1122880012}), 0.1180687218, 47.01798852, {-218.73, 0.11229, 0.11807}},
   };
 }
@@ -193,10 +209,10 @@ TEST(CauchyMlRegression, FindsTheGlobalOptimumOfR) {
     Eigen::VectorXd r_all(all.size());
     r_all << c.r_theta, c.r_gamma;
     const double rel = MaxRelativeDifference(all, r_all);
-    std::printf("[ measured ] cauchy %s: theta %s, gamma = %.10g, NLL = %.10g, %d starts, %d iterations, "
-                "|grad| = %.1e; max rel diff vs R %.2e\n",
-                c.name, Join(m.theta).c_str(),
-                m.scale, m.objective, m.starts, m.iterations, m.gradient_norm, rel);
+    std::printf(
+        "[ measured ] cauchy %s: theta %s, gamma = %.10g, NLL = %.10g, %d starts, %d iterations, "
+        "|grad| = %.1e; max rel diff vs R %.2e\n",
+        c.name, Join(m.theta).c_str(), m.scale, m.objective, m.starts, m.iterations, m.gradient_norm, rel);
     EXPECT_TRUE(m.converged) << c.name;
     EXPECT_LE(m.gradient_norm, 1e-10) << c.name;
     EXPECT_LE(rel, 1e-6) << c.name;

@@ -25,7 +25,9 @@ namespace {
 const Eigen::Vector4d& kTheta = testing::kLockInTheta;
 using Arx = testing::LockInArx;
 
-Arx Simulate(unsigned seed, int n, double outlier_rate = 0.1) { return testing::SimulateLockInArx(seed, n, outlier_rate); }
+Arx Simulate(unsigned seed, int n, double outlier_rate = 0.1) {
+  return testing::SimulateLockInArx(seed, n, outlier_rate);
+}
 
 double MedianOf(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
@@ -71,8 +73,7 @@ TEST(LockInMonitor, AgreesWithTheMedianOfTheLastWindowWeights) {
     if (t + 1 >= M) {  // brute force: the median of the last M weights is below the threshold
       expected = MedianOf(std::vector<double>(history.end() - M, history.end())) < 0.3;
       EXPECT_NEAR(monitor.low_fraction(),
-                  std::count_if(history.end() - M, history.end(), [](double v) { return v < 0.3; }) / double(M),
-                  1e-15);
+                  std::count_if(history.end() - M, history.end(), [](double v) { return v < 0.3; }) / double(M), 1e-15);
     }
     ASSERT_EQ(flagged, expected) << t;
     flags += flagged;

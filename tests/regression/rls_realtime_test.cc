@@ -6,9 +6,9 @@
 #include <random>
 #include <vector>
 
+#include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <gtest/gtest.h>
 
 #include "ident/regression/rls.h"
 #include "tests/regression/arx_stream.h"
@@ -184,8 +184,7 @@ TYPED_TEST(RlsRealtime, ForgettingChangedOnTheFlyEqualsWeightedBatchLeastSquares
     weight *= lambda[t];
   }
   info += weight * o.prior->nu0 * o.prior->V0;
-  const Eigen::VectorXd theta =
-      info.bottomRightCorner(4, 4).ldlt().solve(info.bottomLeftCorner(4, 1));
+  const Eigen::VectorXd theta = info.bottomRightCorner(4, 4).ldlt().solve(info.bottomLeftCorner(4, 1));
   EXPECT_LT((rls.parameters() - theta).norm(), 1e-10 * theta.norm());
   EXPECT_THROW(rls.set_forgetting(1.5), InvalidArgument);
   EXPECT_EQ(rls.options().forgetting.factor, 0.99);  // unchanged by the rejected value

@@ -4,13 +4,13 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
-#include <vector>
 #include <limits>
 #include <random>
+#include <vector>
 
+#include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <gtest/gtest.h>
 
 #include "ident/regression/rls.h"
 #include "tests/support/alloc_counter.h"

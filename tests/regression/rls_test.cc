@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/dense_rls.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/support/dense_rls.h"
 
 namespace ident {
 namespace {

@@ -3,16 +3,16 @@
 // scored on uncorrupted rows, --passes, restarts that keep every sample, row order, and the coverage of
 // θ̂ ± 1.96·theta_std over replications.
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <random>
 #include <string>
 #include <vector>
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
 #include "ident/regression/safe_student_regression.h"
@@ -123,7 +123,8 @@ TEST(StaticRecords, CauchyLandsNearTheCauchyMaximumLikelihoodEstimate) {
     EXPECT_LT((Z * (Theta(three) - r->cauchy_ml)).norm(), 0.3 * ols) << r->name;
   }
   const StaticRecord& telef = StaticRecords()[2];
-  EXPECT_LT((Theta(Json(FitArgs(telef, "cauchy"))) - telef.cauchy_ml).norm(), 0.05 * (telef.ols - telef.cauchy_ml).norm());
+  EXPECT_LT((Theta(Json(FitArgs(telef, "cauchy"))) - telef.cauchy_ml).norm(),
+            0.05 * (telef.ols - telef.cauchy_ml).norm());
   EXPECT_EQ(Json(FitArgs(telef, "rls --passes 3"))["passes"], 1);  // least squares needs one pass
   testing::ExpectCliError(FitArgs(telef, "cauchy --passes 0"), "--passes 0; need 1 <= passes <= 100");
   testing::ExpectCliError("compare dryer --passes 101", "--passes 101; need 1 <= passes <= 100");
@@ -218,8 +219,8 @@ TEST(RowOrder, SpreadOverPermutationsIsWithinTheReportedStdFromTheSecondPass) {
 }
 
 // θ̂ ± 1.96·theta_std covers the truth of y = 1 + 2x₁ − x₂ + e, x ~ N(0, I), n = 100, over 200
-// replications (600 intervals), after a second pass: in [0.92, 0.97] for cauchy under Cauchy noise and student:3 under t₃
-// noise, at least 0.90 under Gaussian noise.
+// replications (600 intervals), after a second pass: in [0.92, 0.97] for cauchy under Cauchy noise and student:3 under
+// t₃ noise, at least 0.90 under Gaussian noise.
 TEST(Coverage, OfTheReportedStandardErrorsFromTheSecondPass) {
   struct Case {
     double dof;
@@ -273,7 +274,8 @@ TEST(Coverage, OfTheReportedStandardErrorsFromTheSecondPass) {
 // squares' median, and the cleaning replaces at least 80 % of the outliers in later regressors.
 TEST(OutlierSize, ALargerOutlierIsNoHarderThanASmallerOne) {
   auto run = [](double size) {
-    return Json(fmt::format("compare dryer --estimators cauchy,rls --trials 12 --outliers 0.1:{}:1", size))["estimators"];
+    return Json(
+        fmt::format("compare dryer --estimators cauchy,rls --trials 12 --outliers 0.1:{}:1", size))["estimators"];
   };
   auto of = [](const nlohmann::json& estimators, const std::string& name) {
     for (const auto& e : estimators)
@@ -284,9 +286,11 @@ TEST(OutlierSize, ALargerOutlierIsNoHarderThanASmallerOne) {
   const nlohmann::json small = of(at20, "cauchy"), large = of(at1000, "cauchy"), rls = of(at1000, "rls");
   const double small_median = small["spread"]["theta_distance"]["median"];
   const double large_median = large["spread"]["theta_distance"]["median"];
-  std::printf("[ measured ] dryer 10 %%: cauchy θ distance median %.3f at 20σ, %.3f at 1000σ (worst %.3f); cleaned "
-              "%.1f of 50 per trial\n", small_median, large_median, large["spread"]["theta_distance"]["max"].get<double>(),
-              large["cleaned_per_trial"].get<double>());
+  std::printf(
+      "[ measured ] dryer 10 %%: cauchy θ distance median %.3f at 20σ, %.3f at 1000σ (worst %.3f); cleaned "
+      "%.1f of 50 per trial\n",
+      small_median, large_median, large["spread"]["theta_distance"]["max"].get<double>(),
+      large["cleaned_per_trial"].get<double>());
   EXPECT_LE(large_median, small_median + 0.01);
   EXPECT_LT(large["spread"]["theta_distance"]["max"].get<double>(),
             rls["spread"]["theta_distance"]["median"].get<double>());

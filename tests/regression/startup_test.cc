@@ -59,9 +59,9 @@ TEST(StartupPrior, PriorFollowsTheRuleAndExactSwitchesItOff) {
 // cleaning), with the regressor cleaning of issue 6 on (the default) and off. The default must be within
 // 2.5 points of the best fixed scale and not below the worst by more than 0.5 (docs/kh.md has the table).
 TEST(StartupPrior, DefaultIsCloseToTheBestFixedPriorScaleOnRealRecords) {
-  for (const std::string data : {"dryer --output y --input u --na 2 --nb 2 --nk 3",
-                                 "gas_furnace --output y --input u --na 2 --nb 2 --nk 3",
-                                 "exchanger --output y --input u --na 2 --nb 2 --nk 1"})
+  for (const std::string data :
+       {"dryer --output y --input u --na 2 --nb 2 --nk 3", "gas_furnace --output y --input u --na 2 --nb 2 --nk 3",
+        "exchanger --output y --input u --na 2 --nb 2 --nk 1"})
     for (const std::string clean : {"on", "off"}) {
       // A fixed scale far below the noise can leave the plain recursion with every sample weighted as an
       // outlier: its standard errors are not defined and ident refuses the result; such a scale is left out.

@@ -1,8 +1,8 @@
-// The O(ρ) step guard (ident/regression/internal/step_guard.h, run by ident/regression/internal/step_driver.h) decides exactly as the
-// straightforward guard it replaces — copy the statistics, take the step, check every d_i ≥ DBL_MIN
-// and L, Θ̂ finite, restore if not — on samples of wildly mixed scales; and the Student-t/Cauchy
-// estimator, now guarded the same way, stays healthy on the fuzz reproducers (d not positive after
-// mixed scales; a data-driven start-up prior that underflowed).
+// The O(ρ) step guard (ident/regression/internal/step_guard.h, run by ident/regression/internal/step_driver.h) decides
+// exactly as the straightforward guard it replaces — copy the statistics, take the step, check every d_i ≥ DBL_MIN and
+// L, Θ̂ finite, restore if not — on samples of wildly mixed scales; and the Student-t/Cauchy estimator, now guarded the
+// same way, stays healthy on the fuzz reproducers (d not positive after mixed scales; a data-driven start-up prior that
+// underflowed).
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -12,8 +12,8 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "ident/regression/internal/extended_information.h"
 #include "ident/regression/rls.h"

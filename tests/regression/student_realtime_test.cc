@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "approx/weighting_polynomial.h"
 #include "ident/regression/student_regression.h"

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <random>
 
+#include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <gtest/gtest.h>
 
 #include "ident/regression/estimator_registry.h"
 #include "ident/regression/rls.h"
@@ -148,9 +148,9 @@ TEST(StudentRegression, IsInvariantUnderAffineTransformsOfTheData) {  // spec §
   };
   std::vector<Transform> transforms;
   Eigen::MatrixXd I = Eigen::MatrixXd::Identity(rho, rho);
-  transforms.push_back({1e3, Eigen::VectorXd::Zero(rho), I});         // scale y
-  transforms.push_back({1, Eigen::VectorXd::Zero(rho), 1e-2 * I});   // scale z
-  transforms.push_back({-1, Eigen::VectorXd::Zero(rho), -I});        // h → −h
+  transforms.push_back({1e3, Eigen::VectorXd::Zero(rho), I});       // scale y
+  transforms.push_back({1, Eigen::VectorXd::Zero(rho), 1e-2 * I});  // scale z
+  transforms.push_back({-1, Eigen::VectorXd::Zero(rho), -I});       // h → −h
   Eigen::MatrixXd T = Eigen::MatrixXd::NullaryExpr(rho, rho, [&] { return g(rng); }) + 2 * I;
   transforms.push_back({-2.5, Eigen::VectorXd::NullaryExpr(rho, [&] { return g(rng); }), T});  // general
   for (const Transform& tr : transforms) {
@@ -197,7 +197,7 @@ TEST(StudentRegression, RefusesInadmissiblePriorWeight) {  // spec §5, §10.10
 }
 
 TEST(StudentRegression, RefusesForgettingThatDrivesNuBelowNuHard) {  // spec §7b
-  StudentRegressionOptions o = Options(4, 1, 1, 0.7);  // ν → 1/(1−0.7) = 3.33 ≤ 4
+  StudentRegressionOptions o = Options(4, 1, 1, 0.7);                // ν → 1/(1−0.7) = 3.33 ≤ 4
   try {
     StudentRegression est(4, o);
     FAIL() << "no exception";

@@ -72,8 +72,8 @@ TEST(DualReconstruction, TotalVariationStepSolvedByHand) {
 }
 
 TEST(DualReconstruction, QuadraticProcessNoiseIsAlwaysUnique) {
-  const MapSmootherProblem p = StepProblem(Penalty::Quadratic(Eigen::MatrixXd::Constant(1, 1, 0.3)),
-                                           {0.1, -0.2, 0.05, 5, 5.2, 4.9, 5.1});
+  const MapSmootherProblem p =
+      StepProblem(Penalty::Quadratic(Eigen::MatrixXd::Constant(1, 1, 0.3)), {0.1, -0.2, 0.05, 5, 5.2, 4.9, 5.1});
   const MapSmootherResult r = SolveMapSmoother(p);
   ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << r.message;
   EXPECT_TRUE(r.nonunique_steps.empty());
@@ -142,7 +142,8 @@ TEST(DualReconstruction, FlaggedStepsAreKinksAndUnflaggedStepsRebuildThePrimalOn
     p.z.resize(1, T + 1);
     Eigen::Vector2d x(0, 0);
     for (int t = 0; t <= T; ++t) {
-      x = p.F[0] * x + 0.2 * Eigen::Vector2d(N(rng), N(rng)) + (jump(rng) ? Eigen::Vector2d(3 * N(rng), 0) : Eigen::Vector2d(0, 0));
+      x = p.F[0] * x + 0.2 * Eigen::Vector2d(N(rng), N(rng)) +
+          (jump(rng) ? Eigen::Vector2d(3 * N(rng), 0) : Eigen::Vector2d(0, 0));
       p.z(0, t) = x(0) + 0.5 * x(1) + 0.3 * N(rng);
     }
     const Penalty processes[] = {Penalty::L1(2), Penalty::Huber(0.4, 2),

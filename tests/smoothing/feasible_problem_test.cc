@@ -6,8 +6,8 @@
 #include <random>
 #include <string>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "ident/smoothing/map_smoother.h"
 #include "models/penalties.h"
@@ -49,9 +49,8 @@ TEST(FeasibleProblem, IsNeverReportedInfeasible) {
       MapSmootherOptions o;
       o.fast_path = fast;
       const MapSmootherResult r = SolveMapSmoother(p, o);
-      EXPECT_EQ(r.status, MapSmootherStatus::kConverged)
-          << "fast path " << fast << ", trial " << trial << " n " << n << " domain [" << lo << ", " << hi
-          << "]: " << r.message;
+      EXPECT_EQ(r.status, MapSmootherStatus::kConverged) << "fast path " << fast << ", trial " << trial << " n " << n
+                                                         << " domain [" << lo << ", " << hi << "]: " << r.message;
       EXPECT_LE(r.primal, at_known_point + 1e-8 * (1 + std::abs(at_known_point))) << "trial " << trial;
       EXPECT_LE(std::abs(r.relative_gap), 1e-6) << "trial " << trial;
       ++cases;

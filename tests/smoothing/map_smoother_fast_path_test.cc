@@ -1,7 +1,7 @@
-// The MAP smoother's fused fast path (ident/smoothing/internal/map_smoother_fast_path.h) against the general interior-point
-// path (MapSmootherOptions::fast_path = false: per-term PLQ dispatch, block Cholesky) on random problems of
-// the fast path's structure, n = 1..4, time-invariant and time-varying; which problems take it. The
-// agreement of both paths with an independent dense method is in map_smoother_test.cc
+// The MAP smoother's fused fast path (ident/smoothing/internal/map_smoother_fast_path.h) against the general
+// interior-point path (MapSmootherOptions::fast_path = false: per-term PLQ dispatch, block Cholesky) on random problems
+// of the fast path's structure, n = 1..4, time-invariant and time-varying; which problems take it. The agreement of
+// both paths with an independent dense method is in map_smoother_test.cc
 // (L1AndHuberMatchAnExhaustiveActiveSetSolutionOfTheDenseDual runs both).
 #include "ident/smoothing/internal/map_smoother_fast_path.h"
 
@@ -24,11 +24,15 @@ using models::Penalty;
 Penalty FastPathPenalty(std::mt19937& rng, int kind) {
   std::uniform_real_distribution<double> U(0, 1);
   switch (kind % 4) {
-    case 0: return Penalty::L1();
-    case 1: return Penalty::Huber(0.2 + 2 * U(rng));
-    case 2: return Penalty::Quantile(0.1 + 0.8 * U(rng));
+    case 0:
+      return Penalty::L1();
+    case 1:
+      return Penalty::Huber(0.2 + 2 * U(rng));
+    case 2:
+      return Penalty::Quantile(0.1 + 0.8 * U(rng));
     default:
-      return Penalty::BoxMonitoring(Eigen::VectorXd::Constant(1, -0.5 - U(rng)), Eigen::VectorXd::Constant(1, 0.5 + U(rng)),
+      return Penalty::BoxMonitoring(Eigen::VectorXd::Constant(1, -0.5 - U(rng)),
+                                    Eigen::VectorXd::Constant(1, 0.5 + U(rng)),
                                     Eigen::MatrixXd::Constant(1, 1, U(rng)));
   }
 }
@@ -37,8 +41,7 @@ Penalty FastPathPenalty(std::mt19937& rng, int kind) {
 MapSmootherProblem RandomProblem(std::mt19937& rng, int n, int T, bool varying, int kind) {
   MapSmootherProblem p;
   const int num_F = varying ? T : 1, num_H = varying ? T + 1 : 1;
-  for (int t = 0; t < num_F; ++t)
-    p.F.push_back(0.9 * Eigen::MatrixXd::Identity(n, n) + RandomMatrix(rng, n, n, 0.1));
+  for (int t = 0; t < num_F; ++t) p.F.push_back(0.9 * Eigen::MatrixXd::Identity(n, n) + RandomMatrix(rng, n, n, 0.1));
   for (int t = 0; t < num_H; ++t) p.H.push_back(RandomMatrix(rng, 1, n));
   p.z = RandomMatrix(rng, 1, T + 1, 2.0);
   std::bernoulli_distribution outlier(0.1);
@@ -147,7 +150,8 @@ TEST(MapSmootherFastPath, AgreesWithTheGeneralPathOnALongSequence) {
   MapSmootherOptions general;
   general.fast_path = false;
   for (const Penalty& g : {Penalty::L1(), Penalty::Huber(1.0)}) {
-    p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2)), Penalty::Quadratic(0.01 * Eigen::MatrixXd::Identity(2, 2))};
+    p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2)),
+                 Penalty::Quadratic(0.01 * Eigen::MatrixXd::Identity(2, 2))};
     p.measurement = {g};
     const MapSmootherResult fast = SolveMapSmoother(p), slow = SolveMapSmoother(p, general);
     ASSERT_EQ(fast.status, MapSmootherStatus::kConverged) << g.Name() << ": " << fast.message;

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <random>
 
+#include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <gtest/gtest.h>
 
 #include "common/error.h"
 #include "tests/smoothing/random_matrices.h"
@@ -89,14 +89,20 @@ Penalty RandomPiecewiseLinear(std::mt19937& rng) {
 Penalty RandomScalarPenalty(std::mt19937& rng, int kind) {
   std::uniform_real_distribution<double> U(0, 1);
   switch (kind % 6) {
-    case 0: return Penalty::L1();
-    case 1: return Penalty::Huber(0.2 + 2 * U(rng));
-    case 2: return Penalty::Vapnik(0.1 + U(rng));
-    case 3: return Penalty::Quantile(0.1 + 0.8 * U(rng));
+    case 0:
+      return Penalty::L1();
+    case 1:
+      return Penalty::Huber(0.2 + 2 * U(rng));
+    case 2:
+      return Penalty::Vapnik(0.1 + U(rng));
+    case 3:
+      return Penalty::Quantile(0.1 + 0.8 * U(rng));
     case 4:
-      return Penalty::BoxMonitoring(Eigen::VectorXd::Constant(1, -0.5 - U(rng)), Eigen::VectorXd::Constant(1, 0.5 + U(rng)),
+      return Penalty::BoxMonitoring(Eigen::VectorXd::Constant(1, -0.5 - U(rng)),
+                                    Eigen::VectorXd::Constant(1, 0.5 + U(rng)),
                                     Eigen::MatrixXd::Constant(1, 1, U(rng)));
-    default: return RandomPiecewiseLinear(rng);
+    default:
+      return RandomPiecewiseLinear(rng);
   }
 }
 
@@ -112,9 +118,15 @@ MapSmootherProblem RandomPlqProblem(std::mt19937& rng, int T, int trial) {
   p.z = RandomMatrix(rng, 1, T + 1, 1.5);
   std::uniform_real_distribution<double> U(0, 1);
   switch (trial % 3) {
-    case 0: p.process = {Penalty::Quadratic(RandomSpd(rng, n)), Penalty::Quadratic(RandomSpd(rng, n))}; break;
-    case 1: p.process = {Penalty::Quadratic(RandomSpd(rng, n)), Penalty::Huber(0.5 + U(rng), n)}; break;
-    default: p.process = {Penalty::L1(n), Penalty::Vapnik(0.05, n)}; break;
+    case 0:
+      p.process = {Penalty::Quadratic(RandomSpd(rng, n)), Penalty::Quadratic(RandomSpd(rng, n))};
+      break;
+    case 1:
+      p.process = {Penalty::Quadratic(RandomSpd(rng, n)), Penalty::Huber(0.5 + U(rng), n)};
+      break;
+    default:
+      p.process = {Penalty::L1(n), Penalty::Vapnik(0.05, n)};
+      break;
   }
   for (int t = 0; t <= T; ++t) p.measurement.push_back(RandomScalarPenalty(rng, static_cast<int>(U(rng) * 6)));
   return p;
@@ -164,8 +176,8 @@ TEST(MapSmoother, WeakDualityHoldsAtArbitraryFeasiblePoints) {
     for (int t = 0; t <= p.T(); ++t) u(0, t) = 0.8 * U(rng);
     const double dual = DualObjective(p, u), primal = PrimalObjective(p, x);
     EXPECT_LE(dual, primal);
-    EXPECT_LE(dual, opt.primal + 1e-9);   // every dual value bounds the optimum from below
-    EXPECT_GE(primal, opt.dual - 1e-9);   // every primal value bounds it from above
+    EXPECT_LE(dual, opt.primal + 1e-9);  // every dual value bounds the optimum from below
+    EXPECT_GE(primal, opt.dual - 1e-9);  // every primal value bounds it from above
   }
   // Outside dom g* the dual is -inf.
   Eigen::MatrixXd u = Eigen::MatrixXd::Constant(1, p.T() + 1, 0.9);
@@ -203,8 +215,10 @@ DenseSolution SolveDualByEnumeration(const MapSmootherProblem& p, const Eigen::M
     std::vector<int> free;
     Eigen::VectorXd u = Eigen::VectorXd::Zero(N);
     for (int i = 0; i < N; ++i)
-      if (state(i) == 0) free.push_back(i);
-      else u(i) = state(i) * b;
+      if (state(i) == 0)
+        free.push_back(i);
+      else
+        u(i) = state(i) * b;
     if (!free.empty()) {
       const int m = static_cast<int>(free.size());
       Eigen::MatrixXd KF(m, m);
@@ -219,8 +233,10 @@ DenseSolution SolveDualByEnumeration(const MapSmootherProblem& p, const Eigen::M
     const Eigen::VectorXd grad = z - K * u;  // gradient of the concave objective
     bool kkt = true;
     for (int i = 0; i < N && kkt; ++i) {
-      if (state(i) == 0) kkt = std::abs(u(i)) <= b;
-      else kkt = state(i) * grad(i) >= -1e-12;
+      if (state(i) == 0)
+        kkt = std::abs(u(i)) <= b;
+      else
+        kkt = state(i) * grad(i) >= -1e-12;
     }
     if (!kkt) continue;
     const Eigen::VectorXd w = Qbar * (Y * u), xs = Ainv * w;
@@ -318,8 +334,8 @@ TEST(MapSmoother, VectorMeasurementsWithACoupledBoxMonitoringFunctionCloseTheGap
   std::mt19937 rng(31);
   Eigen::MatrixXd M(2, 2);
   M << 1.0, 0.4, 0.4, 0.6;
-  const Penalty box = Penalty::BoxMonitoring((Eigen::VectorXd(2) << -1, -0.5).finished(),
-                                             (Eigen::VectorXd(2) << 1, 2).finished(), M);
+  const Penalty box =
+      Penalty::BoxMonitoring((Eigen::VectorXd(2) << -1, -0.5).finished(), (Eigen::VectorXd(2) << 1, 2).finished(), M);
   for (int trial = 0; trial < 4; ++trial) {
     const int T = 15, n = 3;
     MapSmootherProblem p;
@@ -371,8 +387,8 @@ TEST(MapSmoother, QuadraticTermsWithoutMultipliersMixWithBoundedOnes) {
     for (int t = 0; t <= T; ++t) {
       quadratic[t] = t % 3 != 1;
       p.measurement.push_back(quadratic[t] ? Penalty::Quadratic(Eigen::MatrixXd::Constant(1, 1, c))
-                              : t % 2   ? Penalty::L1()
-                                        : Penalty::Huber(0.5));
+                              : t % 2      ? Penalty::L1()
+                                           : Penalty::Huber(0.5));
     }
     const MapSmootherResult r = SolveMapSmoother(p);
     ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << r.message;

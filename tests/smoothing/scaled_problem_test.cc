@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "ident/smoothing/map_smoother.h"
 #include "models/penalties.h"
@@ -26,15 +26,19 @@ using models::Penalty;
 // ρ_s(r) = s²·ρ(r/s) for the penalties the problems below use.
 Penalty ScaledPenalty(const Penalty& f, double s) {
   switch (f.kind()) {
-    case Penalty::Kind::kQuadratic: return f;
-    case Penalty::Kind::kHuber: return Penalty::Huber(s * f.parameter(), f.dim());
+    case Penalty::Kind::kQuadratic:
+      return f;
+    case Penalty::Kind::kHuber:
+      return Penalty::Huber(s * f.parameter(), f.dim());
     case Penalty::Kind::kPiecewiseLinear:
       return Penalty::PiecewiseLinear(s * f.knots(), s * s * f.values());
     case Penalty::Kind::kBoxMonitoring: {
       const models::PlqForm& q = f.plq();
       return Penalty::BoxMonitoring(s * q.lo, s * q.hi, f.matrix());
     }
-    default: ADD_FAILURE() << "no scaled form for " << f.Name(); return f;
+    default:
+      ADD_FAILURE() << "no scaled form for " << f.Name();
+      return f;
   }
 }
 
@@ -53,21 +57,27 @@ MapSmootherProblem RandomScalableProblem(int trial, std::mt19937& rng) {
   if (n == 2) F(0, 1) = 0.2;
   p.F = {F};
   p.H = {Eigen::MatrixXd::Ones(1, n)};
-  const Penalty process = trial % 3 == 0   ? Penalty::Huber(0.5 + U(rng), n)
-                          : trial % 3 == 1 ? Penalty::Quadratic(0.3 * Eigen::MatrixXd::Identity(n, n))
-                                           : Penalty::BoxMonitoring(Eigen::VectorXd::Constant(n, -1),
-                                                                    Eigen::VectorXd::Constant(n, 1),
-                                                                    Eigen::MatrixXd::Identity(n, n));
+  const Penalty process =
+      trial % 3 == 0   ? Penalty::Huber(0.5 + U(rng), n)
+      : trial % 3 == 1 ? Penalty::Quadratic(0.3 * Eigen::MatrixXd::Identity(n, n))
+                       : Penalty::BoxMonitoring(Eigen::VectorXd::Constant(n, -1), Eigen::VectorXd::Constant(n, 1),
+                                                Eigen::MatrixXd::Identity(n, n));
   p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(n, n)), process};
   const double lo = -(1 + 2 * U(rng)), hi = 1 + 2 * U(rng);
   switch (trial % 4) {
-    case 0: p.measurement = {Penalty::Huber(0.3 + U(rng))}; break;
-    case 1: p.measurement = {Penalty::Quadratic(Eigen::MatrixXd::Constant(1, 1, 0.5))}; break;
+    case 0:
+      p.measurement = {Penalty::Huber(0.3 + U(rng))};
+      break;
+    case 1:
+      p.measurement = {Penalty::Quadratic(Eigen::MatrixXd::Constant(1, 1, 0.5))};
+      break;
     case 2:
       p.measurement = {Penalty::BoxMonitoring(Eigen::VectorXd::Constant(1, -1), Eigen::VectorXd::Constant(1, 2),
                                               Eigen::MatrixXd::Constant(1, 1, 0.5))};
       break;
-    default: p.measurement = {ScalableVee(lo, lo + (hi - lo) * U(rng), hi, 0.5 + U(rng), 0.5 + U(rng))}; break;
+    default:
+      p.measurement = {ScalableVee(lo, lo + (hi - lo) * U(rng), hi, 0.5 + U(rng), 0.5 + U(rng))};
+      break;
   }
   std::uniform_real_distribution<double> V(-1, 1);
   auto random_vector = [&] { return Eigen::VectorXd(Eigen::VectorXd::NullaryExpr(n, [&] { return V(rng); })); };

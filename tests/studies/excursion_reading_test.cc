@@ -8,15 +8,15 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <gtest/gtest.h>
+#include <Eigen/Cholesky>
 
 #include "common/error.h"
-#include "studies/mems/crossing_reading.h"
-#include "studies/mems/excursion_reading.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
+#include "studies/mems/crossing_reading.h"
+#include "studies/mems/excursion_reading.h"
 
 namespace ident {
 namespace excursion_test {
@@ -59,7 +59,7 @@ struct ExcursionCase {
   models::LinearStateSpace model = models::MemsAccelerometerDynamics(0.01, 1.0);
   Eigen::Vector2d m_before{0.975, 3.6};
   Eigen::Matrix2d P_before{{4e-4, 4e-3}, {4e-3, 0.25}};
-  std::vector<double> u, y;   // u(k−1) and y(k) of step k = 1..K
+  std::vector<double> u, y;  // u(k−1) and y(k) of step k = 1..K
   ExcursionCase() {
     Eigen::Vector2d x = m_before;
     double y_prev = 0, u_prev = 0;
@@ -79,8 +79,8 @@ TEST(ExcursionReading, WholeExcursionIsCloseToMonteCarloAndCloserThanTheSequenti
   const ExcursionCase c;
   const ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
   const int steps = static_cast<int>(c.y.size());
-  ASSERT_EQ(c.y.front(), 1.0);   // the event at the first step
-  ASSERT_GE(steps, 5);           // repeated readings between the wedges
+  ASSERT_EQ(c.y.front(), 1.0);  // the event at the first step
+  ASSERT_GE(steps, 5);          // repeated readings between the wedges
   ASSERT_EQ(c.y.back(), 0.0);
   // Monte Carlo reference (seeded): accept paths whose readings equal c.y.
   std::mt19937_64 rng(20261123);
@@ -92,10 +92,11 @@ TEST(ExcursionReading, WholeExcursionIsCloseToMonteCarloAndCloserThanTheSequenti
   long accepted = 0;
   for (long i = 0; i < 400000; ++i) {
     Eigen::Vector2d x = c.m_before + Lb * Eigen::Vector2d(normal(rng), normal(rng));
-    if (x(0) >= 1) continue;                                   // y(0) = 0
+    if (x(0) >= 1) continue;  // y(0) = 0
     bool ok = true;
     for (int k = 0; k < steps && ok; ++k) {
-      x = c.model.A * x + c.model.B * Eigen::VectorXd::Constant(1, c.u[k]) + Ln * Eigen::Vector2d(normal(rng), normal(rng));
+      x = c.model.A * x + c.model.B * Eigen::VectorXd::Constant(1, c.u[k]) +
+          Ln * Eigen::Vector2d(normal(rng), normal(rng));
       ok = (x(0) >= 1 ? 1.0 : 0.0) == c.y[k];
     }
     if (!ok) continue;
@@ -120,11 +121,13 @@ TEST(ExcursionReading, WholeExcursionIsCloseToMonteCarloAndCloserThanTheSequenti
     ASSERT_TRUE(ex.Step(ep, mb, Pb, c.model, u, y_prev, c.y[k]).updated()) << k;
     EXPECT_TRUE(ex.last_converged()) << k;
     adf.Predict(c.model, u);
-    if (c.y[k] != y_prev) ASSERT_TRUE(CorrectReadingChange(adf, ab, Pa, c.model, sensor, y_prev, c.y[k]).updated());
-    else ASSERT_TRUE(adf.Correct(sensor, c.y[k]).updated());
+    if (c.y[k] != y_prev)
+      ASSERT_TRUE(CorrectReadingChange(adf, ab, Pa, c.model, sensor, y_prev, c.y[k]).updated());
+    else
+      ASSERT_TRUE(adf.Correct(sensor, c.y[k]).updated());
     y_prev = c.y[k];
   }
-  EXPECT_FALSE(ex.active());   // closed at the exit
+  EXPECT_FALSE(ex.active());  // closed at the exit
   // Monte Carlo standard errors: mean sd/√n, variance ≈ var·√(2/n).
   const double n = static_cast<double>(accepted);
   std::printf("accepted %ld of 400000; steps %d\n", accepted, steps);
@@ -158,8 +161,8 @@ TEST(ExcursionReading, BadInputIsRejectedOrThrows) {
   const Eigen::VectorXd u = Eigen::VectorXd::Zero(1);
   f.Predict(model, u);
   const Eigen::VectorXd m = f.mean();
-  EXPECT_EQ(ex.Step(f, mb, Pb, model, u, 0.0, 0.0).status, StepStatus::kRejectedInvalid);   // no change, no excursion
-  EXPECT_EQ(ex.Step(f, mb, Pb, model, u, 0.0, 0.5).status, StepStatus::kRejectedInvalid);   // not a reading
+  EXPECT_EQ(ex.Step(f, mb, Pb, model, u, 0.0, 0.0).status, StepStatus::kRejectedInvalid);  // no change, no excursion
+  EXPECT_EQ(ex.Step(f, mb, Pb, model, u, 0.0, 0.5).status, StepStatus::kRejectedInvalid);  // not a reading
   EXPECT_EQ(ex.Step(f, Eigen::Vector3d::Zero(), Pb, model, u, 0.0, 1.0).status, StepStatus::kRejectedInvalid);
   EXPECT_EQ(f.mean(), m);
   EXPECT_FALSE(ex.active());
@@ -192,7 +195,7 @@ TEST(LcGaussianFilterAssign, ReplacesTheStateOrRejectsWithoutTouchingIt) {
   const double ll = f.log_likelihood();
   ASSERT_TRUE(f.Assign(Eigen::Vector2d(-1, 2), asym).updated());
   EXPECT_EQ(f.mean(), Eigen::Vector2d(-1, 2));
-  EXPECT_DOUBLE_EQ(f.covariance()(0, 1), 0.2);   // symmetrised
+  EXPECT_DOUBLE_EQ(f.covariance()(0, 1), 0.2);  // symmetrised
   EXPECT_DOUBLE_EQ(f.covariance()(1, 0), 0.2);
   EXPECT_EQ(f.log_likelihood(), ll);
 }

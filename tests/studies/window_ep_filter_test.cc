@@ -11,20 +11,20 @@
 #include <random>
 #include <vector>
 
-#include <boost/math/quadrature/gauss_kronrod.hpp>
+#include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-#include <gtest/gtest.h>
+#include <boost/math/quadrature/gauss_kronrod.hpp>
 
 #include "common/error.h"
-#include "studies/mems/crossing_reading.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "ident/observers/truncated_gaussian_filter.h"
-#include "studies/mems/window_ep_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
 #include "models/truncated_bivariate_normal.h"
+#include "studies/mems/crossing_reading.h"
+#include "studies/mems/window_ep_filter.h"
 #include "tests/support/alloc_counter.h"
 #include "tests/support/sanitizer.h"
 
@@ -40,7 +40,7 @@ struct Sequence {
   models::LinearStateSpace model = models::MemsAccelerometerDynamics(0.01, 1.0);
   Eigen::Vector2d m0;
   Eigen::Matrix2d P0;
-  std::vector<double> u, y;   // u(k−1), y(k) for k = 1..K
+  std::vector<double> u, y;  // u(k−1), y(k) for k = 1..K
   Sequence(Eigen::Vector2d m, Eigen::Matrix2d P, int max_steps, int tail) : m0(m), P0(P) {
     Eigen::Vector2d x = m0;
     double u_prev = 0, y_prev = 0;
@@ -61,7 +61,7 @@ struct Sequence {
 // Dense EP of the same sites as WindowEpFilter (window ≥ K: nothing frozen) over X = (x(0), …, x(K)).
 struct DenseEp {
   struct Site {
-    int j = 0, dim = 1;          // step (1-based); dim 2: (s(j−1), s(j))
+    int j = 0, dim = 1;  // step (1-based); dim 2: (s(j−1), s(j))
     double lo = 0, hi = 0;
     Eigen::Vector2d bounds, sides;
     Eigen::Matrix2d lam = Eigen::Matrix2d::Zero();
@@ -78,7 +78,7 @@ struct DenseEp {
     mu.head(2) = q.m0;
     S.topLeftCorner(2, 2) = q.P0;
     const Eigen::MatrixXd A = q.model.A;
-    for (int j = 1; j <= K; ++j) {   // x(j) = A x(j−1) + B u + w
+    for (int j = 1; j <= K; ++j) {  // x(j) = A x(j−1) + B u + w
       mu.segment(2 * j, 2) = A * mu.segment(2 * (j - 1), 2) + q.model.B * Eigen::VectorXd::Constant(1, q.u[j - 1]);
       S.block(2 * j, 2 * j, 2, 2) = A * S.block(2 * (j - 1), 2 * (j - 1), 2, 2) * A.transpose() + q.model.process_noise;
       for (int i = 0; i < j; ++i) {
@@ -89,7 +89,7 @@ struct DenseEp {
     for (int j = 1; j <= K; ++j) {
       const double y = q.y[j - 1];
       if (j >= 2 && y != q.y[j - 2] && sites.back().dim == 1) {
-        sites.pop_back();   // the wedge takes over the reading of step j − 1
+        sites.pop_back();  // the wedge takes over the reading of step j − 1
         Site w;
         w.j = j;
         w.dim = 2;
@@ -108,8 +108,12 @@ struct DenseEp {
   }
   Eigen::MatrixXd G(const Site& s) const {
     Eigen::MatrixXd g = Eigen::MatrixXd::Zero(s.dim, mu.size());
-    if (s.dim == 1) g(0, 2 * s.j) = 1;
-    else { g(0, 2 * (s.j - 1)) = 1; g(1, 2 * s.j) = 1; }
+    if (s.dim == 1)
+      g(0, 2 * s.j) = 1;
+    else {
+      g(0, 2 * (s.j - 1)) = 1;
+      g(1, 2 * s.j) = 1;
+    }
     return g;
   }
   // Sequential EP sweeps in site order until no site moves by more than tol; returns the sweeps used.
@@ -133,7 +137,8 @@ struct DenseEp {
           mt(0) = t.mean;
           Vt(0, 0) = t.variance;
         } else {
-          const auto t = models::TruncatedBivariateNormalMoments(Eigen::Vector2d(mc), Eigen::Matrix2d(Vc), s.bounds, s.sides);
+          const auto t =
+              models::TruncatedBivariateNormalMoments(Eigen::Vector2d(mc), Eigen::Matrix2d(Vc), s.bounds, s.sides);
           EXPECT_TRUE(t.ok);
           mt = t.mean;
           Vt = t.covariance;
@@ -244,7 +249,8 @@ TEST(WindowEp, WindowOneIsThePlainAssumedDensityFilter) {
       ASSERT_NEAR(w.mean()(i), plain.mean()(i), 1e-10 * sd) << k;
       for (int j = 0; j < 2; ++j)
         ASSERT_NEAR(w.covariance()(i, j), plain.covariance()(i, j),
-                    1e-9 * std::sqrt(plain.covariance()(i, i) * plain.covariance()(j, j))) << k;
+                    1e-9 * std::sqrt(plain.covariance()(i, i) * plain.covariance()(j, j)))
+            << k;
     }
     u(0) = y != 0 ? -y * 32 : -(x(1) - dir * 4) / 0.125;
   }
@@ -258,7 +264,7 @@ TEST(WindowEp, BandedSweepsReachTheDenseEpFixedPoint) {
     const WindowEpFilter f = RunWindow(q, K + 5, 1e-13, 500);
     ASSERT_EQ(f.length(), K);
     DenseEp dense(q, 1.0);
-    const int sweeps = dense.Run(1e-11, 2000);   // 1e-14 is below this joint's round-off floor
+    const int sweeps = dense.Run(1e-11, 2000);  // 1e-14 is below this joint's round-off floor
     std::printf("K = %d: dense EP converged in %d sweeps\n", K, sweeps);
     ASSERT_GT(sweeps, 0);
     for (int lag = 0; lag < K; ++lag) {
@@ -283,7 +289,7 @@ TEST(WindowEp, CloseToMonteCarloOfTheExactPosteriorAndCloserThanTheAssumedDensit
   for (const Sequence& q : {Approach(), ApproachAndExcursion()}) {
     const int K = static_cast<int>(q.y.size());
     if (sequence == 0) {
-      for (double y : q.y) ASSERT_EQ(y, 0.0);   // not yet crossed at every step
+      for (double y : q.y) ASSERT_EQ(y, 0.0);  // not yet crossed at every step
     } else {
       ASSERT_GE(K, 15);
       ASSERT_EQ(q.y.back(), 0.0);
@@ -308,7 +314,7 @@ TEST(WindowEp, CloseToMonteCarloOfTheExactPosteriorAndCloserThanTheAssumedDensit
       EXPECT_NEAR(ep.covariance()(i, i), mc.cov(i, i), (var_tol + 4 * std::sqrt(2 / n)) * mc.cov(i, i))
           << sequence << " x" << i + 1;
       if (sequence == 0 && i == 0) {
-        EXPECT_LT(ep.covariance()(i, i), mc.cov(i, i));   // overconfident, not under
+        EXPECT_LT(ep.covariance()(i, i), mc.cov(i, i));  // overconfident, not under
       }
     }
     // The assumed-density filter re-truncates its projections (overconfident); EP is nearer the exact
@@ -363,7 +369,9 @@ TEST(WindowEp, BadInputIsRejectedAndStepsAllocateNothing) {
 
 // A slow approach: 40 "not yet crossed" readings while the mean path drifts from 0.55 towards the threshold
 // at speed 1 (the regime of the study's failing row: long runs of unchanged y = 0).
-Sequence SlowApproach() { return Sequence(Eigen::Vector2d(0.55, 1.0), Eigen::Matrix2d{{4e-3, 0.0}, {0.0, 0.25}}, 40, 0); }
+Sequence SlowApproach() {
+  return Sequence(Eigen::Vector2d(0.55, 1.0), Eigen::Matrix2d{{4e-3, 0.0}, {0.0, 0.25}}, 40, 0);
+}
 
 TruncatedGaussianFilter RunTruncated(const Sequence& q) {
   const ThresholdSensor sensor(Eigen::Vector2d(1, 0), 1.0);
@@ -387,7 +395,7 @@ RectangleMoments RectangleByQuadrature(const Eigen::Vector2d& mu, const Eigen::M
   std::vector<double> pts{a, b};
   for (double bound : {lo(1), hi(1)}) {
     if (!std::isfinite(bound)) continue;
-    const double x = mu(0) + (bound - mu(1)) / beta;   // conditional mean of s2 = bound
+    const double x = mu(0) + (bound - mu(1)) / beta;  // conditional mean of s2 = bound
     for (double d : {-12.0, -3.0, 0.0, 3.0, 12.0}) {
       const double p = x + d * sc / std::abs(beta);
       if (p > a && p < b) pts.push_back(p);
@@ -402,7 +410,7 @@ RectangleMoments RectangleByQuadrature(const Eigen::Vector2d& mu, const Eigen::M
     }
     return sum;
   };
-  auto moments = [&](double x, int which) {   // ∫ s2^which N(s2 | x) 1{lo2 < s2 < hi2} ds2 × N(x)
+  auto moments = [&](double x, int which) {  // ∫ s2^which N(s2 | x) 1{lo2 < s2 < hi2} ds2 × N(x)
     const double m = mu(1) + beta * (x - mu(0));
     const double px = std::exp(-0.5 * (x - mu(0)) * (x - mu(0)) / S(0, 0)) / (s1 * std::sqrt(2 * M_PI));
     const auto t = models::TruncatedNormalMoments(m, vc, lo(1), hi(1));
@@ -417,7 +425,8 @@ RectangleMoments RectangleByQuadrature(const Eigen::Vector2d& mu, const Eigen::M
   const double e2 = integrate([&](double x) { return moments(x, 1); }) / L;
   const double e11 = integrate([&](double x) { return (x - e1) * (x - e1) * moments(x, 0); }) / L;
   const double e12 = integrate([&](double x) { return (x - e1) * (moments(x, 1) - e2 * moments(x, 0)); }) / L;
-  const double e22 = integrate([&](double x) { return moments(x, 2) - 2 * e2 * moments(x, 1) + e2 * e2 * moments(x, 0); }) / L;
+  const double e22 =
+      integrate([&](double x) { return moments(x, 2) - 2 * e2 * moments(x, 1) + e2 * e2 * moments(x, 0); }) / L;
   r.mean << e1, e2;
   r.covariance << e11, e12, e12, e22;
   r.ok = true;
@@ -522,7 +531,8 @@ TEST(TruncatedGaussian, CloserToMonteCarloThanWindowEp) {
       if (sequence != 1) {
         EXPECT_LT(std::abs(tr.covariance()(i, i) - mc.cov(i, i)), std::abs(ep.covariance()(i, i) - mc.cov(i, i)))
             << sequence << " x" << i + 1;
-        EXPECT_LT(std::abs(tr.mean()(i) - mc.mean(i)), std::abs(ep.mean()(i) - mc.mean(i))) << sequence << " x" << i + 1;
+        EXPECT_LT(std::abs(tr.mean()(i) - mc.mean(i)), std::abs(ep.mean()(i) - mc.mean(i)))
+            << sequence << " x" << i + 1;
       }
     }
     ++sequence;

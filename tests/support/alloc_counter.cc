@@ -24,7 +24,7 @@ std::int64_t AllocationsSoFar() { return g_allocations; }
 #if defined(IDENT_TESTS_UNDER_ASAN)
 
 extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
-                                                          void (*free_hook)(const volatile void*));
+                                                         void (*free_hook)(const volatile void*));
 namespace {
 void CountMalloc(const volatile void*, std::size_t) { ++g_allocations; }
 void IgnoreFree(const volatile void*) {}

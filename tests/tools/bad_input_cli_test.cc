@@ -5,13 +5,13 @@
 #include <filesystem>
 #include <string>
 
-#include <gtest/gtest.h>
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "tests/tools/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
+#include "tests/tools/scaled_dryer.h"
 
 namespace ident::testing {
 namespace {
@@ -24,7 +24,9 @@ std::string Repeat(const std::string& header, int rows, std::string (*row)(int))
   return csv;
 }
 
-TEST(BadInput, MissingFile) { ExpectCliError("fit /nonexistent/x.csv" + kArx, "cannot open '/nonexistent/x.csv': No such file or directory"); }
+TEST(BadInput, MissingFile) {
+  ExpectCliError("fit /nonexistent/x.csv" + kArx, "cannot open '/nonexistent/x.csv': No such file or directory");
+}
 
 TEST(BadInput, UnreadableFileIsADirectory) {
   const std::string dir = TempDir() + "/adir";
@@ -32,7 +34,9 @@ TEST(BadInput, UnreadableFileIsADirectory) {
   ExpectCliError("fit " + dir + kArx, "cannot read '" + dir + "': it is a directory");
 }
 
-TEST(BadInput, EmptyFile) { ExpectCliError("fit " + WriteFile("empty.csv", "") + kArx, "empty.csv: the file is empty"); }
+TEST(BadInput, EmptyFile) {
+  ExpectCliError("fit " + WriteFile("empty.csv", "") + kArx, "empty.csv: the file is empty");
+}
 
 TEST(BadInput, BlankLinesOnlyIsEmpty) {
   ExpectCliError("fit " + WriteFile("blank.csv", "\n  \r\n\n") + kArx, "blank.csv: the file is empty");
@@ -43,14 +47,16 @@ TEST(BadInput, HeaderOnly) {
 }
 
 TEST(BadInput, RaggedRowShort) {
-  ExpectCliError("fit " + WriteFile("ragged.csv", "t,u,y\n0,1,2\n1,2\n") + kArx, "ragged.csv:3: row has 2 fields; the header has 3");
+  ExpectCliError("fit " + WriteFile("ragged.csv", "t,u,y\n0,1,2\n1,2\n") + kArx,
+                 "ragged.csv:3: row has 2 fields; the header has 3");
 }
 
 TEST(BadInput, RaggedRowLongLateInTheFile) {
   // The bad row sits in the validation part: still reported before any result.
   std::string csv = ReadFile(DatasetPath("dryer.csv"));
   csv += "1001,1,2,3\n";
-  ExpectCliError("fit " + WriteFile("ragged_late.csv", csv) + kArx, "ragged_late.csv:1002: row has 4 fields; the header has 3");
+  ExpectCliError("fit " + WriteFile("ragged_late.csv", csv) + kArx,
+                 "ragged_late.csv:1002: row has 4 fields; the header has 3");
 }
 
 TEST(BadInput, FailedFitLeavesNoPartialTrace) {
@@ -64,7 +70,8 @@ TEST(BadInput, FailedFitLeavesNoPartialTrace) {
 }
 
 TEST(BadInput, NonNumericCell) {
-  ExpectCliError("fit " + WriteFile("text.csv", "t,u,y\n0,1,2\n1,x1,2\n") + kArx, "text.csv:3: column 2 ('u'): 'x1' is not a number");
+  ExpectCliError("fit " + WriteFile("text.csv", "t,u,y\n0,1,2\n1,x1,2\n") + kArx,
+                 "text.csv:3: column 2 ('u'): 'x1' is not a number");
 }
 
 TEST(BadInput, EmptyCell) {
@@ -73,20 +80,22 @@ TEST(BadInput, EmptyCell) {
 
 TEST(BadInput, NanCell) {
   ExpectCliError("fit " + WriteFile("nan.csv", "t,u,y\n0,1,2\n1,NaN,3\n") + kArx,
-              "nan.csv:3: column 2 ('u'): 'NaN' is not a finite number (pass --missing");
+                 "nan.csv:3: column 2 ('u'): 'NaN' is not a finite number (pass --missing");
 }
 
 TEST(BadInput, InfCell) {
-  ExpectCliError("fit " + WriteFile("inf.csv", "t,u,y\n0,1,-inf\n") + kArx, "inf.csv:2: column 3 ('y'): '-inf' is not a finite number");
+  ExpectCliError("fit " + WriteFile("inf.csv", "t,u,y\n0,1,-inf\n") + kArx,
+                 "inf.csv:2: column 3 ('y'): '-inf' is not a finite number");
 }
 
 TEST(BadInput, CellBeyondDoubleRange) {
-  ExpectCliError("fit " + WriteFile("e309.csv", "t,u,y\n0,1e309,1\n") + kArx, "e309.csv:2: column 2 ('u'): '1e309' is out of the range of double");
+  ExpectCliError("fit " + WriteFile("e309.csv", "t,u,y\n0,1e309,1\n") + kArx,
+                 "e309.csv:2: column 2 ('u'): '1e309' is out of the range of double");
 }
 
 TEST(BadInput, ValuesNear1e308AreRefusedNotTurnedIntoInf) {
   ExpectCliError("fit " + ScaledDryer("dryer_e300.csv", 1e300) + kArx,
-              "none of the 496 samples of the estimation part could be used");
+                 "none of the 496 samples of the estimation part could be used");
 }
 
 TEST(BadInput, OneValueNear1e308SpoilsTheMeanAndIsRefused) {
@@ -100,8 +109,8 @@ TEST(BadInput, OneValueNear1e308SpoilsTheMeanAndIsRefused) {
 
 TEST(BadInput, ValuesNear1e308OfBothSignsOverflowTheMean) {
   const std::string path = WriteFile("alt.csv", Repeat("t,u,y", 40, [](int i) {
-    return fmt::format("{},{},{}", i, i % 2 ? 1.7e308 : -1.7e308, std::sin(i));
-  }));
+                                       return fmt::format("{},{},{}", i, i % 2 ? 1.7e308 : -1.7e308, std::sin(i));
+                                     }));
   ExpectCliError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 1", "the mean of column 'u' overflows");
 }
 
@@ -122,7 +131,7 @@ TEST(BadInput, ValuesNear1e150GiveTheSameModelAsUnscaledData) {
 // the estimate would be the prior's (θ ≈ 1e-286, found by this test) — refused with a clear message.
 TEST(BadInput, ValuesNear1em150AreRefusedInsteadOfReturningThePrior) {
   ExpectCliError("fit " + ScaledDryer("dryer_em150.csv", 1e-150) + kArx,
-              "over the estimation part, too small against the default flat prior (values near 1e-150?)");
+                 "over the estimation part, too small against the default flat prior (values near 1e-150?)");
 }
 
 // Ordinary small units (dryer × 3e-5: sums of squares ~1e-7): the default priors follow the data's scale
@@ -147,8 +156,10 @@ TEST(BadInput, SmallUnitsGiveTheSameModelAsUnscaledData) {
 // Orders far beyond any record are refused from the structure alone — before (before: 7.8 GB were
 // allocated, then "std::bad_alloc") and without integer overflow (before: nb = INT_MAX wrapped around).
 TEST(BadInput, HugeOrdersAreRefusedBeforeAllocating) {
-  ExpectCliError("fit dryer --output y --input u --na 1000000000", "the model has 1000000002 parameters; need at most 10000");
-  ExpectCliError("fit dryer --output y --input u --nb 2147483647", "nk + nb = 2147483648 for input 1; need at most 10000000");
+  ExpectCliError("fit dryer --output y --input u --na 1000000000",
+                 "the model has 1000000002 parameters; need at most 10000");
+  ExpectCliError("fit dryer --output y --input u --nb 2147483647",
+                 "nk + nb = 2147483648 for input 1; need at most 10000000");
 }
 
 TEST(BadInput, DofContradictingTheEstimatorSpecNamesIt) {
@@ -169,44 +180,62 @@ TEST(BadInput, UnknownSubcommandIsNamedOnOneLine) {
 }
 
 TEST(BadInput, ConstantInputColumn) {
-  const std::string path = WriteFile("const.csv", Repeat("t,u,y", 50, [](int i) {
-    return fmt::format("{},1.5,{}", i, std::sin(0.3 * i));
-  }));
-  ExpectCliError("fit " + path + " --output y --input u --na 1 --nb 1 --nk 1",
-              "regressor 'b1' is identically zero over the estimation part (a constant column after detrending?); the "
-              "model is not identifiable");
+  const std::string path =
+      WriteFile("const.csv", Repeat("t,u,y", 50, [](int i) { return fmt::format("{},1.5,{}", i, std::sin(0.3 * i)); }));
+  ExpectCliError(
+      "fit " + path + " --output y --input u --na 1 --nb 1 --nk 1",
+      "regressor 'b1' is identically zero over the estimation part (a constant column after detrending?); the "
+      "model is not identifiable");
 }
 
 TEST(BadInput, CollinearRegressors) {
   const std::string path = WriteFile("collinear.csv", Repeat("x1,x2,y", 50, [](int i) {
-    return fmt::format("{},{},{}", std::sin(i), 2 * std::sin(i), i % 7);
-  }));
-  ExpectCliError("fit " + path + " --output y --regressors x1,x2", "the regressors are collinear over the estimation part");
+                                       return fmt::format("{},{},{}", std::sin(i), 2 * std::sin(i), i % 7);
+                                     }));
+  ExpectCliError("fit " + path + " --output y --regressors x1,x2",
+                 "the regressors are collinear over the estimation part");
 }
 
 TEST(BadInput, OrdersTooLargeForTheRecord) {
   ExpectCliError("fit gas_furnace --output y --input u --na 100 --nb 50 --nk 3",
-              "the estimation part has 148 rows; ARX(100,50,3) with 150 parameters needs at least 251");
+                 "the estimation part has 148 rows; ARX(100,50,3) with 150 parameters needs at least 251");
 }
 
-TEST(BadInput, UnknownEstimator) { ExpectCliError("fit dryer" + kArx + " --estimator nonesuch", "unknown estimator 'nonesuch'"); }
+TEST(BadInput, UnknownEstimator) {
+  ExpectCliError("fit dryer" + kArx + " --estimator nonesuch", "unknown estimator 'nonesuch'");
+}
 
 TEST(BadInput, UnknownColumn) {
   ExpectCliError("fit dryer --output y --input q --na 2 --nb 2 --nk 3", "no column 'q' (columns: t, u, y)");
 }
 
-TEST(BadInput, ForgettingAboveOne) { ExpectCliError("fit dryer" + kArx + " --forgetting 1.5", "forgetting = 1.5; need 0 < forgetting <= 1"); }
-TEST(BadInput, ForgettingZero) { ExpectCliError("fit dryer" + kArx + " --forgetting 0", "forgetting = 0; need 0 < forgetting <= 1"); }
+TEST(BadInput, ForgettingAboveOne) {
+  ExpectCliError("fit dryer" + kArx + " --forgetting 1.5", "forgetting = 1.5; need 0 < forgetting <= 1");
+}
+TEST(BadInput, ForgettingZero) {
+  ExpectCliError("fit dryer" + kArx + " --forgetting 0", "forgetting = 0; need 0 < forgetting <= 1");
+}
 TEST(BadInput, ForgettingNegative) { ExpectCliError("fit dryer" + kArx + " --forgetting -0.5", "forgetting = -0.5"); }
 TEST(BadInput, ForgettingNan) { ExpectCliError("fit dryer" + kArx + " --forgetting nan", "forgetting = nan"); }
-TEST(BadInput, ForgettingNotANumberIsAUsageError) { ExpectCliError("fit dryer" + kArx + " --forgetting abc", "--forgetting", 2); }
+TEST(BadInput, ForgettingNotANumberIsAUsageError) {
+  ExpectCliError("fit dryer" + kArx + " --forgetting abc", "--forgetting", 2);
+}
 
-TEST(BadInput, PriorDegreesZero) { ExpectCliError("fit dryer" + kArx + " --nu0 0 --vy0 1 --vz0 1", "nu0 = 0; need a positive number of prior degrees"); }
+TEST(BadInput, PriorDegreesZero) {
+  ExpectCliError("fit dryer" + kArx + " --nu0 0 --vy0 1 --vz0 1", "nu0 = 0; need a positive number of prior degrees");
+}
 TEST(BadInput, PriorDegreesNegative) { ExpectCliError("fit dryer" + kArx + " --nu0 -1 --vy0 1 --vz0 1", "nu0 = -1"); }
-TEST(BadInput, NegativePriorOutputVariance) { ExpectCliError("fit dryer" + kArx + " --nu0 5 --vy0 -1 --vz0 1", "vy0 = -1; need a positive prior output variance"); }
-TEST(BadInput, NegativePriorRegressorVariance) { ExpectCliError("fit dryer" + kArx + " --nu0 5 --vy0 1 --vz0 -2", "vz0 = -2; need a positive prior regressor variance"); }
+TEST(BadInput, NegativePriorOutputVariance) {
+  ExpectCliError("fit dryer" + kArx + " --nu0 5 --vy0 -1 --vz0 1", "vy0 = -1; need a positive prior output variance");
+}
+TEST(BadInput, NegativePriorRegressorVariance) {
+  ExpectCliError("fit dryer" + kArx + " --nu0 5 --vy0 1 --vz0 -2",
+                 "vz0 = -2; need a positive prior regressor variance");
+}
 
-TEST(BadInput, DofForAnEstimatorWithoutOne) { ExpectCliError("fit dryer" + kArx + " --dof 0", "dof = 0 does not apply to estimator 'rls'"); }
+TEST(BadInput, DofForAnEstimatorWithoutOne) {
+  ExpectCliError("fit dryer" + kArx + " --dof 0", "dof = 0 does not apply to estimator 'rls'");
+}
 
 TEST(BadInput, SplitOutOfRange) { ExpectCliError("fit dryer" + kArx + " --split 0", "split = 0; need 0 < split <= 1"); }
 
@@ -218,13 +247,13 @@ TEST(BadInput, MalformedPriorJson) {
 
 TEST(BadInput, PriorJsonOfTheWrongDimension) {
   ExpectCliError("fit dryer" + kArx + " --prior " + WriteFile("dim.json", "{\"nu0\": 5, \"V0\": [[1,0],[0,1]]}"),
-              "dim.json: V0 has 2 rows; the model needs 5x5 (rho = 4, y first)");
+                 "dim.json: V0 has 2 rows; the model needs 5x5 (rho = 4, y first)");
 }
 
 TEST(BadInput, PriorJsonNotPositiveDefinite) {
-  ExpectCliError("fit dryer --output y --regressors u --prior " +
-                  WriteFile("npd.json", "{\"nu0\": 5, \"V0\": [[1,2],[2,1]]}"),
-              "npd.json: prior matrix V is not positive definite");
+  ExpectCliError(
+      "fit dryer --output y --regressors u --prior " + WriteFile("npd.json", "{\"nu0\": 5, \"V0\": [[1,2],[2,1]]}"),
+      "npd.json: prior matrix V is not positive definite");
 }
 
 TEST(BadInput, UnknownOptionIsAUsageError) { ExpectCliError("fit dryer" + kArx + " --bogus", "--bogus", 2); }
@@ -286,11 +315,16 @@ TEST(BadInput, LockInWindowBeyondTheLimit) {
 }
 
 TEST(BadInput, PlusMinusIsNotANumber) {
-  ExpectCliError("fit " + WriteFile("plus_minus.csv", "t,u,y\n0,+-5,1\n") + kArx, "plus_minus.csv:2: column 2 ('u'): '+-5' is not a number");
+  ExpectCliError("fit " + WriteFile("plus_minus.csv", "t,u,y\n0,+-5,1\n") + kArx,
+                 "plus_minus.csv:2: column 2 ('u'): '+-5' is not a number");
 }
 
 TEST(BadInput, NulByteInACellIsReported) {
-  ExpectCliError("fit " + WriteFile("nul.csv", std::string("t,u,y\n0,1\0" "2,3\n", 14)) + kArx,
+  ExpectCliError("fit " +
+                     WriteFile("nul.csv", std::string("t,u,y\n0,1\0"
+                                                      "2,3\n",
+                                                      14)) +
+                     kArx,
                  "nul.csv:2: column 2 ('u'): contains a NUL byte");
 }
 
@@ -337,8 +371,7 @@ TEST(BadInput, CrOnlyLineEndsGiveTheSameModelAsLf) {
   ASSERT_EQ(b.exit_code, 0) << b.err;
   const auto ja = nlohmann::json::parse(a.out), jb = nlohmann::json::parse(b.out);
   EXPECT_EQ(jb["samples_estimation"].get<int>(), 500);
-  for (int i = 0; i < 4; ++i)
-    EXPECT_NEAR(jb["theta"][i].get<double>(), ja["theta"][i].get<double>(), 1e-12) << i;
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(jb["theta"][i].get<double>(), ja["theta"][i].get<double>(), 1e-12) << i;
   EXPECT_NEAR(jb["fit_percent"]["one_step"].get<double>(), ja["fit_percent"]["one_step"].get<double>(), 1e-9);
 }
 

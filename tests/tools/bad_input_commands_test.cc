@@ -11,9 +11,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
-#include "tests/tools/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
+#include "tests/tools/scaled_dryer.h"
 
 namespace ident::testing {
 namespace {
@@ -33,7 +33,8 @@ void ExpectEveryReaderRejects(const std::string& csv, const std::string& needle)
 }
 
 std::string Model(const std::string& initial, const std::string& process = R"({"penalty": "l1"})",
-                  const std::string& measurement = R"({"penalty": "l1"})", const std::string& fh = R"("F": [[1]], "H": [[1]])") {
+                  const std::string& measurement = R"({"penalty": "l1"})",
+                  const std::string& fh = R"("F": [[1]], "H": [[1]])") {
   return WriteFile("model.json", "{" + fh + ", \"initial\": " + initial + ", \"process\": " + process +
                                      ", \"measurement\": " + measurement + "}");
 }
@@ -46,7 +47,9 @@ void ExpectSmoothError(const std::string& model_path, const std::string& needle)
 
 // ---- data files: compare, smooth, logcondens ------------------------------------------------------
 
-TEST(BadInputCommands, MissingFile) { ExpectEveryReaderRejects("/nonexistent/x.csv", "cannot open '/nonexistent/x.csv'"); }
+TEST(BadInputCommands, MissingFile) {
+  ExpectEveryReaderRejects("/nonexistent/x.csv", "cannot open '/nonexistent/x.csv'");
+}
 
 TEST(BadInputCommands, UnreadableFileIsADirectory) {
   const std::string dir = TempDir() + "/adir";
@@ -54,18 +57,22 @@ TEST(BadInputCommands, UnreadableFileIsADirectory) {
   ExpectEveryReaderRejects(dir, "cannot read '" + dir + "': it is a directory");
 }
 
-TEST(BadInputCommands, EmptyFile) { ExpectEveryReaderRejects(WriteFile("empty.csv", ""), "empty.csv: the file is empty"); }
+TEST(BadInputCommands, EmptyFile) {
+  ExpectEveryReaderRejects(WriteFile("empty.csv", ""), "empty.csv: the file is empty");
+}
 
 TEST(BadInputCommands, HeaderOnly) {
   ExpectEveryReaderRejects(WriteFile("header.csv", "u,x,y,z\n"), "header.csv: no data rows after the header");
 }
 
 TEST(BadInputCommands, RaggedRow) {
-  ExpectEveryReaderRejects(WriteFile("ragged.csv", "u,x,y,z\n1,2,3,4\n1,2\n"), "ragged.csv:3: row has 2 fields; the header has 4");
+  ExpectEveryReaderRejects(WriteFile("ragged.csv", "u,x,y,z\n1,2,3,4\n1,2\n"),
+                           "ragged.csv:3: row has 2 fields; the header has 4");
 }
 
 TEST(BadInputCommands, NonNumericCell) {
-  ExpectEveryReaderRejects(WriteFile("text.csv", "u,x,y,z\n1,2,3,4\n1,x1,3,4\n"), "text.csv:3: column 2 ('x'): 'x1' is not a number");
+  ExpectEveryReaderRejects(WriteFile("text.csv", "u,x,y,z\n1,2,3,4\n1,x1,3,4\n"),
+                           "text.csv:3: column 2 ('x'): 'x1' is not a number");
 }
 
 TEST(BadInputCommands, NanCell) {
@@ -74,7 +81,8 @@ TEST(BadInputCommands, NanCell) {
 }
 
 TEST(BadInputCommands, InfCell) {
-  ExpectEveryReaderRejects(WriteFile("inf.csv", "u,x,y,z\n1,2,3,-inf\n"), "inf.csv:2: column 4 ('z'): '-inf' is not a finite number");
+  ExpectEveryReaderRejects(WriteFile("inf.csv", "u,x,y,z\n1,2,3,-inf\n"),
+                           "inf.csv:2: column 4 ('z'): '-inf' is not a finite number");
 }
 
 TEST(BadInputCommands, BlankLineInsideTheData) {
@@ -83,7 +91,9 @@ TEST(BadInputCommands, BlankLineInsideTheData) {
 }
 
 TEST(BadInputCommands, NulByteInACell) {
-  ExpectEveryReaderRejects(WriteFile("nul.csv", std::string("u,x,y,z\n1,1\0" "5,2,3\n", 18)),
+  ExpectEveryReaderRejects(WriteFile("nul.csv", std::string("u,x,y,z\n1,1\0"
+                                                            "5,2,3\n",
+                                                            18)),
                            "nul.csv:2: column 2 ('x'): contains a NUL byte");
 }
 
@@ -93,13 +103,13 @@ TEST(BadInputCommands, LineLongerThanTheLimit) {
 }
 
 TEST(BadInputCommands, CellBeyondDoubleRange) {
-  ExpectEveryReaderRejects(WriteFile("e309.csv", "u,x,y,z\n1,1e309,3,4\n"), "e309.csv:2: column 2 ('x'): '1e309' is out of the range of double");
+  ExpectEveryReaderRejects(WriteFile("e309.csv", "u,x,y,z\n1,1e309,3,4\n"),
+                           "e309.csv:2: column 2 ('x'): '1e309' is out of the range of double");
 }
 
 // ---- ident compare ----------------------------------------------------------------------------------
 
 const std::string kCompareArx = " --output y --input u --na 2 --nb 2 --nk 3 --estimators rls";
-
 
 TEST(BadInputCompare, ValuesNear1e308) {
   ExpectCliError("compare " + ScaledDryer("dryer_e300.csv", 1e300) + kCompareArx, "rescale the data");
@@ -108,13 +118,15 @@ TEST(BadInputCompare, ValuesNear1e308) {
 TEST(BadInputCompare, ConstantInputColumn) {
   std::string csv = "u,y\n";
   for (int t = 0; t < 200; ++t) csv += fmt::format("3,{}\n", std::sin(0.1 * t));
-  ExpectCliError("compare " + WriteFile("const.csv", csv) + " --output y --input u --na 1 --nb 1 --nk 1 --estimators rls",
-                 "regressor 'b1' is identically zero over the estimation part");
+  ExpectCliError(
+      "compare " + WriteFile("const.csv", csv) + " --output y --input u --na 1 --nb 1 --nk 1 --estimators rls",
+      "regressor 'b1' is identically zero over the estimation part");
 }
 
 TEST(BadInputCompare, CollinearRegressors) {
   std::string csv = "x1,x2,y\n";
-  for (int t = 0; t < 200; ++t) csv += fmt::format("{},{},{}\n", std::sin(0.3 * t), 2 * std::sin(0.3 * t), std::cos(0.2 * t));
+  for (int t = 0; t < 200; ++t)
+    csv += fmt::format("{},{},{}\n", std::sin(0.3 * t), 2 * std::sin(0.3 * t), std::cos(0.2 * t));
   ExpectCliError("compare " + WriteFile("collinear.csv", csv) + " --output y --regressors x1,x2 --estimators rls",
                  "the regressors are collinear over the estimation part");
 }
@@ -129,7 +141,8 @@ TEST(BadInputCompare, EmptyEstimatorName) {
 
 TEST(BadInputCompare, EmptyNameInsideTheEstimatorList) {
   ExpectCliError("compare dryer --estimators rls,,cauchy", "--estimators: an empty estimator name in 'rls,,cauchy'");
-  ExpectCliError("compare dryer --estimators rls, --estimators cauchy", "--estimators: an empty estimator name in 'rls,'");
+  ExpectCliError("compare dryer --estimators rls, --estimators cauchy",
+                 "--estimators: an empty estimator name in 'rls,'");
 }
 
 TEST(BadInputCompare, LockInWindowBeyondTheLimit) {
@@ -142,7 +155,9 @@ TEST(BadInputCompare, UnknownEstimator) {
   ExpectCliError("compare dryer --estimators rls,nonesuch", "unknown estimator 'nonesuch'");
 }
 
-TEST(BadInputCompare, UnknownColumn) { ExpectCliError("compare dryer --estimators rls --output y --input q", "no column 'q'"); }
+TEST(BadInputCompare, UnknownColumn) {
+  ExpectCliError("compare dryer --estimators rls --output y --input q", "no column 'q'");
+}
 
 TEST(BadInputCompare, UnknownDataset) { ExpectCliError("compare nonesuch", "no file or bundled dataset 'nonesuch'"); }
 
@@ -155,11 +170,13 @@ TEST(BadInputCompare, ForgettingZero) {
 }
 
 TEST(BadInputCompare, PriorDegreesZero) {
-  ExpectCliError("compare dryer --estimators rls --nu0 0 --vy0 1 --vz0 1", "nu0 = 0; need a positive number of prior degrees");
+  ExpectCliError("compare dryer --estimators rls --nu0 0 --vy0 1 --vz0 1",
+                 "nu0 = 0; need a positive number of prior degrees");
 }
 
 TEST(BadInputCompare, NegativePriorVariance) {
-  ExpectCliError("compare dryer --estimators rls --nu0 5 --vy0 -1 --vz0 1", "vy0 = -1; need a positive prior output variance");
+  ExpectCliError("compare dryer --estimators rls --nu0 5 --vy0 -1 --vz0 1",
+                 "vy0 = -1; need a positive prior output variance");
 }
 
 TEST(BadInputCompare, DofZero) { ExpectCliError("compare dryer --estimators student:0", "dof = 0"); }
@@ -172,8 +189,9 @@ TEST(BadInputCompare, MalformedPriorJson) {
 }
 
 TEST(BadInputCompare, PriorJsonOfTheWrongDimension) {
-  ExpectCliError("compare dryer --estimators rls --prior " + WriteFile("dim.json", R"({"nu0": 5, "V0": [[1, 0], [0, 1]]})"),
-                 "dim.json: V0 has 2 rows; the model needs 5x5");
+  ExpectCliError(
+      "compare dryer --estimators rls --prior " + WriteFile("dim.json", R"({"nu0": 5, "V0": [[1, 0], [0, 1]]})"),
+      "dim.json: V0 has 2 rows; the model needs 5x5");
 }
 
 TEST(BadInputCompare, BadOutlierSpec) {
@@ -270,12 +288,17 @@ TEST(BadInputSmooth, MissingModelFile) {
 TEST(BadInputSmooth, ModelIsADirectory) {
   const std::string dir = TempDir() + "/model_dir";
   std::filesystem::create_directories(dir);
-  ExpectCliError("smooth --model " + Quote(dir) + " " + Quote(SmoothData()), "cannot read '" + dir + "': it is a directory");
+  ExpectCliError("smooth --model " + Quote(dir) + " " + Quote(SmoothData()),
+                 "cannot read '" + dir + "': it is a directory");
 }
 
-TEST(BadInputSmooth, MalformedJson) { ExpectSmoothError(WriteFile("m.json", "{\"F\": [[1]"), "m.json: not valid JSON"); }
+TEST(BadInputSmooth, MalformedJson) {
+  ExpectSmoothError(WriteFile("m.json", "{\"F\": [[1]"), "m.json: not valid JSON");
+}
 
-TEST(BadInputSmooth, ModelNotAnObject) { ExpectSmoothError(WriteFile("m.json", "[1, 2]"), "the model must be a JSON object"); }
+TEST(BadInputSmooth, ModelNotAnObject) {
+  ExpectSmoothError(WriteFile("m.json", "[1, 2]"), "the model must be a JSON object");
+}
 
 TEST(BadInputSmooth, MissingKey) {
   ExpectSmoothError(WriteFile("m.json", R"({"F": [[1]], "H": [[1]]})"), "m.json: missing \"initial\"");
@@ -304,15 +327,15 @@ TEST(BadInputSmooth, RaggedMatrix) {
 }
 
 TEST(BadInputSmooth, NonNumericMatrixEntry) {
-  ExpectSmoothError(Model(R"({"penalty": "l1"})", R"({"penalty": "l1"})", R"({"penalty": "l1"})",
-                          R"("F": [["a"]], "H": [[1]])"),
-                    "F[0][0]: expected a number, got \"a\"");
+  ExpectSmoothError(
+      Model(R"({"penalty": "l1"})", R"({"penalty": "l1"})", R"({"penalty": "l1"})", R"("F": [["a"]], "H": [[1]])"),
+      "F[0][0]: expected a number, got \"a\"");
 }
 
 TEST(BadInputSmooth, MatrixEntryBeyondDoubleRange) {
-  ExpectSmoothError(Model(R"({"penalty": "l1"})", R"({"penalty": "l1"})", R"({"penalty": "l1"})",
-                          R"("F": [[1e999]], "H": [[1]])"),
-                    "model.json: not valid JSON ([json.exception.out_of_range.406] number overflow parsing '1e999')");
+  ExpectSmoothError(
+      Model(R"({"penalty": "l1"})", R"({"penalty": "l1"})", R"({"penalty": "l1"})", R"("F": [[1e999]], "H": [[1]])"),
+      "model.json: not valid JSON ([json.exception.out_of_range.406] number overflow parsing '1e999')");
 }
 
 TEST(BadInputSmooth, NegativeVariance) {
@@ -321,7 +344,8 @@ TEST(BadInputSmooth, NegativeVariance) {
 }
 
 TEST(BadInputSmooth, CovarianceOfTheWrongSize) {
-  ExpectSmoothError(Model(R"({"penalty": "quadratic", "covariance": [[1, 0], [0, 1]]})"), "initial.covariance: is 2x2; need 1x1");
+  ExpectSmoothError(Model(R"({"penalty": "quadratic", "covariance": [[1, 0], [0, 1]]})"),
+                    "initial.covariance: is 2x2; need 1x1");
 }
 
 TEST(BadInputSmooth, HuberKappaNotPositive) {
@@ -358,8 +382,9 @@ TEST(BadInputSmooth, WrongNumberOfTimeVaryingPenalties) {
 }
 
 TEST(BadInputSmooth, NoMeasurementColumn) {
-  ExpectCliError("smooth --model " + Quote(Model(R"({"penalty": "l1"})")) + " " + Quote(WriteFile("y.csv", "y\n1\n2\n")),
-                 "no measurement column (need z, or z1, z2, ...)");
+  ExpectCliError(
+      "smooth --model " + Quote(Model(R"({"penalty": "l1"})")) + " " + Quote(WriteFile("y.csv", "y\n1\n2\n")),
+      "no measurement column (need z, or z1, z2, ...)");
 }
 
 TEST(BadInputSmooth, MeasurementsNear1e308) {
@@ -378,7 +403,8 @@ TEST(BadInputSmooth, MissingModelOptionIsAUsageError) { ExpectCliError("smooth "
 // ---- ident logcondens ---------------------------------------------------------------------------------
 
 TEST(BadInputLogcondens, FewerThanTwoDistinctValues) {
-  ExpectCliError("logcondens " + Quote(WriteFile("same.csv", "x\n2\n2\n2\n")), "at least 2 distinct sample values, got 1");
+  ExpectCliError("logcondens " + Quote(WriteFile("same.csv", "x\n2\n2\n2\n")),
+                 "at least 2 distinct sample values, got 1");
 }
 
 TEST(BadInputLogcondens, OneSample) {
@@ -390,7 +416,8 @@ TEST(BadInputLogcondens, UnknownColumn) {
 }
 
 TEST(BadInputLogcondens, SeveralColumnsAndNoneNamedX) {
-  ExpectCliError("logcondens " + Quote(WriteFile("two.csv", "a,b\n1,5\n2,3\n")), "has 2 columns and none is named 'x'; pass --column NAME");
+  ExpectCliError("logcondens " + Quote(WriteFile("two.csv", "a,b\n1,5\n2,3\n")),
+                 "has 2 columns and none is named 'x'; pass --column NAME");
 }
 
 TEST(BadInputLogcondens, ValuesNear1e308) {

@@ -5,28 +5,28 @@
 #include <limits>
 #include <string>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "common/error.h"
 #include "ident/density/logconcave_mle.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/io/csv.h"
+#include "ident/linalg/ld_factor.h"
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
-#include "ident/smoothing/map_smoother.h"
-#include "ident/regression/student_regression.h"
-#include "ident/io/csv.h"
-#include "ident/linalg/ld_factor.h"
+#include "ident/regression/estimator_registry.h"
 #include "ident/regression/regression_prior.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
+#include "ident/regression/student_regression.h"
+#include "ident/smoothing/map_smoother.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
 #include "models/arx.h"
 #include "models/measurement.h"
 #include "models/penalties.h"
 #include "models/state_space.h"
-#include "ident/workflow/data_source.h"
-#include "ident/workflow/fit.h"
 
 namespace ident {
 namespace {
@@ -46,10 +46,10 @@ std::string InvalidArgumentMessage(F&& f) {
   return {};
 }
 
-#define EXPECT_INVALID(statement, needle)                                            \
-  do {                                                                               \
-    const std::string message = InvalidArgumentMessage([&] { statement; });          \
-    EXPECT_NE(message.find(needle), std::string::npos) << "message: " << message;   \
+#define EXPECT_INVALID(statement, needle)                                         \
+  do {                                                                            \
+    const std::string message = InvalidArgumentMessage([&] { statement; });       \
+    EXPECT_NE(message.find(needle), std::string::npos) << "message: " << message; \
   } while (false)
 
 TEST(BadInputLibrary, ForgettingOutsideZeroOneIsRejectedByName) {
@@ -69,7 +69,8 @@ TEST(BadInputLibrary, PriorDegreesAndVariancesMustBePositive) {
   EXPECT_INVALID(RegressionPrior::Diagonal(2, -3, 1, 1).Validate(), "nu0 = -3");
   EXPECT_INVALID(RegressionPrior::Diagonal(2, 5, -1, 1), "vy0 = -1");
   EXPECT_INVALID(RegressionPrior::Diagonal(2, 5, 1, -1e-3), "vz0 = -0.001");
-  EXPECT_INVALID(RegressionPrior::FromGuess(Eigen::Vector2d(1, 2), Eigen::Matrix2d::Identity(), -1, 10, 1), "sigma0 = -1");
+  EXPECT_INVALID(RegressionPrior::FromGuess(Eigen::Vector2d(1, 2), Eigen::Matrix2d::Identity(), -1, 10, 1),
+                 "sigma0 = -1");
   EXPECT_INVALID(RegressionPrior::FromGuess(Eigen::Vector2d(1, 2), -Eigen::Matrix2d::Identity(), 1, 10, 1),
                  "prior covariance P0 is not positive definite");
 }
@@ -112,7 +113,8 @@ TEST(BadInputLibrary, FitWorkflowChecksSplitAndRecordLength) {
   EXPECT_INVALID(workflow::Fit(table, *source, *estimator, options), "split = 1.5; need 0 < split <= 1");
   options.split = 0.5;
   EXPECT_INVALID(workflow::Fit(table, *source, *estimator, options), "<t>: the estimation part has 3 rows");
-  EXPECT_INVALID(workflow::MakeArxSource(table.names, "y", {"y"}, arx, "<t>"), "column 'y' is both the output and an input");
+  EXPECT_INVALID(workflow::MakeArxSource(table.names, "y", {"y"}, arx, "<t>"),
+                 "column 'y' is both the output and an input");
 }
 
 TEST(BadInputLibrary, CsvTextErrorsAreDataErrorsNamingLineAndColumn) {
@@ -159,7 +161,8 @@ TEST(StreamingFit, CountsDataRowsLikeTheReader) {
   const std::string path = dir + "/count.csv";
   {
     std::FILE* f = std::fopen(path.c_str(), "w");
-    std::fputs("\n  \n\xEF\xBB\xBFu,y\r\n\n \t\r\n1,2\r\n3,4\r5,6\n7,8\r\n9,10", f);  // blank lines, CRLF, CR, no final newline
+    std::fputs("\n  \n\xEF\xBB\xBFu,y\r\n\n \t\r\n1,2\r\n3,4\r5,6\n7,8\r\n9,10",
+               f);  // blank lines, CRLF, CR, no final newline
     std::fclose(f);
   }
   EXPECT_EQ(workflow::CountCsvDataRows(path), 5);
@@ -242,7 +245,6 @@ TEST(BadInputLibrary, TooSmallDofIsNamed) {
   s.dof = 0.5;  // nu(1) = 6.5 > (0.5 + 2)/0.5 = 5
   EXPECT_NO_THROW(MakeRegressionEstimator(s, 4));
 }
-
 
 // ---- the libraries behind smooth, logcondens, mems and the Student/Cauchy estimators --------------
 

@@ -8,9 +8,9 @@
 
 #include "common/error.h"
 #include "ident/regression/estimator_registry.h"
+#include "ident/workflow/compare.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
-#include "ident/workflow/compare.h"
 
 namespace ident::testing {
 namespace {
@@ -29,7 +29,7 @@ TEST(InjectOutliers, IsReproducibleFromItsSeedAndDiffersBetweenSeeds) {
   EXPECT_EQ(rows_a, rows_b);
   EXPECT_EQ(a, b);
   EXPECT_NE(rows_a, rows_c);
-  ASSERT_EQ(rows_a.size(), 25u);  // ⌊0.05·500 + ½⌋
+  ASSERT_EQ(rows_a.size(), 25u);                                       // ⌊0.05·500 + ½⌋
   EXPECT_EQ(std::set<int>(rows_a.begin(), rows_a.end()).size(), 25u);  // distinct
   int plus = 0;
   for (int i = 0; i < 600; ++i) {
@@ -175,7 +175,8 @@ TEST(CompareCommand, RegressorCleaningImprovesCauchyOnDryer) {
     };
     EXPECT_LT(spread(on, "cauchy", "theta_distance", "median"), 0.9 * spread(off, "cauchy", "theta_distance", "median"))
         << outliers;
-    EXPECT_GE(spread(on, "cauchy", "fit_one_step", "median"), spread(off, "cauchy", "fit_one_step", "median")) << outliers;
+    EXPECT_GE(spread(on, "cauchy", "fit_one_step", "median"), spread(off, "cauchy", "fit_one_step", "median"))
+        << outliers;
     EXPECT_EQ(spread(on, "rls", "fit_one_step", "mean"), spread(off, "rls", "fit_one_step", "mean"));  // identical
     // A gross error cleaned to the prediction (the default) against the Huber value ŷ ± 2s of every
     // flagged error (--clean-gross 0): the clipped error left in later regressors costs accuracy.
@@ -260,7 +261,8 @@ TEST(CompareCommand, BadInputExitsOneWithOneLine) {
   ExpectBadInput("compare dryer --estimators rls --clean-below 1.5", "--clean-below");
   ExpectBadInput("compare dryer --estimators rls --clean-clip -1 --clean-regressors on", "clip = -1");
   ExpectBadInput("compare dryer --estimators rls --clean-gross -1", "--clean-clip/--clean-gross: cleaning gross = -1");
-  ExpectBadInput("compare stackloss --estimators rls --clean-gross -1", "--clean-clip/--clean-gross: cleaning gross = -1");
+  ExpectBadInput("compare stackloss --estimators rls --clean-gross -1",
+                 "--clean-clip/--clean-gross: cleaning gross = -1");
   ExpectBadInput("compare /nonexistent.csv --estimators rls --output y --input u", "cannot open '/nonexistent.csv'");
   const std::string csv = WriteFile("plain.csv", "t,u,y\n0,1,2\n1,2,3\n");
   ExpectBadInput("compare " + csv + " --estimators rls", "is not a bundled dataset with a suggested structure");

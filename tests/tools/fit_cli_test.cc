@@ -17,7 +17,6 @@ nlohmann::json FitJson(const std::string& args) {
   return nlohmann::json::parse(r.out);
 }
 
-
 TEST(FitCommand, DryerRlsReproducesTheDatasetsReadmeBaseline) {
   const nlohmann::json j = FitJson("datasets/dryer.csv" + kDryerArx + " --estimator rls");
   EXPECT_EQ(j["estimator"], "rls");
@@ -63,7 +62,8 @@ TEST(FitCommand, TraceHasOneRowPerUpdateEndingAtTheFinalEstimate) {
   const nlohmann::json j = FitJson("dryer" + kDryerArx + " --trace " + trace);
   std::vector<std::string> names;
   const Eigen::MatrixXd t = ReadCsvMatrix(trace, &names);
-  EXPECT_EQ(names, (std::vector<std::string>{"t", "nu", "beta", "pred_err", "theta1", "theta2", "theta3", "theta4", "Dy"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"t", "nu", "beta", "pred_err", "theta1", "theta2", "theta3", "theta4", "Dy"}));
   ASSERT_EQ(t.rows(), j["updates"].get<int>());
   EXPECT_EQ(t(0, 0), 5);  // first regression at row t0 + 1 = 5 (1-based)
   const std::vector<double> theta = j["theta"];
@@ -108,7 +108,8 @@ TEST(FitCommand, BadDataFilesAreReportedWithFileLineAndColumn) {
                  "ragged.csv:3: row has 2 fields; the header has 3");
   ExpectCliError("fit " + WriteFile("text.csv", "t,u,y\n0,1,2\n1,x1,2\n") + kDryerArx,
                  "text.csv:3: column 2 ('u'): 'x1' is not a number");
-  ExpectCliError("fit " + WriteFile("inf.csv", "t,u,y\n0,1,inf\n") + kDryerArx, "inf.csv:2: column 3 ('y'): 'inf' is not a finite number");
+  ExpectCliError("fit " + WriteFile("inf.csv", "t,u,y\n0,1,inf\n") + kDryerArx,
+                 "inf.csv:2: column 3 ('y'): 'inf' is not a finite number");
   ExpectCliError("fit " + WriteFile("dup.csv", "t,u,u\n0,1,2\n") + kDryerArx, "dup.csv:1: duplicate column name 'u'");
   ExpectCliError("fit dryer --output y --input q --na 2 --nb 2 --nk 3", "no column 'q' (columns: t, u, y)");
   ExpectCliError("fit dryer --output yy --input u", "no column 'yy'");
@@ -121,7 +122,8 @@ TEST(FitCommand, UnidentifiableModelsAreRefused) {
                  "regressor 'b1' is identically zero");
   std::string collinear = "x1,x2,y\n";
   for (int i = 0; i < 50; ++i)
-    collinear += std::to_string(std::sin(i)) + "," + std::to_string(2 * std::sin(i)) + "," + std::to_string(i % 7) + "\n";
+    collinear +=
+        std::to_string(std::sin(i)) + "," + std::to_string(2 * std::sin(i)) + "," + std::to_string(i % 7) + "\n";
   ExpectCliError("fit " + WriteFile("collinear.csv", collinear) + " --output y --regressors x1,x2", "collinear");
   ExpectCliError("fit gas_furnace --output y --input u --na 100 --nb 50 --nk 3", "the estimation part has 148 rows");
 }
@@ -143,11 +145,11 @@ TEST(FitCommand, BadOptionsExitOneAndNameTheOption) {
 
 TEST(FitCommand, UsageErrorsExitTwo) {
   EXPECT_EQ(RunCli("fit dryer --output y --input u --bogus").exit_code, 2);
-  EXPECT_EQ(RunCli("fit dryer --input u").exit_code, 2);                      // --output is required
-  EXPECT_EQ(RunCli("fit --output y --input u").exit_code, 2);                 // DATA is required
+  EXPECT_EQ(RunCli("fit dryer --input u").exit_code, 2);       // --output is required
+  EXPECT_EQ(RunCli("fit --output y --input u").exit_code, 2);  // DATA is required
   EXPECT_EQ(RunCli("fit dryer --output y --input u --detrend linear").exit_code, 2);
   EXPECT_EQ(RunCli("fit dryer --output y --input u --regressors u").exit_code, 2);  // excludes --input
-  EXPECT_EQ(RunCli("fit dryer --output y --input u --nu0 3").exit_code, 2);   // needs --vy0 --vz0
+  EXPECT_EQ(RunCli("fit dryer --output y --input u --nu0 3").exit_code, 2);         // needs --vy0 --vz0
   EXPECT_EQ(RunCli("").exit_code, 2);
   EXPECT_EQ(RunCli("fit --help").exit_code, 0);
 }

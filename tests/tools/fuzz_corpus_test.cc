@@ -18,9 +18,9 @@
 #include "fuzz/output_file_property.h"
 #include "fuzz/prior_json_property.h"
 #include "fuzz/rls_property.h"
-#include "fuzz/student_property.h"
 #include "fuzz/smooth_model_property.h"
 #include "fuzz/smoother_scaling_property.h"
+#include "fuzz/student_property.h"
 
 namespace ident::testing {
 namespace {

@@ -130,7 +130,8 @@ TEST(LockInCli, BadLockInOptionsExitOneAndSayWhy) {
   const std::string dryer = "fit dryer --output y --input u --na 2 --nb 2 --nk 3";
   ExpectCliError(dryer + " --estimator rls --lock-in-window 50", "lock-in options apply to the robust estimators");
   ExpectCliError(dryer + " --estimator cauchy --exact --no-lock-in-restart", "no effect with exact");
-  ExpectCliError(dryer + " --estimator cauchy --lock-in-window 1", "lock_in_window = 1; need 0 (automatic) or 2..1000000");
+  ExpectCliError(dryer + " --estimator cauchy --lock-in-window 1",
+                 "lock_in_window = 1; need 0 (automatic) or 2..1000000");
   ExpectCliError(dryer + " --estimator cauchy --lock-in-window -5", "lock_in_window = -5");
   ExpectCliError(dryer + " --estimator cauchy --lock-in-threshold 0", "lock-in threshold = 0");
   ExpectCliError(dryer + " --estimator cauchy --lock-in-threshold nan", "lock-in threshold = nan");

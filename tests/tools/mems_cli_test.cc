@@ -25,13 +25,15 @@ TEST(MemsCli, WritesOneCsvRowPerRateWithTheRequiredColumns) {
     EXPECT_NE(header.find(col), std::string::npos) << col;
   EXPECT_NE(r.out.find("jackknife standard error"), std::string::npos) << r.out;
   int rows = 0;
-  while (std::getline(csv, line)) if (!line.empty()) ++rows;
+  while (std::getline(csv, line))
+    if (!line.empty()) ++rows;
   EXPECT_EQ(rows, 2);
   std::istringstream trace(testing::ReadFile(dir + "/fig8.csv"));
   std::getline(trace, header);
   EXPECT_EQ(header, "t,x1,y,var_grid,var_tuned_kalman,var_lc_gaussian,var_bound");
   rows = 0;
-  while (std::getline(trace, line)) if (!line.empty()) ++rows;
+  while (std::getline(trace, line))
+    if (!line.empty()) ++rows;
   EXPECT_EQ(rows, steps);
 }
 

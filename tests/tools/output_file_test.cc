@@ -71,7 +71,7 @@ TEST(OutputFile, CommitReplacesTheTargetAndKeepsItsMode) {
   }
   EXPECT_EQ(ReadFile(target), "t,y\n1,2.5\n");
   EXPECT_EQ(Listing(dir), "t.csv");
-  struct stat st{};
+  struct stat st {};
   ASSERT_EQ(stat(target.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 07777, 0640u);
   EXPECT_EQ(tools::PendingOutputFiles(), 0);
@@ -91,7 +91,10 @@ TEST(OutputFile, WithoutCommitTheTargetKeepsItsBytesAndNoTemporaryFileRemains) {
   EXPECT_EQ(Listing(dir), "keep");
   EXPECT_EQ(tools::PendingOutputFiles(), 0);
   // A new name that fails is not created at all.
-  { OutputFile out((dir / "new.csv").string(), "--csv file"); out.Write("partial"); }
+  {
+    OutputFile out((dir / "new.csv").string(), "--csv file");
+    out.Write("partial");
+  }
   EXPECT_EQ(Listing(dir), "keep");
 }
 
@@ -99,7 +102,10 @@ TEST(OutputFile, SymbolicLinkIsWrittenThroughAndStaysALink) {
   const fs::path dir = FreshDir("link");
   const std::string real = WriteFile("output_file_link/real.csv", "old\n");
   fs::create_symlink("real.csv", dir / "link.csv");
-  { OutputFile out((dir / "link.csv").string(), "--trace file"); out.Write("aborted\n"); }
+  {
+    OutputFile out((dir / "link.csv").string(), "--trace file");
+    out.Write("aborted\n");
+  }
   EXPECT_EQ(ReadFile(real), "old\n");
   EXPECT_TRUE(fs::is_symlink(dir / "link.csv"));
   {
@@ -127,16 +133,18 @@ TEST(OutputFile, RefusesDevicesDirectoriesAndMissingDirectoriesNamingTheFile) {
   // A private /dev/full node (root only), so that a regression cannot remove the system's.
   const fs::path full = dir / "full";
   if (mknod(full.c_str(), S_IFCHR | 0666, makedev(1, 7)) == 0) {
-    EXPECT_EQ(ErrorOf([&] { OutputFile(full.string(), "--csv file"); }),
-              fmt::format("cannot write --csv file '{}': not a regular file (a device, fifo or directory)", full.string()));
+    EXPECT_EQ(
+        ErrorOf([&] { OutputFile(full.string(), "--csv file"); }),
+        fmt::format("cannot write --csv file '{}': not a regular file (a device, fifo or directory)", full.string()));
     EXPECT_TRUE(fs::is_character_file(full));
     fs::remove(full);
   }
-  EXPECT_EQ(ErrorOf([&] { OutputFile(dir.string(), "--trace file"); }),
-            fmt::format("cannot write --trace file '{}': not a regular file (a device, fifo or directory)",
-                        dir.string()));
-  EXPECT_EQ(ErrorOf([&] { OutputFile((dir / "no/such/dir.csv").string(), "--trace file"); }),
-            fmt::format("cannot write --trace file '{}': No such file or directory", (dir / "no/such/dir.csv").string()));
+  EXPECT_EQ(
+      ErrorOf([&] { OutputFile(dir.string(), "--trace file"); }),
+      fmt::format("cannot write --trace file '{}': not a regular file (a device, fifo or directory)", dir.string()));
+  EXPECT_EQ(
+      ErrorOf([&] { OutputFile((dir / "no/such/dir.csv").string(), "--trace file"); }),
+      fmt::format("cannot write --trace file '{}': No such file or directory", (dir / "no/such/dir.csv").string()));
   ASSERT_EQ(mkfifo((dir / "fifo").c_str(), 0600), 0);
   EXPECT_NE(ErrorOf([&] { OutputFile((dir / "fifo").string(), "--trace file"); }).find("not a regular file"),
             std::string::npos);
@@ -181,20 +189,30 @@ TEST(CheckOutputPaths, RefusesAnInputTwoEqualOutputsStdoutAndDevices) {
   fs::create_symlink("d.csv", dir / "alias.csv");
   fs::create_hard_link(data, dir / "hard.csv");
   const std::string alias = (dir / "alias.csv").string(), hard = (dir / "hard.csv").string();
-  EXPECT_EQ(ErrorOf([&] { CheckOutputPaths({{"--trace", data}}, {{"input data file", data}}); }),
+  EXPECT_EQ(ErrorOf([&] {
+              CheckOutputPaths({{"--trace", data}}, {{"input data file", data}});
+            }),
             fmt::format("--trace file '{0}' is the input data file '{0}'; give another name", data));
   EXPECT_NE(ErrorOf([&] { CheckOutputPaths({{"--trace", alias}}, {{"input data file", data}}); }), "");
   EXPECT_NE(ErrorOf([&] { CheckOutputPaths({{"--trace", hard}}, {{"input data file", data}}); }), "");
   const std::string x = (dir / "x.csv").string(), x2 = (dir / "sub/../x.csv").string();
   fs::create_directories(dir / "sub");
-  EXPECT_EQ(ErrorOf([&] { CheckOutputPaths({{"--csv", x}, {"--trace", x2}}, {}); }),
+  EXPECT_EQ(ErrorOf([&] {
+              CheckOutputPaths({{"--csv", x}, {"--trace", x2}}, {});
+            }),
             fmt::format("--csv and --trace name the same file ('{}', '{}'); give two names", x, x2));
-  EXPECT_NE(ErrorOf([] { CheckOutputPaths({{"--trace", "-"}}, {}); }).find("writing to standard output"),
+  EXPECT_NE(ErrorOf([] {
+              CheckOutputPaths({{"--trace", "-"}}, {});
+            }).find("writing to standard output"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { CheckOutputPaths({{"--csv", dir.string()}}, {}); }).find("not a regular file"),
+  EXPECT_NE(ErrorOf([&] {
+              CheckOutputPaths({{"--csv", dir.string()}}, {});
+            }).find("not a regular file"),
             std::string::npos);
-  EXPECT_EQ(ErrorOf([&] { CheckOutputPaths({{"--csv", x}, {"--trace", ""}, {"--plot", (dir / "p.svg").string()}},
-                                           {{"input data file", data}, {"--prior file", ""}}); }),
+  EXPECT_EQ(ErrorOf([&] {
+              CheckOutputPaths({{"--csv", x}, {"--trace", ""}, {"--plot", (dir / "p.svg").string()}},
+                               {{"input data file", data}, {"--prior file", ""}});
+            }),
             "");
   EXPECT_EQ(Listing(dir), "alias.csv d.csv hard.csv sub");  // checking creates nothing
 }

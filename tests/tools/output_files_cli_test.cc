@@ -42,7 +42,8 @@ std::string Q(const fs::path& p) { return "'" + p.string() + "'"; }
 // Names in `dir` that look like temporary files of OutputFile.
 int TemporaryFiles(const fs::path& dir) {
   int n = 0;
-  for (const auto& e : fs::directory_iterator(dir)) n += e.path().filename().string().find(".tmp-") != std::string::npos;
+  for (const auto& e : fs::directory_iterator(dir))
+    n += e.path().filename().string().find(".tmp-") != std::string::npos;
   return n;
 }
 
@@ -84,8 +85,8 @@ TEST(OutputFilesCli, TraceThroughASymbolicLinkKeepsTheLinkAndTheTargetOnFailure)
   EXPECT_TRUE(fs::is_symlink(dir / "link.csv"));
   EXPECT_EQ(ReadFile(target), "old target\n");
   // A successful fit writes through the link: one row per update, the link stays.
-  const CliResult r = RunCli("fit " + Q(dir / "d.csv") + kDryerArx + " --estimator rls --json --trace " +
-                             Q(dir / "link.csv"));
+  const CliResult r =
+      RunCli("fit " + Q(dir / "d.csv") + kDryerArx + " --estimator rls --json --trace " + Q(dir / "link.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(fs::is_symlink(dir / "link.csv"));
   const io::DataTable trace = io::ReadCsv(target);
@@ -107,9 +108,11 @@ TEST(OutputFilesCli, DevicesDirectoriesAndStdoutAreRefusedAsOutputFiles) {
   if (devices) {
     ExpectCliError("fit " + Q(dir / "d.csv") + kDryerArx + " --trace " + Q(full),
                    "cannot write --trace file '" + full.string() + "': not a regular file");
-    ExpectCliError(kSmallMems + " --csv " + Q(full), "cannot write --csv file '" + full.string() + "': not a regular file");
-    ExpectCliError(kSmallMems + " --trace " + Q(null), "cannot write --trace file '" + null.string() + "': not a regular file");
-    struct stat st{};
+    ExpectCliError(kSmallMems + " --csv " + Q(full),
+                   "cannot write --csv file '" + full.string() + "': not a regular file");
+    ExpectCliError(kSmallMems + " --trace " + Q(null),
+                   "cannot write --trace file '" + null.string() + "': not a regular file");
+    struct stat st {};
     ASSERT_EQ(stat(full.c_str(), &st), 0);
     EXPECT_TRUE(S_ISCHR(st.st_mode));
     EXPECT_EQ(st.st_rdev, makedev(1, 7));
@@ -188,8 +191,8 @@ TEST(OutputFilesCli, SigtermDuringARunKeepsTheOutputAndRemovesTheTemporaryFile) 
 // Runs `ident ARGS REDIRECTION` through sh; returns the exit code, stderr in `err`.
 int RunWithStdout(const std::string& args, const std::string& redirection, std::string& err) {
   const std::string err_file = TempDir() + "/stdout_test.err";
-  const std::string command = std::string("'") + IDENT_CLI_PATH + "' " + args + " " + redirection + " 2> '" +
-                              err_file + "' < /dev/null";
+  const std::string command =
+      std::string("'") + IDENT_CLI_PATH + "' " + args + " " + redirection + " 2> '" + err_file + "' < /dev/null";
   const int status = std::system(command.c_str());
   err = ReadFile(err_file);
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -216,7 +219,8 @@ TEST(OutputFilesCli, ClosedStandardOutputIsAnError) {
   ExpectStdoutError("datasets", ">&-", "Bad file descriptor");
   // With stdout closed, the trace file still gets the trace, not the report.
   const fs::path dir = DirWithDryer("closed");
-  ExpectStdoutError("fit " + Q(dir / "d.csv") + kDryerArx + " --trace " + Q(dir / "t.csv"), ">&-", "Bad file descriptor");
+  ExpectStdoutError("fit " + Q(dir / "d.csv") + kDryerArx + " --trace " + Q(dir / "t.csv"), ">&-",
+                    "Bad file descriptor");
   EXPECT_EQ(ReadFile((dir / "t.csv").string()).rfind("t,nu,beta,pred_err,", 0), 0u);
   EXPECT_EQ(io::ReadCsv((dir / "t.csv").string()).num_rows(), 496);
 }

@@ -3,12 +3,12 @@
 #include <filesystem>
 #include <random>
 
-#include <boost/math/distributions/chi_squared.hpp>
 #include <gtest/gtest.h>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <nlohmann/json.hpp>
 
-#include "tests/support/cli.h"
 #include "ident/workflow/residual_analysis.h"
+#include "tests/support/cli.h"
 
 namespace ident::testing {
 namespace {
@@ -67,7 +67,8 @@ TEST(FitReport, EndsWithTheResidualAnalysis) {
   const CliResult good = RunCli("fit dryer --output y --input u --na 2 --nb 2 --nk 3");
   ASSERT_EQ(good.exit_code, 0) << good.err;
   EXPECT_NE(good.out.find("residual analysis (validation one-step residuals, N = 496, 99 % band ±0.116)"),
-            std::string::npos) << good.out;  // 2.58/√496 = 0.1158
+            std::string::npos)
+      << good.out;  // 2.58/√496 = 0.1158
   // A wrong delay (nk = 1 instead of 3) leaves the input in the residuals.
   const CliResult bad = RunCli("fit dryer --output y --input u --na 1 --nb 1 --nk 1");
   EXPECT_NE(bad.out.find("correlated with the input"), std::string::npos) << bad.out;

@@ -115,26 +115,39 @@ TEST(SmoothCommand, TextReportListsOneRowPerTime) {
 TEST(SmoothCommand, BadModelsAndDataExitWithOneLine) {
   const std::string data = WriteFile("d.csv", "z\n0.5\n1.2\n3.1\n");
   auto model = [](const std::string& text) { return "'" + WriteFile("m.json", text) + "' "; };
-  const std::string tail = R"(, "initial": {"penalty": "l1"}, "process": {"penalty": "l1"}, "measurement": {"penalty": "l1"}})";
-  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1, 0]])" + tail) + "'" + data + "'",
-                 "F[0] is 2x2 but H has 3 columns");
-  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1], [1, 0]])" + tail) + "'" + data + "'",
-                 "H has 2 rows but the data have 1 measurement columns");
-  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "huber"}, "process": {"penalty": "l1"}, "measurement": {"penalty": "l1"}})") + "'" + data + "'",
-                 "initial: missing \"kappa\"");
-  ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "l1"}, "process": {"penalty": "cauchy"}, "measurement": {"penalty": "l1"}})") + "'" + data + "'",
-                 "unknown penalty 'cauchy'");
+  const std::string tail =
+      R"(, "initial": {"penalty": "l1"}, "process": {"penalty": "l1"}, "measurement": {"penalty": "l1"}})";
+  ExpectSmoothBadInput(
+      "smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1, 0]])" + tail) + "'" + data + "'",
+      "F[0] is 2x2 but H has 3 columns");
+  ExpectSmoothBadInput(
+      "smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1], [1, 0]])" + tail) + "'" + data + "'",
+      "H has 2 rows but the data have 1 measurement columns");
+  ExpectSmoothBadInput(
+      "smooth --model " +
+          model(
+              R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "huber"}, "process": {"penalty": "l1"}, "measurement": {"penalty": "l1"}})") +
+          "'" + data + "'",
+      "initial: missing \"kappa\"");
+  ExpectSmoothBadInput(
+      "smooth --model " +
+          model(
+              R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]], "initial": {"penalty": "l1"}, "process": {"penalty": "cauchy"}, "measurement": {"penalty": "l1"}})") +
+          "'" + data + "'",
+      "unknown penalty 'cauchy'");
   ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]]})") + "'" + data + "'",
-                 "missing \"initial\"");
+                       "missing \"initial\"");
   ExpectSmoothBadInput("smooth --model " + model("{\"F\": [[1]") + "'" + data + "'", "not valid JSON");
   ExpectSmoothBadInput("smooth --model " + model(R"({"F": [[1, 1], [0, 1]], "H": [[1, 1]])" + tail) + "'" +
-                     WriteFile("y.csv", "y\n1\n2\n") + "'",
-                 "no measurement column");
+                           WriteFile("y.csv", "y\n1\n2\n") + "'",
+                       "no measurement column");
   // Infeasible: |w_t| <= 0.1 and |z_t - x_t| <= 0.1 cannot hold when z jumps by 3.
   const std::string box = R"({"penalty": "piecewise_linear", "knots": [-0.1, 0.1], "values": [0, 0]})";
-  ExpectSmoothBadInput("smooth --model " + model("{\"F\": [[1]], \"H\": [[1]], \"initial\": " + box + ", \"process\": " + box +
-                                           ", \"measurement\": " + box + "}") + "'" + data + "'",
-                 "no state sequence keeps every residual inside");
+  ExpectSmoothBadInput("smooth --model " +
+                           model("{\"F\": [[1]], \"H\": [[1]], \"initial\": " + box + ", \"process\": " + box +
+                                 ", \"measurement\": " + box + "}") +
+                           "'" + data + "'",
+                       "no state sequence keeps every residual inside");
 }
 
 }  // namespace

@@ -84,8 +84,9 @@ TEST(Structures, FirModelIsArxWithNaZero) {
 
 TEST(Structures, StaticRegressionOnStacklossMatchesROls) {
   // datasets/README.md: R lm(stack_loss ~ air_flow + water_temp + acid_conc).
-  const nlohmann::json j = StructureFitJson("stackloss --output stack_loss --regressors air_flow,water_temp,acid_conc "
-                                   "--intercept --split 1");
+  const nlohmann::json j = StructureFitJson(
+      "stackloss --output stack_loss --regressors air_flow,water_temp,acid_conc "
+      "--intercept --split 1");
   const std::vector<double> theta = j["theta"], r_lm = {-39.920, 0.71564, 1.2953, -0.15212};
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(theta[i], r_lm[i], 5e-4 * std::abs(r_lm[i]) + 5e-4) << i;
   const nlohmann::json t = StructureFitJson("telef --output calls --regressors year --intercept --split 1");

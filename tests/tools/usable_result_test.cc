@@ -5,19 +5,19 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/Core>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "ident/regression/batch_regression.h"
 #include "common/error.h"
+#include "ident/regression/batch_regression.h"
 #include "ident/regression/estimator_registry.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 #include "ident/regression/student_regression.h"
-#include "tests/tools/scaled_dryer.h"
 #include "tests/support/cli.h"
+#include "tests/tools/scaled_dryer.h"
 
 namespace ident::testing {
 namespace {
@@ -42,7 +42,8 @@ TEST(UsableResult, ForgettingFarBelowOneIsRefusedInsteadOfNanStandardErrors) {
 TEST(UsableResult, ColumnsOfFarApartScalesAreRefusedInsteadOfInfiniteStandardErrors) {
   const std::string path = ScaledDryer("dryer_mixed.csv", 1e-100, 1e100);
   ExpectCliError("fit " + path + kUsableArx, "the standard error of parameter 'b1'");
-  ExpectCliError("fit " + path + kUsableArx + " --json", "its variance is infinite (columns whose scales are too far apart");
+  ExpectCliError("fit " + path + kUsableArx + " --json",
+                 "its variance is infinite (columns whose scales are too far apart");
 }
 
 // ARX θ does not change when u and y are scaled alike: every estimator, recursive and batch, returns the
@@ -71,8 +72,7 @@ TEST(UsableResult, StudentWithHugeDegreesOfFreedomBehavesAsLeastSquares) {
   const auto student = UsableFitJson("fit dryer" + kUsableArx + " --estimator student --dof 1e80");
   if (rls.is_null() || student.is_null()) return;
   EXPECT_EQ(student["updates"].get<int>(), rls["updates"].get<int>());
-  for (int i = 0; i < 4; ++i)
-    EXPECT_NEAR(student["theta"][i].get<double>(), rls["theta"][i].get<double>(), 1e-2) << i;
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(student["theta"][i].get<double>(), rls["theta"][i].get<double>(), 1e-2) << i;
 }
 
 // One estimator that cannot fit the data (the Kárný–Hangos recursion refuses dryer × 1e90 as numerically
@@ -102,7 +102,8 @@ TEST(UsableResult, CompareReportsOneEstimatorsFailureBesideTheOthers) {
   ASSERT_EQ(table.exit_code, 0) << table.err;
   EXPECT_NE(table.out.find("cauchy failed in 1 of 1 trials"), std::string::npos) << table.out;
   // Every estimator failing is an error.
-  ExpectCliError("compare " + big + kUsableArx + " --estimators cauchy,student:3", "every estimator failed on every trial");
+  ExpectCliError("compare " + big + kUsableArx + " --estimators cauchy,student:3",
+                 "every estimator failed on every trial");
 }
 
 // A record shorter than the robust start-up window: at the end of the data the start-up starts from every

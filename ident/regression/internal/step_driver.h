@@ -27,8 +27,8 @@
 #include <Eigen/Core>
 
 #include "common/step_report.h"
-#include "ident/regression/internal/extended_information.h"
 #include "ident/linalg/ld_factor.h"
+#include "ident/regression/internal/extended_information.h"
 #include "ident/regression/internal/step_guard.h"
 
 namespace ident {
@@ -55,11 +55,12 @@ class StepDriver {
   // forgetting's target (the prior), unused otherwise.
   // WithXi = false: the weight needs only ν (RLS); ξ, ξ_z are then NaN and not computed.
   template <bool WithXi = true, class Derived, class Weight>
-  DrivenStep Run(ExtendedInformation<Dim>& stats, const StepSettings& s, double nu_a, const LdFactor<Dim>& Va,
-                 double y, const Eigen::MatrixBase<Derived>& z, Weight&& weight) noexcept {
+  DrivenStep Run(ExtendedInformation<Dim>& stats, const StepSettings& s, double nu_a, const LdFactor<Dim>& Va, double y,
+                 const Eigen::MatrixBase<Derived>& z, Weight&& weight) noexcept {
     // |h|² = y² + |z|² is finite iff every entry is and nothing overflows (squares cannot cancel).
     const double h_norm2 = y * y + z.squaredNorm();
-    if (z.size() != stats.num_parameters() || !std::isfinite(h_norm2)) return {{StepStatus::kRejectedInvalid}, s.lambda};
+    if (z.size() != stats.num_parameters() || !std::isfinite(h_norm2))
+      return {{StepStatus::kRejectedInvalid}, s.lambda};
     const Sample<Derived> sample{y, z, std::sqrt(h_norm2)};
     const bool windup = s.lambda < 1 && s.windup_floor > 0;
     Outcome o = Attempt<WithXi>(stats, s.stabilised, s.lambda, windup ? s.windup_floor : StepGuard<Dim>::kNormalMin,

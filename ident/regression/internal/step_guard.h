@@ -31,8 +31,8 @@
 #include <cmath>
 #include <limits>
 
-#include "ident/regression/internal/extended_information.h"
 #include "ident/linalg/ld_factor.h"
+#include "ident/regression/internal/extended_information.h"
 
 namespace ident {
 
@@ -70,8 +70,7 @@ class StepGuard {
   // The full check on a state (the slow path's verdict after a committed step).
   bool Healthy(const ExtendedInformation<Dim>& stats, double d_min = kNormalMin) const {
     const auto& f = stats.factor();
-    if (!(std::isfinite(stats.nu()) && stats.nu() > 0 && f.d().allFinite() && f.d().minCoeff() >= d_min))
-      return false;
+    if (!(std::isfinite(stats.nu()) && stats.nu() > 0 && f.d().allFinite() && f.d().minCoeff() >= d_min)) return false;
     const double S = f.L().cwiseAbs().sum();
     if (S < theta_bound_) return true;  // false for S = NaN or Inf too
     return f.L().allFinite() && stats.parameters().allFinite();

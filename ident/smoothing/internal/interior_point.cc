@@ -34,7 +34,7 @@ struct Prepared {
   Eigen::VectorXd c0;       // constant case: at u = K^-1 (B r - b), p + B'u = c0 + W r with c0 = p - B'K^-1 b
   Eigen::MatrixXd K;        // dense case work
   Eigen::LLT<Eigen::MatrixXd> llt;
-  Eigen::MatrixXd KinvB;    // dense case work (k x m)
+  Eigen::MatrixXd KinvB;  // dense case work (k x m)
 };
 
 struct Term {
@@ -90,8 +90,8 @@ class Solver {
     // so their Newton contribution is the precomputed J'WJ and the gradient J'(c0 + W r)).
     const std::size_t K = offset, N = T_ + 1, nN = static_cast<std::size_t>(n_) * N, blocks = nN * n_;
     using A = WorkArena;
-    const std::size_t size = 17 * A::Padded(K) + 3 * A::Padded(nN) + (4 + (e_changes_ ? 2 : 1)) * A::Padded(blocks) +
-                             A::Padded(n_);
+    const std::size_t size =
+        17 * A::Padded(K) + 3 * A::Padded(nN) + (4 + (e_changes_ ? 2 : 1)) * A::Padded(blocks) + A::Padded(n_);
     arena_ = std::make_unique<WorkArena>(size);
     for (Eigen::Map<Eigen::VectorXd>* v : {&u_, &slo_, &qlo_, &shi_, &qhi_, &lo_, &hi_, &r3_, &rt3_, &du_, &dslo_,
                                            &dqlo_, &dshi_, &dqhi_, &xlo_, &xhi_, &kd_})
@@ -178,8 +178,8 @@ class Solver {
       if (!FactorizeBlockTridiagonal(n_, T_ + 1, D_.data(), E_.data(), C_.data(), G_.data(), chol_work_)) {
         // Near the solution K = M + D spans many orders of magnitude; if the Newton matrix breaks down
         // there, the iterate is accepted when its KKT residual is within 1e3 tolerance (precision limit).
-        res.status = kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged
-                                                          : MapSmootherStatus::kNumericalFailure;
+        res.status =
+            kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged : MapSmootherStatus::kNumericalFailure;
         break;
       }
       if (num_constraints_ == 0) {  // all penalties quadratic: one Newton step solves (P) exactly
@@ -225,8 +225,7 @@ class Solver {
     prep->identity_B = f.B.rows() == f.B.cols() && f.B.isIdentity(0.0) && f.b.isZero(0.0) && f.p.isZero(0.0);
     if (prep->constant) {
       Eigen::LLT<Eigen::MatrixXd> llt(f.M);
-      IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds",
-                    pen.Name());
+      IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds", pen.Name());
       prep->Kinv = llt.solve(Eigen::MatrixXd::Identity(prep->k, prep->k));
       prep->W = f.B.transpose() * prep->Kinv * f.B;
       prep->c0 = f.p - f.B.transpose() * (prep->Kinv * f.b);
@@ -569,7 +568,7 @@ class Solver {
       if (term.process) continue;
       const PlqForm& f = *term.prep->plq;
       double* ut = res->u.col(term.t).data();  // u_t = p + B'u in d g_t
-      if (term.prep->constant) {  // u = K^-1 (B r - b): p + B'u = c0 + W r
+      if (term.prep->constant) {               // u = K^-1 (B r - b): p + B'u = c0 + W r
         double* r = r_.data();
         Residual(term, x_.data(), true, r);
         for (int i = 0; i < nz_; ++i) ut[i] = term.prep->c0(i);
@@ -586,7 +585,7 @@ class Solver {
   const MapSmootherProblem& p_;
   const MapSmootherOptions& o_;
   const int T_, n_, nz_;
-  const double sigma_;     // the data unit (MapSmootherDataUnit)
+  const double sigma_;       // the data unit (MapSmootherDataUnit)
   const Eigen::MatrixXd z_;  // the measurements in that unit
   std::map<const Penalty*, std::unique_ptr<Prepared>> prepared_;
   std::vector<Term> terms_;   // process terms t = 0..T, then measurement terms t = 0..T
@@ -626,11 +625,16 @@ MapSmootherResult Solve(const MapSmootherProblem& problem, const MapSmootherOpti
 
 MapSmootherResult SolveMapSmootherInteriorPoint(const MapSmootherProblem& problem, const MapSmootherOptions& options) {
   switch (problem.state_dim()) {  // fixed-size kernels for small state dimensions
-    case 1: return Solve<1>(problem, options);
-    case 2: return Solve<2>(problem, options);
-    case 3: return Solve<3>(problem, options);
-    case 4: return Solve<4>(problem, options);
-    default: return Solve<0>(problem, options);
+    case 1:
+      return Solve<1>(problem, options);
+    case 2:
+      return Solve<2>(problem, options);
+    case 3:
+      return Solve<3>(problem, options);
+    case 4:
+      return Solve<4>(problem, options);
+    default:
+      return Solve<0>(problem, options);
   }
 }
 

@@ -105,8 +105,7 @@ class FastSolver {
       seen.push_back(f);
       const PlqForm& q = f->plq();
       Eigen::LLT<Eigen::MatrixXd> llt(q.M);
-      IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds",
-                    f->Name());
+      IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds", f->Name());
       const Eigen::MatrixXd KinvB = llt.solve(q.B);
       process_.push_back({f, q.B.transpose() * KinvB, (q.p - KinvB.transpose() * q.b) / sigma_});  // in the unit σ
     }
@@ -158,16 +157,15 @@ class FastSolver {
         break;
       }
       if (!FactorAndForward()) {  // as the general path: accept a breakdown at the precision limit
-        res.status = kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged
-                                                          : MapSmootherStatus::kNumericalFailure;
+        res.status =
+            kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged : MapSmootherStatus::kNumericalFailure;
         break;
       }
       // Mehrotra predictor-corrector: affine direction, centring sigma = (mu_aff / mu)^3, then the
       // corrected direction with the second-order term ds_aff .* dq_aff.
       const Backward affine = BackwardAndRecover(0.0, false);
       const double alpha_aff = std::min(1.0, affine.max_step);
-      const double mu_aff =
-          (r.complementarity + alpha_aff * (affine.sum1 + alpha_aff * affine.sum2)) / num_constraints;
+      const double mu_aff = (r.complementarity + alpha_aff * (affine.sum1 + alpha_aff * affine.sum2)) / num_constraints;
       const double sigma = std::pow(std::clamp(mu_aff / mu, 0.0, 1.0), 3);
       CorrectorForward(sigma * mu);
       const Backward corrected = BackwardAndRecover(sigma * mu, true);
@@ -292,7 +290,7 @@ class FastSolver {
   // P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1).
   template <bool kCorrector>
   [[gnu::always_inline]] inline void ForwardRightHandSide(const StepConstants<kN>& c, StepState<kN>& s,
-                                                           const double* v_prev, double target) {
+                                                          const double* v_prev, double target) {
     const double r1hi = s.u + s.shi - c.hi, r1lo = -s.u + s.slo + c.lo;
     double r2lo = s.slo * s.qlo - target, r2hi = s.shi * s.qhi - target;
     if constexpr (kCorrector) {
@@ -315,7 +313,8 @@ class FastSolver {
 
   // Block LDL' of the Newton matrix (D_t = Db_t + K^-1 H'H, E_t) fused with the predictor's forward
   // substitution: A = L diag(S_t) L' with L_t = E_t P_{t-1}; the solves use v_t = P_t y_t, so that L is not
-  // stored and the large K^-1 of coordinates at a kink never multiplies a vector. False if a Schur complement S_t is not numerically positive definite.
+  // stored and the large K^-1 of coordinates at a kink never multiplies a vector. False if a Schur complement S_t is
+  // not numerically positive definite.
   bool FactorAndForward() {
     for (int t = 0; t <= T_; ++t) {
       const StepConstants<kN>& c = Constants(t);
@@ -433,9 +432,9 @@ class FastSolver {
   std::vector<StepConstants<kN>> constants_;
   std::unique_ptr<WorkArena> arena_;
   StepState<kN>* steps_ = nullptr;
-  double* x_ = nullptr;  // kN x (T+1)
-  const double sigma_;         // the data unit (MapSmootherDataUnit)
-  const Eigen::VectorXd z_;    // the measurements in that unit
+  double* x_ = nullptr;      // kN x (T+1)
+  const double sigma_;       // the data unit (MapSmootherDataUnit)
+  const Eigen::VectorXd z_;  // the measurements in that unit
   double bound_scale_ = 1, matrix_scale_ = 1;
 };
 
@@ -453,10 +452,14 @@ bool MapSmootherFastPathApplies(const MapSmootherProblem& p) {
 
 MapSmootherResult SolveMapSmootherFastPath(const MapSmootherProblem& p, const MapSmootherOptions& o) {
   switch (p.state_dim()) {
-    case 1: return FastSolver<1>(p, o).Run();
-    case 2: return FastSolver<2>(p, o).Run();
-    case 3: return FastSolver<3>(p, o).Run();
-    default: return FastSolver<4>(p, o).Run();
+    case 1:
+      return FastSolver<1>(p, o).Run();
+    case 2:
+      return FastSolver<2>(p, o).Run();
+    case 3:
+      return FastSolver<3>(p, o).Run();
+    default:
+      return FastSolver<4>(p, o).Run();
   }
 }
 

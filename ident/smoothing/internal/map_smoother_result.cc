@@ -15,7 +15,8 @@ namespace {
 
 using models::Penalty;
 
-// Everything of the result after the iteration, from res->x and res->u (see ident/smoothing/internal/map_smoother_fast_path.h).
+// Everything of the result after the iteration, from res->x and res->u (see
+// ident/smoothing/internal/map_smoother_fast_path.h).
 template <int kN>
 void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {
   const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
@@ -128,9 +129,10 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double
   if (!res->x.allFinite() || !res->u.allFinite()) {  // overflow or NaN in the iteration: nothing to evaluate
     const double nan = std::numeric_limits<double>::quiet_NaN();
     res->status = MapSmootherStatus::kNumericalFailure;
-    res->message = fmt::format("the iterate is not finite after {} iterations (values too large or too far apart "
-                               "in scale: rescale the data or the model)",
-                               res->iterations);
+    res->message = fmt::format(
+        "the iterate is not finite after {} iterations (values too large or too far apart "
+        "in scale: rescale the data or the model)",
+        res->iterations);
     res->primal = res->dual = res->gap = res->relative_gap = res->dual_infeasibility = nan;
     res->max_abs_x_difference = nan;
     res->w.setConstant(res->x.rows(), res->x.cols(), nan);
@@ -141,11 +143,16 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double
     return;
   }
   switch (p.state_dim()) {
-    case 1: return FinishResult<1>(p, z_scale, mu, res);
-    case 2: return FinishResult<2>(p, z_scale, mu, res);
-    case 3: return FinishResult<3>(p, z_scale, mu, res);
-    case 4: return FinishResult<4>(p, z_scale, mu, res);
-    default: return FinishResult<0>(p, z_scale, mu, res);
+    case 1:
+      return FinishResult<1>(p, z_scale, mu, res);
+    case 2:
+      return FinishResult<2>(p, z_scale, mu, res);
+    case 3:
+      return FinishResult<3>(p, z_scale, mu, res);
+    case 4:
+      return FinishResult<4>(p, z_scale, mu, res);
+    default:
+      return FinishResult<0>(p, z_scale, mu, res);
   }
 }
 
@@ -161,7 +168,9 @@ void SetMapSmootherMessage(MapSmootherResult* res) {
     case MapSmootherStatus::kInfeasible:
       res->message = "the multipliers diverge: no state sequence keeps every residual inside its penalty's domain";
       break;
-    case MapSmootherStatus::kNumericalFailure: res->message = "the Newton matrix is not positive definite"; break;
+    case MapSmootherStatus::kNumericalFailure:
+      res->message = "the Newton matrix is not positive definite";
+      break;
   }
 }
 

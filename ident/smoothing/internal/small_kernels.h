@@ -8,7 +8,8 @@ namespace ident::internal {
 // y += alpha A x (A r x c column-major, plain loops: several times faster than Eigen's dynamic-size
 // kernels for the tiny blocks here). kR, kC > 0 fix the sizes at compile time (the loops unroll).
 template <int kR = 0, int kC = 0>
-[[gnu::always_inline]] inline void AddMatVec(const double* A, int r_runtime, int c_runtime, const double* x, double* y, double alpha) {
+[[gnu::always_inline]] inline void AddMatVec(const double* A, int r_runtime, int c_runtime, const double* x, double* y,
+                                             double alpha) {
   const int r = kR > 0 ? kR : r_runtime, c = kC > 0 ? kC : c_runtime;
   for (int j = 0; j < c; ++j) {
     const double xj = alpha * x[j];
@@ -17,7 +18,8 @@ template <int kR = 0, int kC = 0>
 }
 // y += alpha A' x.
 template <int kR = 0, int kC = 0>
-[[gnu::always_inline]] inline void AddMatTVec(const double* A, int r_runtime, int c_runtime, const double* x, double* y, double alpha) {
+[[gnu::always_inline]] inline void AddMatTVec(const double* A, int r_runtime, int c_runtime, const double* x, double* y,
+                                              double alpha) {
   const int r = kR > 0 ? kR : r_runtime, c = kC > 0 ? kC : c_runtime;
   for (int j = 0; j < c; ++j) {
     double s = 0;
