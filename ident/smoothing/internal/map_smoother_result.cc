@@ -144,15 +144,28 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double
   }
   switch (p.state_dim()) {
     case 1:
-      return FinishResult<1>(p, z_scale, mu, res);
+      FinishResult<1>(p, z_scale, mu, res);
+      break;
     case 2:
-      return FinishResult<2>(p, z_scale, mu, res);
+      FinishResult<2>(p, z_scale, mu, res);
+      break;
     case 3:
-      return FinishResult<3>(p, z_scale, mu, res);
+      FinishResult<3>(p, z_scale, mu, res);
+      break;
     case 4:
-      return FinishResult<4>(p, z_scale, mu, res);
+      FinishResult<4>(p, z_scale, mu, res);
+      break;
     default:
-      return FinishResult<0>(p, z_scale, mu, res);
+      FinishResult<0>(p, z_scale, mu, res);
+  }
+  // A converged iterate whose objectives overflow (e.g. the dual states y_t = F_t'y_{t+1} + H_t'u_t under
+  // dynamics of 1e86) certifies nothing: reported as a numerical failure, never as converged.
+  if (res->status == MapSmootherStatus::kConverged && !(std::isfinite(res->primal) && std::isfinite(res->dual))) {
+    res->status = MapSmootherStatus::kNumericalFailure;
+    res->message = fmt::format(
+        "the objectives are not finite at the last iterate (primal {}, dual {}; values too large or too far apart "
+        "in scale: rescale the data or the model)",
+        res->primal, res->dual);
   }
 }
 
