@@ -18,7 +18,7 @@
 #include "ident/density/logconcave_mle.h"
 #include "ident/smoothing/map_smoother.h"
 #ifdef IDENT_EXAMPLE_HAS_PLOT
-#include "tools/gnuplot.h"
+#include "cli/gnuplot.h"
 #endif
 
 int main(int argc, char** argv) {
@@ -83,10 +83,10 @@ int main(int argc, char** argv) {
 #ifdef IDENT_EXAMPLE_HAS_PLOT
     std::vector<double> ts(T + 1);
     for (int t = 0; t <= T; ++t) ts[t] = t;
-    std::vector<ident::tools::PlotPanel> panels;
+    std::vector<ident::cli::PlotPanel> panels;
     const char* names[2] = {"position x1", "velocity x2"};
     for (int i = 0; i < 2; ++i) {
-      ident::tools::PlotPanel p{.title = names[i], .xlabel = "t", .ylabel = names[i], .series = {}};
+      ident::cli::PlotPanel p{.title = names[i], .xlabel = "t", .ylabel = names[i], .series = {}};
       std::vector<double> tr(T + 1), map(T + 1), dual(T + 1);
       for (int t = 0; t <= T; ++t) tr[t] = truth(i, t), map[t] = r.x(i, t), dual[t] = r.x_from_dual(i, t);
       p.series.push_back({"truth", ts, tr});
@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
       p.series.push_back({"reconstructed from the dual", ts, dual});
       panels.push_back(p);
     }
-    ident::tools::RenderPlot(plot, panels);
+    ident::cli::RenderPlot(plot, panels);
     fmt::print("\nplot written to {}\n", plot);
 #else
     fmt::print(stderr, "plotting needs the tools layer (IDENT_BUILD_TOOLS)\n");

@@ -1,4 +1,4 @@
-// Properties of the whole command line, run in-process through tools::RunCommandLine: the fuzzer's bytes
+// Properties of the whole command line, run in-process through cli::RunCommandLine: the fuzzer's bytes
 // choose a small data file (raw bytes, or rows of numbers and odd tokens) and an argument vector
 // (subcommand fit, compare, smooth, logcondens or datasets, options and values from vocabularies that
 // include the limits and the bad values; `mems` on a small study). For every input:
@@ -35,7 +35,7 @@
 #include "common/error.h"
 #include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
-#include "tools/command_line.h"
+#include "cli/command_line.h"
 
 namespace ident::fuzz {
 
@@ -237,7 +237,7 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
   close(captured);
   std::streambuf* const old_err = std::cerr.rdbuf(err.rdbuf());
   std::streambuf* const old_out = std::cout.rdbuf(out.rdbuf());
-  const int code = tools::RunCommandLine(static_cast<int>(args.size()), argv.data());
+  const int code = cli::RunCommandLine(static_cast<int>(args.size()), argv.data());
   std::cerr.rdbuf(old_err);
   std::cout.rdbuf(old_out);
   std::fflush(stdout);

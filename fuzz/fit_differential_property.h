@@ -44,7 +44,7 @@ inline Outcome Run(const std::string& path, bool streamed, const EstimatorSettin
                    const models::ArxStructure& arx, const workflow::FitOptions& options) {
   Outcome o;
   try {
-    // The default priors of `ident fit` (tools/fit_command.cc): in the data's own scale — RLS the flat
+    // The default priors of `ident fit` (cli/fit_command.cc): in the data's own scale — RLS the flat
     // prior of the estimation part's mean squares, the others their scale-invariant start-up prior —
     // without the absolute small-information check.
     workflow::FitOptions fit = options;

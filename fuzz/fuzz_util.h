@@ -1,4 +1,4 @@
-// Shared by the fuzz targets and by tests/tools/fuzz_corpus_test.cc (which replays every
+// Shared by the fuzz targets and by tests/cli/fuzz_corpus_test.cc (which replays every
 // committed corpus input through the same property checks in the ordinary test suite):
 //   ByteReader             reads typed values from the fuzzer's bytes
 //   IDENT_FUZZ_ENTRY(fn)   defines LLVMFuzzerTestOneInput from a property check

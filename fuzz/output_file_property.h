@@ -1,4 +1,4 @@
-// Property of the output-file writer (ident::tools::OutputFile) and the trace row writer of `ident fit`
+// Property of the output-file writer (ident::cli::OutputFile) and the trace row writer of `ident fit`
 // (ident::workflow::WriteTraceRow), on arbitrary content, chunking and failure points.
 // Input:
 //   1 byte flags: bit 0 the target exists before (old content), bit 1 the target is a symbolic link to
@@ -42,7 +42,7 @@
 #include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/fit.h"
-#include "tools/output_file.h"
+#include "cli/output_file.h"
 
 namespace ident::fuzz {
 
@@ -156,7 +156,7 @@ inline std::string OutputFileProperty(const std::uint8_t* data, std::size_t size
 
   bool committed = false, refused = false;
   try {
-    tools::OutputFile out(target.string(), "fuzz file");
+    cli::OutputFile out(target.string(), "fuzz file");
     std::size_t written = 0;
     std::optional<FileSizeLimit> limit;
     if (failure == 2) limit.emplace(static_cast<rlim_t>(fail_at));
@@ -205,7 +205,7 @@ inline std::string OutputFileProperty(const std::uint8_t* data, std::size_t size
     const std::string name = entry.path().filename().string();
     check(name == "out.csv" || name == "link.csv", "no temporary file remains");
   }
-  check(tools::PendingOutputFiles() == 0, "the signal handler's table is empty");
+  check(cli::PendingOutputFiles() == 0, "the signal handler's table is empty");
 
   if (trace_mode && committed && !rows.empty() && violated.empty()) {
     try {

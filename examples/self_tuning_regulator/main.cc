@@ -43,7 +43,7 @@
 #define IDENT_HAS_CAUCHY 1
 #endif
 #ifdef IDENT_HAS_GNUPLOT
-#include "tools/gnuplot.h"
+#include "cli/gnuplot.h"
 #endif
 
 namespace {
@@ -293,7 +293,7 @@ int main(int argc, char** argv) {
     }
     if (!plot.empty()) {
 #ifdef IDENT_HAS_GNUPLOT
-      using ident::tools::PlotPanel;
+      using ident::cli::PlotPanel;
       std::vector<PlotPanel> panels;
       PlotPanel p1{.title = "run 1 with outliers (feedback: " + plot_feedback + "): RLS-based loop",
                    .xlabel = "t",
@@ -316,7 +316,7 @@ int main(int argc, char** argv) {
         p3.series.push_back({"Cauchy", cauchy_ptr->t, cauchy_ptr->a1_hat});
       }
       panels.push_back(p3);
-      ident::tools::RenderPlot(plot, panels);
+      ident::cli::RenderPlot(plot, panels);
       std::printf("wrote %s\n", plot.c_str());
 #else
       std::fprintf(stderr, "built without the gnuplot helper (tools/); use --csv\n");

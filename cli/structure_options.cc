@@ -1,0 +1,105 @@
+#include "cli/structure_options.h"
+
+#include "common/error.h"
+
+namespace ident::cli {
+
+void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
+  auto* output_option = app.add_option("--output", output, "Output column y (one output at a time for MIMO data)")
+                            ->required(require_output);
+  auto* input =
+      app.add_option("--input", inputs, "Input column(s) u (comma-separated for several inputs)")->delimiter(',');
+  auto* na_option = app.add_option("--na", na, "ARX order of the output polynomial (0: FIR)")->capture_default_str();
+  auto* nb_option = app.add_option("--nb", nb, "Number of b coefficients (one value, or one per input)")
+                        ->delimiter(',')
+                        ->capture_default_str();
+  auto* nk_option = app.add_option("--nk", nk, "Input delay in samples (one value, or one per input)")
+                        ->delimiter(',')
+                        ->capture_default_str();
+  auto* regressors_option =
+      app.add_option("--regressors", regressors, "Static regression on these columns (comma-separated)")
+          ->delimiter(',')
+          ->excludes(input)
+          ->excludes(na_option)
+          ->excludes(nb_option)
+          ->excludes(nk_option);
+  auto* intercept_option =
+      app.add_flag("--intercept", intercept, "Static regression: add an intercept (first parameter)")
+          ->needs(regressors_option);
+  app.add_option("--clean-regressors", clean_regressors,
+                 "ARX: replace outputs the estimator flags as outliers (nu*beta < --clean-below) by a bounded "
+                 "cleaned value in later regressors")
+      ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  app.add_option("--clean-clip", cleaning.clip,
+                 "With --clean-gross 0: a flagged output is stored as the prediction plus its error clipped to C "
+                 "noise scales (Huber)")
+      ->capture_default_str();
+  app.add_option("--clean-gross", cleaning.gross,
+                 "Clean a flagged output only if its error exceeds G robust scales of the recent prediction errors, "
+                 "and then store the prediction; 0: clean every flagged output with --clean-clip")
+      ->capture_default_str();
+  app.add_option("--clean-below", clean_below, "Flag a sample as outlier when its relative weight nu*beta is below W")
+      ->capture_default_str();
+  options_ = {output_option, input, na_option, nb_option, nk_option, regressors_option, intercept_option};
+}
+
+bool StructureCliOptions::Given() const {
+  for (const CLI::Option* option : options_)
+    if (option->count() > 0) return true;
+  return false;
+}
+
+std::unique_ptr<workflow::DataSource> StructureCliOptions::MakeSource(const std::vector<std::string>& columns,
+                                                                      const std::string& source) const {
+  // The cleaning options are checked whatever the structure: a bad value is an error, not ignored.
+  models::OutputCleaningOptions clean = cleaning;
+  clean.enabled = clean_regressors == "on";
+  const std::string error = clean.Validate();
+  IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
+  if (!regressors.empty()) {
+    models::StaticRegression regression{regressors, intercept};
+    return workflow::MakeStaticSource(columns, output, regression, source);
+  }
+  IDENT_REQUIRE(!inputs.empty(), "give --input (ARX/FIR model) or --regressors (static regression)");
+  const std::size_t m = inputs.size();
+  auto per_input = [m](const std::vector<int>& v, const char* name) {
+    IDENT_REQUIRE(v.size() == 1 || v.size() == m, "--{} has {} values; give one, or one per input ({})", name, v.size(),
+                  m);
+    return v.size() == m ? v : std::vector<int>(m, v[0]);
+  };
+  models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
+  return workflow::MakeArxSource(columns, output, inputs, arx, source, clean);
+}
+
+}  // namespace ident::cli
+
+namespace ident::cli {
+
+StructureCliOptions StructureCliOptions::WithDefaultsFrom(const StructureCliOptions& suggestion) const {
+  enum { kOutput, kInput, kNa, kNb, kNk, kRegressors, kIntercept };
+  auto given = [this](std::size_t i) { return i < options_.size() && options_[i]->count() > 0; };
+  StructureCliOptions r = *this;
+  if (!given(kOutput)) r.output = suggestion.output;
+  if (given(kRegressors)) return r;
+  if (!given(kInput) && !given(kIntercept)) {
+    r.inputs = suggestion.inputs;
+    r.regressors = suggestion.regressors;
+    r.intercept = suggestion.intercept;
+  }
+  if (!r.regressors.empty()) return r;
+  const bool same_inputs = r.inputs.size() == suggestion.inputs.size();
+  if (!given(kNa)) r.na = suggestion.na;
+  if (!given(kNb) && same_inputs) r.nb = suggestion.nb;
+  if (!given(kNk) && same_inputs) r.nk = suggestion.nk;
+  return r;
+}
+
+OutlierDecision StructureCliOptions::Decision() const {
+  OutlierDecision decision{clean_below};
+  const std::string error = decision.Validate();
+  IDENT_REQUIRE(error.empty(), "--clean-below: {}", error);
+  return decision;
+}
+
+}  // namespace ident::cli
