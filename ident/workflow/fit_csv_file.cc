@@ -1,0 +1,213 @@
+// The streamed workflow of ident/workflow/fit.h: FitCsvFile and its passes over a CSV file in constant memory.
+#include "ident/workflow/fit.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <memory>
+
+#include <fmt/format.h>
+#include <Eigen/Eigenvalues>
+
+#include "common/error.h"
+#include "ident/workflow/internal/fit_steps.h"
+
+namespace ident::workflow {
+
+using internal::Estimation;
+using internal::MeanSquares;
+using internal::RequireUsable;
+using internal::RunningMean;
+using internal::RunPasses;
+using internal::Scoring;
+using internal::Split;
+using internal::Summarise;
+
+long CountCsvDataRows(const std::string& path) {
+  std::ifstream in(path, std::ios::in | std::ios::binary);
+  if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  // A line ends at LF or CR (CRLF: an empty line between them, not counted) and counts if it has a
+  // character other than ' ' and '\t' (the reader skips the others).
+  std::vector<char> block(1 << 16);
+  long lines = 0;
+  bool content = false;
+  while (in) {
+    in.read(block.data(), static_cast<std::streamsize>(block.size()));
+    const char* const end = block.data() + in.gcount();
+    for (const char* p = block.data(); p < end; ++p) {
+      const char c = *p;
+      if (c == '\n' || c == '\r') {
+        lines += content;
+        content = false;
+      } else if (c != ' ' && c != '\t') {
+        content = true;
+      }
+    }
+  }
+  if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
+  lines += content;
+  return lines > 0 ? lines - 1 : 0;  // minus the header
+}
+
+namespace {
+
+// The rows of a CSV file: the header's reader, the number of data rows and the (estimation, validation) split.
+struct CsvLayout {
+  int columns = 0;
+  long rows = 0;
+  Segment estimation, validation;
+};
+CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                 const FitOptions& options) {
+  io::CsvReader header(path, csv);
+  CsvLayout layout;
+  layout.columns = header.num_columns();
+  layout.rows = CountCsvDataRows(path);
+  if (layout.rows == 0) {
+    Eigen::VectorXd row(layout.columns);
+    header.Next(row);  // throws "no data rows after the header"
+  }
+  IDENT_REQUIRE(layout.rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", path, layout.rows);
+  std::tie(layout.estimation, layout.validation) = Split(static_cast<int>(layout.rows), source, options, path);
+  return layout;
+}
+
+// Detrending offsets of a CSV file: the estimation-part means of the used columns (NaN = missing skipped),
+// zero with Detrend::kNone.
+Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                               const FitOptions& options, Segment estimation) {
+  io::CsvReader reader(path, csv);
+  Eigen::VectorXd offset = Eigen::VectorXd::Zero(reader.num_columns()), row(reader.num_columns());
+  if (options.detrend == Detrend::kMean) {
+    std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
+    const std::vector<int> used = source.used_columns();
+    for (int r = 0; r < estimation.count && reader.Next(row); ++r)
+      for (int c : used) means[c].Add(row(c));
+    for (int c : used) offset(c) = means[c].Get(path, reader.names()[c]);
+  }
+  return offset;
+}
+
+// Runs f(); if it throws InvalidArgument, a bad row later in the file is the real problem (e.g. a ragged
+// row makes the record look too short): report the data error first, as reading the whole table up
+// front would.
+template <class F>
+auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) {
+  try {
+    return f();
+  } catch (const InvalidArgument&) {
+    io::CsvReader reader(path, csv);
+    Eigen::VectorXd row(reader.num_columns());
+    while (reader.Next(row)) {}
+    throw;
+  }
+}
+
+FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                        AnyRegressionEstimator& estimator, const FitOptions& options) {
+  // Pass 1: the header, then the number of rows (the rows are parsed and checked by the passes below).
+  const CsvLayout layout = LayOut(path, csv, source, options);
+  const long rows = layout.rows;
+  const Segment estimation = layout.estimation, validation = layout.validation;  // captured below (clang 14)
+  Eigen::VectorXd row(layout.columns);
+
+  // Pass 2: detrending offsets (estimation-part means of the used columns, NaN = missing skipped).
+  const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, estimation);
+
+  // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass. With
+  // options.passes > 1 the passes before the last read the estimation part only.
+  if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
+  int passes = 1;
+  if (options.passes > 1) {
+    FitOptions earlier = options;
+    earlier.passes = options.passes - 1;
+    earlier.trace = nullptr;
+    earlier.on_update = {};
+    RunPasses(estimator, earlier, &passes, [&](const FitOptions& o) {
+      Estimation estimating(source, estimator, o);
+      io::CsvReader reader(path, csv);
+      for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
+        row -= offset;
+        estimating.Row(row, r);
+      }
+      return estimating.Finish(path);
+    });
+    if (passes == options.passes - 1 && estimator.BeginPass()) {
+      ++passes;
+    } else {
+      estimator.Reset();
+      passes = 1;
+    }
+  }
+  Estimation estimating(source, estimator, options);
+  std::unique_ptr<Scoring> scoring;
+  FitResult result;
+  io::CsvReader reader(path, csv);
+  int r = 0;
+  auto finish_estimation = [&] {
+    std::tie(result.updates, result.rejected) = estimating.Finish(path);
+    const int updates = result.updates, rejected = result.rejected;
+    result = Summarise(source, estimator, estimation, validation);
+    result.passes = passes;
+    result.updates = updates;
+    result.rejected = rejected;
+    RequireUsable(result, estimator, path);
+    scoring = std::make_unique<Scoring>(source, result.theta);
+  };
+  while (reader.Next(row)) {
+    row -= offset;
+    if (r == estimation.count) finish_estimation();
+    if (r < estimation.count)
+      estimating.Row(row, r);
+    else
+      scoring->Row(row);
+    ++r;
+  }
+  IDENT_REQUIRE(r == rows, "{}: {} rows were counted but {} read (file changed while reading?)", path, rows, r);
+  if (!scoring) {
+    // Pass 4 (split = 1): score the whole record.
+    finish_estimation();
+    io::CsvReader again(path, csv);
+    while (again.Next(row)) {
+      row -= offset;
+      scoring->Row(row);
+    }
+  }
+  result.validation = scoring->Finish(path);
+  return result;
+}
+
+Eigen::VectorXd StreamMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                                  const FitOptions& options) {
+  const CsvLayout layout = LayOut(path, csv, source, options);
+  const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation);
+  MeanSquares squares(source);
+  io::CsvReader reader(path, csv);
+  Eigen::VectorXd row(layout.columns);
+  for (int r = 0; r < layout.estimation.count && reader.Next(row); ++r) {
+    row -= offset;
+    squares.Add(row);
+  }
+  return squares.Get();
+}
+
+}  // namespace
+
+Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                                         const FitOptions& options) {
+  return DataErrorsFirst(path, csv, [&] { return StreamMeanSquares(path, csv, source, options); });
+}
+
+FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                     AnyRegressionEstimator& estimator, const FitOptions& options) {
+  return DataErrorsFirst(path, csv, [&] { return StreamCsvFile(path, csv, source, estimator, options); });
+}
+
+int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options) {
+  return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options).estimation.count; });
+}
+
+}  // namespace ident::workflow

@@ -1,0 +1,346 @@
+// The steps of fitting a record that the in-memory and the streamed workflow share (internal to
+// ident/workflow/; see ident/workflow/fit.h): the split, detrending means, recursive estimation with output
+// cleaning and passes, scoring, the summary and its usability check, the mean squares for data-scaled priors.
+#pragma once
+
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include "common/error.h"
+#include "ident/workflow/fit.h"
+
+namespace ident::workflow::internal {
+
+// The estimation and validation segments of an n-row record; checks they are long enough.
+inline std::pair<Segment, Segment> Split(int n, const DataSource& source, const FitOptions& options,
+                                         const std::string& name) {
+  IDENT_REQUIRE(std::isfinite(options.split) && options.split > 0 && options.split <= 1,
+                "split = {}; need 0 < split <= 1", options.split);
+  const int n_est = options.split == 1 ? n : static_cast<int>(std::floor(options.split * n));
+  const Segment estimation{0, n_est};
+  const Segment validation = options.split == 1 ? Segment{0, n} : Segment{n_est, n - n_est};
+  const int t0 = source.first_regression_index();
+  const int rho = source.num_parameters();
+  IDENT_REQUIRE(estimation.count - t0 >= rho + 1,
+                "{}: the estimation part has {} rows; {} with {} parameters needs at least {} (lower the orders or "
+                "raise --split)",
+                name, estimation.count, source.structure(), rho, t0 + rho + 1);
+  IDENT_REQUIRE(validation.count - t0 >= 2, "{}: the validation part has {} rows; {} needs at least {} (lower --split)",
+                name, validation.count, source.structure(), t0 + 2);
+  return {estimation, validation};
+}
+
+// Mean of a column's non-missing values, m ← m + (v − m)/k: exact for a constant column even near
+// 1e308, where a plain sum would overflow. 0 for a column with no values.
+class RunningMean {
+ public:
+  void Add(double v) {
+    if (std::isnan(v)) return;
+    ++count_;
+    mean_ += (v - mean_) / static_cast<double>(count_);
+  }
+  double Get(const std::string& source, const std::string& column) const {
+    IDENT_REQUIRE(std::isfinite(mean_),
+                  "{}: the mean of column '{}' overflows (values near 1e308 of both signs); rescale the data or "
+                  "pass --detrend none",
+                  source, column);
+    return mean_;
+  }
+
+ private:
+  long count_ = 0;
+  double mean_ = 0;
+};
+
+// Recursive estimation, one row at a time (rows of one segment, in order).
+class Estimation {
+ public:
+  Estimation(DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options)
+      : source_(source),
+        estimator_(estimator),
+        trace_(options.trace),
+        min_information_(options.min_regressor_information),
+        decision_(options.decision),
+        on_update_(options.on_update),
+        z_(source.num_parameters()),
+        z_measured_(source.num_parameters()),
+        ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())),
+        max_abs_(Eigen::VectorXd::Zero(source.num_parameters())),
+        judged_(estimator.judges_outliers()),
+        in_startup_(estimator.in_startup()) {
+    source_.Reset();
+  }
+
+  // `r` is the 0-based row index in the record (the trace prints r + 1).
+  void Row(const Eigen::VectorXd& row, int r) {
+    const double y = row(source_.output_column());
+    bool flagged = false;
+    double y_hat = std::nan(""), scale = std::nan("");
+    if (source_.Regressor(row, z_)) {
+      // y(t−1) was cleaned: keep the reading of it (additive outlier or innovation) that predicts y(t) better.
+      if (source_.MeasuredRegressor(z_measured_) &&
+          std::abs(y - estimator_.Predict(z_measured_)) < std::abs(y - estimator_.Predict(z_))) {
+        source_.RestoreMeasured();
+        z_ = z_measured_;
+      }
+      const StepReport report = estimator_.Update(y, z_);
+      if (in_startup_ && !estimator_.in_startup()) {  // the robust start is made: the model judges from now on
+        in_startup_ = false;
+        source_.EndCleaningWarmUp();
+      }
+      flagged = decision_.Flags(report);
+      // Every prediction ŷ goes to the cleaner (its gross-error test compares |y − ŷ| with the robust
+      // scale of all recent prediction errors); a flagged output is rebuilt from ŷ and the noise scale.
+      y_hat = y - report.prediction_error;
+      scale = estimator_.noise_std();
+      if (report.updated()) {
+        ++updates_;
+        ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);
+        max_abs_ = max_abs_.cwiseMax(z_.cwiseAbs());
+        if (on_update_) on_update_(r, estimator_);
+        if (trace_) {
+          const Eigen::VectorXd theta = estimator_.parameters();
+          WriteTraceRow(trace_, {.t = r + 1,
+                                 .nu = report.nu,
+                                 .beta = report.weight,
+                                 .pred_err = report.prediction_error,
+                                 .theta = &theta,
+                                 .Dy = estimator_.Dy()});
+        }
+      } else {
+        ++rejected_;
+        failed_ += report.status == StepStatus::kNumericalFailure;
+      }
+    }
+    source_.PushCheckedOutput(y, y_hat, scale, flagged, judged_);
+  }
+
+  // The end of the pass: a start-up that still waits starts from every sample seen. Identifiability:
+  // every regressor must vary and none may be a combination of the others.
+  std::pair<int, int> Finish(const std::string& name) {
+    estimator_.FinishStartup();
+    const int rho = source_.num_parameters();
+    const std::vector<std::string> names = source_.parameter_names();
+    IDENT_REQUIRE(updates_ > 0 || failed_ < rejected_,
+                  "{}: every update of the estimation part ({} samples) was refused as numerically unsafe (values "
+                  "extremely far from unit scale, e.g. near 1e100? rescale the data or give a prior; or a "
+                  "forgetting factor far below 1, which discards nearly all information at each step?)",
+                  name, rejected_);
+    IDENT_REQUIRE(updates_ > 0,
+                  "{}: none of the {} samples of the estimation part could be used (all missing, or too large: "
+                  "squares beyond 1e308); rescale the data",
+                  name, rejected_);
+    const Eigen::MatrixXd G = ZtZ_.selfadjointView<Eigen::Lower>();
+    const Eigen::VectorXd scale = G.diagonal().cwiseSqrt();
+    for (int i = 0; i < rho; ++i)
+      IDENT_REQUIRE(scale(i) > 0 || max_abs_(i) == 0,
+                    "{}: regressor '{}' has sum of squares 0 over the estimation part: its values (largest {:.3g}) "
+                    "are too small to square in double precision (values near 1e-200?); rescale the data",
+                    name, names[i], max_abs_(i));
+    for (int i = 0; i < rho; ++i)
+      IDENT_REQUIRE(scale(i) > 0,
+                    "{}: regressor '{}' is identically zero over the estimation part (a constant column "
+                    "after detrending?); the model is not identifiable",
+                    name, names[i]);
+    for (int i = 0; i < rho; ++i)
+      IDENT_REQUIRE(G(i, i) >= min_information_,
+                    "{}: regressor '{}' has sum of squares {:.3g} over the estimation part, too small against the "
+                    "default flat prior (values near 1e-150?); rescale the data or give a prior",
+                    name, names[i], G(i, i));
+    IDENT_REQUIRE(scale.allFinite(),
+                  "{}: the regressors' sum of squares overflows (values near 1e308?); rescale the data", name);
+    const Eigen::MatrixXd C = scale.cwiseInverse().asDiagonal() * G * scale.cwiseInverse().asDiagonal();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
+    IDENT_REQUIRE(eig.eigenvalues()(0) > 1e-12 * rho,
+                  "{}: the regressors are collinear over the estimation part (smallest eigenvalue of their "
+                  "correlation matrix {:.3g}); the model is not identifiable (if a gross outlier has moved the "
+                  "detrending mean, try --detrend none)",
+                  name, eig.eigenvalues()(0));
+    return {updates_, rejected_};
+  }
+
+ private:
+  DataSource& source_;
+  AnyRegressionEstimator& estimator_;
+  std::FILE* trace_;
+  double min_information_;
+  OutlierDecision decision_;
+  std::function<void(int row, const AnyRegressionEstimator&)> on_update_;
+  Eigen::VectorXd z_, z_measured_;
+  Eigen::MatrixXd ZtZ_;
+  Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)
+  bool judged_;              // the estimator gives outlier verdicts (cleaning applies)
+  bool in_startup_;          // the estimator is in its start-up (asked after each update only while true)
+  int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
+};
+
+// Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) and RMS, accumulated in one pass (Welford for ‖y − ȳ‖²).
+class FitAccumulator {
+ public:
+  void Add(double y, double yhat) {
+    ++count_;
+    const double delta = y - mean_;
+    mean_ += delta / static_cast<double>(count_);
+    dev_ += delta * (y - mean_);
+    err_ += (y - yhat) * (y - yhat);
+  }
+  long count() const { return count_; }
+  bool finite() const { return std::isfinite(err_) && std::isfinite(dev_); }
+  double Percent() const { return 100.0 * (1.0 - std::sqrt(err_) / std::sqrt(dev_)); }
+  double Rms() const { return std::sqrt(err_ / static_cast<double>(count_)); }
+
+ private:
+  long count_ = 0;
+  double mean_ = 0, dev_ = 0, err_ = 0;
+};
+
+// One-step and simulation scoring of θ, one row at a time (rows of one segment, in order).
+class Scoring {
+ public:
+  Scoring(const DataSource& source, const Eigen::VectorXd& theta)
+      : one_step_source_(source.Clone()),
+        simulation_source_(source.Clone()),
+        theta_(theta),
+        z_(source.num_parameters()),
+        t0_(source.first_regression_index()) {
+    one_step_source_->Reset();
+    simulation_source_->Reset();
+  }
+
+  void Row(const Eigen::VectorXd& row) {
+    const double y = row(one_step_source_->output_column());
+    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) one_step_.Add(y, theta_.dot(z_));
+    one_step_source_->PushOutput(y);
+    if (simulation_source_->dynamic()) {
+      if (simulation_source_->Regressor(row, z_)) {
+        const double yhat = theta_.dot(z_);
+        if (std::isfinite(y) && std::isfinite(yhat)) simulation_.Add(y, yhat);
+        simulation_source_->PushOutput(yhat);
+      } else {
+        simulation_source_->PushOutput(row_ < t0_ ? y : std::nan(""));
+      }
+    }
+    ++row_;
+  }
+
+  FitScores Finish(const std::string& name) const {
+    IDENT_REQUIRE(one_step_.count() >= 2, "{}: fewer than 2 validation samples can be scored", name);
+    IDENT_REQUIRE(one_step_.finite(),
+                  "{}: the validation fit overflows (values or predictions near 1e308); rescale the data", name);
+    FitScores scores;
+    scores.scored = static_cast<int>(one_step_.count());
+    scores.one_step = one_step_.Percent();
+    scores.rms_one_step = one_step_.Rms();
+    if (simulation_source_->dynamic() && simulation_.count() >= 2 && simulation_.finite()) {
+      scores.simulation = simulation_.Percent();
+      scores.rms_simulation = simulation_.Rms();
+    }
+    return scores;
+  }
+
+ private:
+  std::unique_ptr<DataSource> one_step_source_, simulation_source_;
+  Eigen::VectorXd theta_, z_;
+  int t0_;
+  int row_ = 0;
+  FitAccumulator one_step_, simulation_;
+};
+
+// Runs `pass(options)` (one pass over the estimation part, returning its (updates, rejected)) options.passes
+// times, calling estimator.BeginPass() between passes; the trace and on_update see the last pass only. An
+// estimator that declines a further pass runs once (re-run with the trace if it was held back). Stores the
+// number of passes made in *passes_run.
+template <class Pass>
+inline std::pair<int, int> RunPasses(AnyRegressionEstimator& estimator, const FitOptions& options, int* passes_run,
+                                     Pass&& pass) {
+  IDENT_REQUIRE(options.passes >= 1 && options.passes <= 100, "--passes {}; need 1 <= passes <= 100", options.passes);
+  FitOptions quiet = options;
+  quiet.trace = nullptr;
+  quiet.on_update = {};
+  int made = 1;
+  std::pair<int, int> counts = pass(options.passes == 1 ? options : quiet);
+  for (; made < options.passes; ++made) {
+    if (!estimator.BeginPass()) break;
+    counts = pass(made + 1 == options.passes ? options : quiet);
+  }
+  if (made == 1 && options.passes > 1 && (options.trace || options.on_update)) {
+    estimator.Reset();
+    counts = pass(options);
+  }
+  if (passes_run) *passes_run = made;
+  return counts;
+}
+
+inline std::pair<int, int> EstimateRows(const io::DataTable& data, Segment segment, DataSource& source,
+                                        AnyRegressionEstimator& estimator, const FitOptions& options,
+                                        int* passes_run = nullptr) {
+  return RunPasses(estimator, options, passes_run, [&](const FitOptions& o) {
+    Estimation estimation(source, estimator, o);
+    Eigen::VectorXd row(data.values.cols());
+    for (int r = segment.first; r < segment.first + segment.count; ++r) {
+      row = data.values.row(r).transpose();
+      estimation.Row(row, r);
+    }
+    return estimation.Finish(data.source);
+  });
+}
+
+inline FitResult Summarise(const DataSource& source, const AnyRegressionEstimator& estimator, Segment estimation,
+                           Segment validation) {
+  FitResult result;
+  result.estimator = estimator.name();
+  result.kind = estimator.kind();
+  result.structure = source.structure();
+  result.parameter_names = source.parameter_names();
+  result.theta = estimator.parameters();
+  result.theta_std = estimator.covariance().diagonal().cwiseMax(0).cwiseSqrt();
+  result.noise_std = estimator.noise_std();
+  result.nu = estimator.nu();
+  result.Dy = estimator.Dy();
+  result.samples_estimation = estimation.count;
+  result.samples_validation = validation.count;
+  result.cleaned = source.cleaned();
+  result.lock_in = estimator.lock_in();
+  return result;
+}
+
+// Throws DataError if the result of the estimation part cannot be reported (see UnusableResult).
+inline void RequireUsable(const FitResult& result, const AnyRegressionEstimator& estimator, const std::string& name) {
+  const std::string why = UnusableResult(estimator, result.parameter_names, result.updates);
+  if (!why.empty()) throw DataError(fmt::format("{}: the result is unusable: {}", name, why));
+}
+
+// Σ of (y², z_1², …, z_ρ²) and the count over rows fed to Add (usable samples only).
+class MeanSquares {
+ public:
+  explicit MeanSquares(DataSource& source)
+      : source_(source), z_(source.num_parameters()), sum_(Eigen::VectorXd::Zero(source.num_parameters() + 1)) {
+    source_.Reset();
+  }
+  void Add(const Eigen::VectorXd& row) {
+    const double y = row(source_.output_column());
+    if (source_.Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {
+      sum_(0) += y * y;
+      sum_.tail(z_.size()) += z_.cwiseAbs2();
+      ++count_;
+    }
+    source_.PushOutput(y);
+  }
+  Eigen::VectorXd Get() {
+    source_.Reset();
+    return count_ > 0 ? Eigen::VectorXd(sum_ / static_cast<double>(count_)) : sum_;
+  }
+
+ private:
+  DataSource& source_;
+  Eigen::VectorXd z_, sum_;
+  long count_ = 0;
+};
+
+}  // namespace ident::workflow::internal
