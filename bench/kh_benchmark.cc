@@ -1,7 +1,7 @@
 // ns per update of the Kárný–Hangos Cauchy and Student-t (k = 3) estimators (ident/regression/student_regression.h)
 // against the LD-form RLS (ident/regression/rls.h), all dynamic-size, exponential forgetting 0.99, on a
 // pre-generated regression stream with Cauchy noise and ρ ∈ {2, 4, 8, 16, 32} parameters. The closing
-// tables give cauchy / RLS and student / RLS per ρ, measured in this run. Goal (issue 3): cauchy ≤ 1.3× RLS.
+// tables give cauchy / RLS and student / RLS per ρ, measured in this run. Goal: cauchy ≤ 1.3× RLS.
 // BM_SafeCauchy: the Cauchy estimator with ident fit's lock-in safeguard (ident/regression/safe_student_regression.h).
 // BM_CauchyWithoutRoot splits the ratio: the Cauchy step with a free weight (β = 1/ν) against RLS, and
 // the full Cauchy step against it (what the root of the weighting cubic adds, docs/kh.md).

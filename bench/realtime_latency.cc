@@ -5,7 +5,7 @@
 // counters p50, p99, p99.9 and max [ns], plus the cost of one clock read pair (timing overhead,
 // included in every sample); the closing table gives the Cauchy / RLS ratio at p50 (raw and with the
 // clock overhead subtracted), measured in this run, and again from a loop that updates the two alternately
-// (BM_LatencyInterleavedCauchyRls4: both under the same machine state). Goals (issue 7): p99 ≤ 2× p50;
+// (BM_LatencyInterleavedCauchyRls4: both under the same machine state). Goals: p99 ≤ 2× p50;
 // Cauchy ≤ 1.5× RLS.
 //
 //   ./build/bench/realtime_latency

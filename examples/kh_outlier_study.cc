@@ -1,4 +1,4 @@
-// Statistical check of the Kárný–Hangos estimators on ARX(2,2) data with outliers (issue 3, items 5–6).
+// Statistical check of the Kárný–Hangos estimators on ARX(2,2) data with outliers.
 //
 // System: y(t) = 1.5 y(t−1) − 0.7 y(t−2) + 1.0 u(t−1) + 0.5 u(t−2) + e(t), u = ±1 (random binary),
 // e ~ N(0, 0.1²). 10 % of the samples get an outlier of ±50σ = ±5:

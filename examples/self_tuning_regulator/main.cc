@@ -325,7 +325,7 @@ int main(int argc, char** argv) {
     }
   }
   if (check) {
-    // The goal of issue 7 in the loops where the feedback path is protected: every model that is not
+    // The goal in the loops where the feedback path is protected: every model that is not
     // thrown off by outliers keeps Var(y − y_d) within 20 % of its outlier-free value.
     int failures = 0;
     for (size_t k = 1; k < tables.size(); ++k)

@@ -9,7 +9,7 @@
 //   Log-likelihood:  log N(y; C x, Re) accumulated over the corrections (prediction-error form).
 //   This is the Kalman filter of the log-concave observer [1, sec. IV-A] when everything is Gaussian.
 //
-// Real time (issue 7): BasicKalmanFilter<N> keeps every matrix fixed-size for N ≥ 1 (Eigen fixed-size
+// Real time: BasicKalmanFilter<N> keeps every matrix fixed-size for N ≥ 1 (Eigen fixed-size
 // types, no heap at all) and preallocates every workspace for N = Eigen::Dynamic (alias KalmanFilter).
 // Predict(), the scalar Correct(c, r, y) and Update() are noexcept and allocate nothing after construction;
 // trouble (wrong sizes, NaN/Inf, a non-finite result) is a StepReport status and leaves the state untouched.

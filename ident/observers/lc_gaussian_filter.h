@@ -15,7 +15,7 @@
 // exact after one reading but on the MEMS threshold sensor it treats successive, strongly dependent
 // y = 0 readings as independent and collapses; see studies/mems/mems_study.h for the event model variants.
 //
-// Real time (issue 7): BasicLcGaussianFilter<N> uses Eigen fixed-size types for N ≥ 1 and
+// Real time: BasicLcGaussianFilter<N> uses Eigen fixed-size types for N ≥ 1 and
 // preallocated workspaces for N = Eigen::Dynamic (alias LcGaussianFilter). Predict, Correct, ApplyTilt
 // and Update are noexcept and allocate nothing after construction (the closed-form tilts of the
 // threshold sensor, quantiser and Gaussian allocate nothing; the quadrature tilts do not either, but

@@ -1,4 +1,4 @@
-// LockInMonitor: a diagnostic that flags a robust estimator locked into a wrong mode (issue 3 item 6).
+// LockInMonitor: a diagnostic that flags a robust estimator locked into a wrong mode.
 //
 // A robust regression estimator gives every sample a weight; for the Kárný–Hangos estimators the
 // normalised weight νβ(t) ≈ (k+1)/(k + ê²/D_y) (spec §7a) is O(1) for a sample the model explains and

@@ -1,7 +1,7 @@
 // `ident compare` as a library: seeded outlier injection and the scoring of several estimators on
 // the same corrupted record.
 //
-// Protocol (issue 6, item 4): split and detrend as `ident fit` (ident/workflow/fit.h). A clean least-squares
+// Protocol: split and detrend as `ident fit` (ident/workflow/fit.h). A clean least-squares
 // fit (RLS with the flat prior = batch LS) on the estimation part gives θ_LS and the residual std σ.
 // Each trial adds ±SIZE·σ (random sign) to y at ⌊RATE·N_est + ½⌋ distinct estimation rows drawn with
 // seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the

@@ -27,19 +27,17 @@
 //                   lagged pair (x1(k−1), x1(k)), e.g. x1(k−1) < T ≤ x1(k) (studies/mems/crossing_reading.h: a
 //                   log-concave reading of the augmented state, Tallis moments, exact update of x(k));
 //                   every repeated reading is the σ_o reading of lc_event (p11 = 1/3)
-//   lc_excursion    (the CLI's lc_gaussian in session 5) as lc_wedge, but an excursion past a threshold (entry wedge,
-//   repeated ±1 readings, exit
+//   lc_excursion    as lc_wedge, but an excursion past a threshold (entry wedge, repeated ±1 readings, exit
 //                   wedge) is one log-concave reading of the stacked states x(k_e − 1 … k): fixed-lag
 //                   expectation propagation with exact 1-D/2-D factor moments (studies/mems/excursion_reading.h)
 //   lc_excursion_silent  diagnostic: lc_excursion with no reading at repeated y = 0 (prediction only
 //                   between excursions), to see what the σ_o reading contributes
-//   lc_window       (the CLI's lc_gaussian in sessions 6–7) every reading of the last W = ep_window steps an exact site
-//   of the state chain (repeated
+//   lc_window       every reading of the last W = ep_window steps an exact site of the state chain (repeated
 //                   y = 0 as 1{|x1| < T}, repeated ±1 as half-lines, changes as the wedge of lc_wedge), refined
-//                   jointly by banded sliding-window EP; older sites frozen (studies/mems/window_ep_filter.h). No σ_o.
-//   lc_truncated    (the CLI's lc_gaussian since session 8) assumed-density filter in the family of Gaussians
-//   restricted to the current
-//                   reading's interval: each step the exact moments of the pushed-forward restricted density on
+//                   jointly by banded sliding-window EP; older sites frozen (studies/mems/window_ep_filter.h).
+//                   No σ_o.
+//   lc_truncated    (the CLI's lc_gaussian) assumed-density filter in the family of Gaussians restricted to the
+//                   current reading's interval: each step the exact moments of the pushed-forward restricted density on
 //                   the rectangle R(y(k−1)) × R(y(k)), then the KL projection back onto the family
 //                   (ident/observers/truncated_gaussian_filter.h). No σ_o, no window.
 //   bound           CovarianceBoundTracker with the modified event measurement: crossing ∈ LC(Q_M),

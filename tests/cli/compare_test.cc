@@ -145,7 +145,7 @@ TEST(CompareCommand, DryerDefaultsAreArx223WithFivePercentOutliersOfTwentySigma)
   EXPECT_GT(rls, 80);
 }
 
-// Issue 6, item 8: on dryer with 5 % outliers of 20σ the Cauchy estimator's validation fit stays
+// On dryer with 5 % outliers of 20σ the Cauchy estimator's validation fit stays
 // within 2 points of clean-data RLS while RLS loses at least 5. Over 10 seeds, worst case.
 TEST(CompareCommand, CauchyStaysWithinTwoPointsOfCleanRlsWhileRlsLosesFive) {
   const nlohmann::json j = CompareJson("dryer --estimators rls,cauchy,student:3 --trials 10");

@@ -1,4 +1,4 @@
-// The lock-in safeguard through the command line (issue 3 item 6): `ident fit` reports the monitor's
+// The lock-in safeguard through the command line: `ident fit` reports the monitor's
 // state under "lock_in" in --json (null for RLS and with --exact) and a line in the report, and
 // --lock-in-window / --lock-in-threshold / --no-lock-in-restart reach the estimator. Checked on the seeded
 // ARX record on which the Cauchy estimator locks in (tests/regression/lock_in_data.h): against the true Θ, and

@@ -1,4 +1,4 @@
-// Real-time variants of the observers (issue 7 item 1): noexcept steps, zero heap allocations over 10⁴
+// Real-time variants of the observers: noexcept steps, zero heap allocations over 10⁴
 // steps after construction (counted, including Eigen's malloc calls), the state untouched whenever a
 // step is not kUpdated, and fixed-size filters that equal an independent textbook recursion.
 #include <cmath>

@@ -1,4 +1,4 @@
-// Lock-in of the Cauchy estimator and the safeguards of SafeStudentRegression (issue 3 item 6):
+// Lock-in of the Cauchy estimator and the safeguards of SafeStudentRegression:
 // LockInMonitor against a brute-force window median, RobustScale and RegressionPrior::FromWindow against
 // hand values and the spec §8 recipe, the start-up and restart states against the plain recursion rebuilt
 // independently from the same prior, and the lock-in itself on seeded ARX data with innovation outliers.

@@ -1,4 +1,4 @@
-// The data-driven start-up prior of StudentRegression (issue 3 item 6; spec §8's D_y(0) hazard).
+// The data-driven start-up prior of StudentRegression (spec §8's D_y(0) hazard).
 #include <cmath>
 #include <random>
 
@@ -56,7 +56,7 @@ TEST(StartupPrior, PriorFollowsTheRuleAndExactSwitchesItOff) {
 // On the bundled records the default (SafeStudentRegression: robust start-up prior, lock-in monitor) is
 // compared with a range of fixed prior scales D_y(0) ∈ {1e−6, 1e−2, 1, 100} (ν0 = 6, V_z(0) = 1e−3·I,
 // plain recursion otherwise), whose validation fits spread by up to 21 points (gas_furnace with
-// cleaning), with the regressor cleaning of issue 6 on (the default) and off. The default must be within
+// cleaning), with the regressor cleaning on (the default) and off. The default must be within
 // 2.5 points of the best fixed scale and not below the worst by more than 0.5 (docs/kh.md has the table).
 TEST(StartupPrior, DefaultIsCloseToTheBestFixedPriorScaleOnRealRecords) {
   for (const std::string data :
