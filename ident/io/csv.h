@@ -13,8 +13,10 @@
 //   x.csv:7: line longer than 1048576 bytes
 //   x.csv:7: row has 2 fields; the header has 3
 //   x.csv:7: column 3 ('y'): 'abc' is not a number
-//   x.csv:7: column 3 ('y'): 'nan' is not a finite number (pass --missing to treat NaN/Inf/empty cells as missing
-//   samples) x.csv:7: column 2 ('u'): contains a NUL byte x.csv:7: blank line inside the data (a gap in the record?)
+//   x.csv:7: column 3 ('y'): 'nan' is not a finite number (pass --missing to treat NaN/Inf/empty cells as
+//            missing samples)
+//   x.csv:7: column 2 ('u'): contains a NUL byte
+//   x.csv:7: blank line inside the data (a gap in the record?)
 //   x.csv: no column 'q' (columns: t, u, y)
 // A cell or name echoed in a message shows at most its first 32 bytes, control bytes as \xNN, and
 // the length of a longer one: '00000000000000000000000000000000...' (1000000 bytes).

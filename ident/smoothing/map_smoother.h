@@ -69,8 +69,8 @@ struct MapSmootherOptions {
   double tolerance = 1e-10;      // on complementarity and the scaled KKT residuals
   double step_fraction = 0.995;  // fraction-to-boundary factor for s, q > 0
   // Use the fused fast path (ident/smoothing/internal/map_smoother_fast_path.h) when the problem has its structure:
-  // bound-free (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties, n
-  // <= 4. Same iteration and result up to rounding; false forces the general path (tests compare both).
+  // bound-free (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties,
+  // n <= 4. Same iteration and result up to rounding; false forces the general path (tests compare both).
   bool fast_path = true;
   std::string Validate() const;  // "" if valid
 };
