@@ -165,6 +165,106 @@ Spread Spread::Of(std::vector<double> v) {
   return s;
 }
 
+namespace {
+
+// The estimators' settings with their default priors in the data's own scale (DataScaledDefaultPrior,
+// ident/regression/estimator_registry.h) from the clean estimation part's mean squares, the clean least-squares
+// reference's settings, and the fit options every trial uses.
+struct TrialSettings {
+  std::vector<EstimatorSettings> estimators;
+  EstimatorSettings least_squares;
+  FitOptions fit;
+};
+
+TrialSettings ScaledSettings(const io::DataTable& data, Segment estimation, DataSource& source,
+                             const std::vector<EstimatorSettings>& estimators, const FitOptions& options) {
+  TrialSettings t{estimators, {}, options};
+  const Eigen::VectorXd mean_squares = EstimationMeanSquares(data, estimation, source);
+  if ((t.least_squares.prior = DataScaledDefaultPrior(t.least_squares, mean_squares))) {
+    for (auto& s : t.estimators)
+      if (std::optional<RegressionPrior> prior = DataScaledDefaultPrior(s, mean_squares)) s.prior = prior;
+    bool absolute_prior = false;  // an --exact estimator keeps the unit-free flat prior and its check
+    for (const auto& s : t.estimators) absolute_prior = absolute_prior || (!s.prior && s.exact);
+    if (!absolute_prior) t.fit.min_regressor_information = 0;
+  }
+  t.fit.trace = nullptr;
+  t.fit.on_update = {};
+  return t;
+}
+
+// One estimator's results over the trials.
+struct Tally {
+  std::vector<double> one_step, simulation, distance, ns, cleaned, one_step_per_trial;
+  Eigen::VectorXd theta_sum;
+  std::string kind, failure;
+  int passes = 1, failed = 0;
+
+  Tally(int rho, int trials) : one_step_per_trial(static_cast<std::size_t>(trials), std::nan("")) {
+    theta_sum = Eigen::VectorXd::Zero(rho);
+  }
+
+  EstimatorScore Summary(const std::string& label, int trials) const {
+    EstimatorScore score;
+    score.estimator = label;
+    score.kind = kind;
+    score.passes = passes;
+    const int succeeded = trials - failed;
+    score.theta = succeeded > 0 ? Eigen::VectorXd(theta_sum / succeeded)
+                                : Eigen::VectorXd::Constant(theta_sum.size(), std::numeric_limits<double>::quiet_NaN());
+    score.failed_trials = failed;
+    score.failure = failure;
+    score.one_step = Spread::Of(one_step);
+    score.one_step_per_trial = one_step_per_trial;
+    score.has_simulation = !simulation.empty();
+    score.simulation = Spread::Of(simulation);
+    score.theta_distance = Spread::Of(distance);
+    score.ns_per_update = ns.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                     : Spread::Of(ns).min;  // the least disturbed by other processes
+    score.cleaned = Spread::Of(cleaned).mean;
+    return score;
+  }
+};
+
+// Runs one estimator on one corrupted record and adds its result to `tally`; scores on the clean `data`.
+void RunTrial(const io::DataTable& data, const io::DataTable& corrupted, DataSource& source,
+              const EstimatorSettings& settings, const FitOptions& fit, const CompareResult& result, int trial,
+              Tally& tally) {
+  const int rho = source.num_parameters();
+  auto estimator = MakeRegressionEstimator(settings, rho);
+  tally.kind = estimator->kind();
+  RecordingEstimator recorder(*estimator, result.estimation.count);
+  // One estimator's failure on one trial is that estimator's result, reported beside the others.
+  std::string failure;
+  try {
+    const int updates = Estimate(corrupted, result.estimation, source, recorder, fit, &tally.passes).first;
+    failure = UnusableResult(*estimator, result.parameter_names, updates);
+  } catch (const DataError& error) {
+    failure = error.what();
+  } catch (const InvalidArgument& error) {
+    failure = error.what();
+  }
+  if (!failure.empty()) {
+    if (tally.failed++ == 0) tally.failure = fmt::format("trial {}: {}", trial + 1, failure);
+    return;
+  }
+  tally.cleaned.push_back(static_cast<double>(source.cleaned()));
+  const Eigen::VectorXd theta = estimator->parameters();
+  tally.theta_sum += theta;
+  // Scored on the uncorrupted record: with split = 1 the validation rows are the estimation rows,
+  // whose corrupted outputs would reward the estimator that fits the outliers.
+  const FitScores s = Score(data, result.validation, source, theta);
+  tally.one_step.push_back(s.one_step);
+  tally.one_step_per_trial[static_cast<std::size_t>(trial)] = s.one_step;
+  if (s.simulation) tally.simulation.push_back(*s.simulation);
+  tally.distance.push_back((theta - result.theta_ls).norm() / result.theta_ls.norm());
+  if (trial < kTimedTrials) {
+    auto fresh = MakeRegressionEstimator(settings, rho);
+    tally.ns.push_back(recorder.TimeReplay(*fresh));
+  }
+}
+
+}  // namespace
+
 CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<EstimatorSettings>& estimators,
                       const std::vector<std::string>& labels, const CompareOptions& options) {
   IDENT_REQUIRE(!estimators.empty(), "--estimators: give at least one estimator");
@@ -178,113 +278,39 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   std::tie(result.estimation, result.validation) = PrepareData(data, source, options.fit);
   result.structure = source.structure();
   result.parameter_names = source.parameter_names();
-
-  // Default priors in the data's own scale (DataScaledDefaultPrior, ident/regression/estimator_registry.h), from
-  // the clean estimation part's mean squares.
-  std::vector<EstimatorSettings> settings = estimators;
-  EstimatorSettings ls_settings;
-  FitOptions fit = options.fit;
-  const Eigen::VectorXd mean_squares = EstimationMeanSquares(data, result.estimation, source);
-  if ((ls_settings.prior = DataScaledDefaultPrior(ls_settings, mean_squares))) {
-    for (auto& s : settings)
-      if (std::optional<RegressionPrior> prior = DataScaledDefaultPrior(s, mean_squares)) s.prior = prior;
-    bool absolute_prior = false;  // an --exact estimator keeps the unit-free flat prior and its check
-    for (const auto& s : settings) absolute_prior = absolute_prior || (!s.prior && s.exact);
-    if (!absolute_prior) fit.min_regressor_information = 0;
-  }
-  fit.trace = nullptr;
-  fit.on_update = {};
+  const TrialSettings settings = ScaledSettings(data, result.estimation, source, estimators, options.fit);
 
   // Clean-data least squares: reference θ, σ and scores.
-  {
-    auto ls = MakeRegressionEstimator(ls_settings, rho);
-    Estimate(data, result.estimation, source, *ls, fit);
-    result.theta_ls = ls->parameters();
-    result.sigma = ls->noise_std();
-    result.reference = Score(data, result.validation, source, result.theta_ls);
-  }
+  auto ls = MakeRegressionEstimator(settings.least_squares, rho);
+  Estimate(data, result.estimation, source, *ls, settings.fit);
+  result.theta_ls = ls->parameters();
+  result.sigma = ls->noise_std();
+  result.reference = Score(data, result.validation, source, result.theta_ls);
   IDENT_REQUIRE(std::isfinite(result.sigma), "{}: the clean least-squares fit has no residual std (too few samples)",
                 data.source);
 
+  std::vector<Tally> tallies(estimators.size(), Tally(rho, options.trials));
   const int total = options.trials * static_cast<int>(estimators.size());
-  std::vector<std::vector<double>> one_step(estimators.size()), simulation(estimators.size()),
-      distance(estimators.size()), ns(estimators.size()), cleaned(estimators.size());
-  std::vector<Eigen::VectorXd> theta_sum(estimators.size(), Eigen::VectorXd::Zero(rho));
-  std::vector<std::string> kinds(estimators.size());
-  std::vector<int> passes(estimators.size(), 1);
-  std::vector<int> failed(estimators.size(), 0);
-  std::vector<std::vector<double>> one_step_per_trial(
-      estimators.size(), std::vector<double>(static_cast<std::size_t>(options.trials), std::nan("")));
-  std::vector<std::string> failures(estimators.size());
-  const int y_col = source.output_column();
   int done = 0;
   for (int trial = 0; trial < options.trials; ++trial) {
     io::DataTable corrupted = data;
     const std::vector<int> rows =
-        InjectOutliers(corrupted.values.col(y_col), result.estimation, options.outliers.rate,
+        InjectOutliers(corrupted.values.col(source.output_column()), result.estimation, options.outliers.rate,
                        options.outliers.size * result.sigma, options.outliers.seed + static_cast<std::uint64_t>(trial));
     result.outliers_per_trial = static_cast<int>(rows.size());
     for (std::size_t e = 0; e < estimators.size(); ++e) {
-      auto estimator = MakeRegressionEstimator(settings[e], rho);
-      kinds[e] = estimator->kind();
-      RecordingEstimator recorder(*estimator, result.estimation.count);
-      // One estimator's failure on one trial is that estimator's result, reported beside the others.
-      std::string failure;
-      try {
-        const int updates = Estimate(corrupted, result.estimation, source, recorder, fit, &passes[e]).first;
-        failure = UnusableResult(*estimator, result.parameter_names, updates);
-      } catch (const DataError& error) {
-        failure = error.what();
-      } catch (const InvalidArgument& error) {
-        failure = error.what();
-      }
-      if (!failure.empty()) {
-        if (failed[e]++ == 0) failures[e] = fmt::format("trial {}: {}", trial + 1, failure);
-        if (options.progress) options.progress(++done, total);
-        continue;
-      }
-      cleaned[e].push_back(static_cast<double>(source.cleaned()));
-      const Eigen::VectorXd theta = estimator->parameters();
-      theta_sum[e] += theta;
-      // Scored on the uncorrupted record: with split = 1 the validation rows are the estimation rows,
-      // whose corrupted outputs would reward the estimator that fits the outliers.
-      const FitScores s = Score(data, result.validation, source, theta);
-      one_step[e].push_back(s.one_step);
-      one_step_per_trial[e][static_cast<std::size_t>(trial)] = s.one_step;
-      if (s.simulation) simulation[e].push_back(*s.simulation);
-      distance[e].push_back((theta - result.theta_ls).norm() / result.theta_ls.norm());
-      if (trial < kTimedTrials) {
-        auto fresh = MakeRegressionEstimator(settings[e], rho);
-        ns[e].push_back(recorder.TimeReplay(*fresh));
-      }
+      RunTrial(data, corrupted, source, settings.estimators[e], settings.fit, result, trial, tallies[e]);
       if (options.progress) options.progress(++done, total);
     }
   }
-  for (std::size_t e = 0; e < estimators.size(); ++e) {
-    EstimatorScore score;
-    score.estimator = labels[e];
-    score.kind = kinds[e];
-    score.passes = passes[e];
-    const int succeeded = options.trials - failed[e];
-    score.theta = succeeded > 0 ? Eigen::VectorXd(theta_sum[e] / succeeded)
-                                : Eigen::VectorXd::Constant(rho, std::numeric_limits<double>::quiet_NaN());
-    score.failed_trials = failed[e];
-    score.failure = failures[e];
-    score.one_step = Spread::Of(one_step[e]);
-    score.one_step_per_trial = one_step_per_trial[e];
-    score.has_simulation = !simulation[e].empty();
-    score.simulation = Spread::Of(simulation[e]);
-    score.theta_distance = Spread::Of(distance[e]);
-    score.ns_per_update = ns[e].empty() ? std::numeric_limits<double>::quiet_NaN()
-                                        : Spread::Of(ns[e]).min;  // the least disturbed by other processes
-    score.cleaned = Spread::Of(cleaned[e]).mean;
-    result.scores.push_back(std::move(score));
-  }
   bool any = false;
-  for (std::size_t e = 0; e < estimators.size(); ++e) any = any || failed[e] < options.trials;
+  for (std::size_t e = 0; e < estimators.size(); ++e) {
+    result.scores.push_back(tallies[e].Summary(labels[e], options.trials));
+    any = any || tallies[e].failed < options.trials;
+  }
   if (!any)
     throw DataError(
-        fmt::format("{}: every estimator failed on every trial ({}, {})", data.source, labels[0], failures[0]));
+        fmt::format("{}: every estimator failed on every trial ({}, {})", data.source, labels[0], tallies[0].failure));
   auto key = [](const EstimatorScore& s) { return std::isnan(s.one_step.mean) ? -HUGE_VAL : s.one_step.mean; };
   std::stable_sort(result.scores.begin(), result.scores.end(),
                    [&key](const EstimatorScore& a, const EstimatorScore& b) { return key(a) > key(b); });
