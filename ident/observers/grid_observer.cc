@@ -133,8 +133,23 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
   SmallVector shift(dim_);
   shift.noalias() = model.B * u;
   Save();
-  // Support box of the current density (nodes above support_level · max). No extra margin: a margin
-  // would compound from step to step and the grid would keep coarsening.
+  std::array<double, 3> mid{}, half{};
+  SupportBox(mid, half);
+  const auto old_origin = origin_;
+  const auto old_spacing = spacing_;
+  if (!MoveGrid(model, shift, mid, half)) {
+    Restore();
+    return {StepStatus::kNumericalFailure};
+  }
+  PushForward(Ainv, shift, old_origin, old_spacing);
+  // (2): convolution with f_N.
+  Convolve(model.process_noise, log_noise);
+  return Commit();
+}
+
+void GridObserver::SupportBox(std::array<double, 3>& mid, std::array<double, 3>& half) const {
+  // Nodes above support_level · max. No extra margin: a margin would compound from step to step and the
+  // grid would keep coarsening.
   const double level = options_.support_level * *std::max_element(p_.begin(), p_.end());
   std::array<int, 3> lo{n_[0], n_[1], n_[2]}, hi{-1, -1, -1};
   for (int idx = 0; idx < total_; ++idx) {
@@ -147,20 +162,22 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
       hi[i] = std::max(hi[i], j);
     }
   }
-  SmallVector mid(dim_), half(dim_);
   for (int i = 0; i < dim_; ++i) {
     const double a = origin_[i] + lo[i] * spacing_[i];
     const double b = origin_[i] + hi[i] * spacing_[i];
-    mid(i) = 0.5 * (a + b);
-    half(i) = 0.5 * (b - a);
+    mid[i] = 0.5 * (a + b);
+    half[i] = 0.5 * (b - a);
   }
+}
+
+bool GridObserver::MoveGrid(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& shift,
+                            const std::array<double, 3>& mid, const std::array<double, 3>& half) {
   // Image of the box under x ↦ A x + B u, widened by the process noise.
+  const Eigen::Map<const SmallVector> box_mid(mid.data(), dim_), box_half(half.data(), dim_);
   SmallVector new_mid(dim_), new_half(dim_);
-  new_mid.noalias() = model.A * mid;
+  new_mid.noalias() = model.A * box_mid;
   new_mid += shift;
-  new_half.noalias() = model.A.cwiseAbs() * half;
-  const auto old_origin = origin_;
-  const auto old_spacing = spacing_;
+  new_half.noalias() = model.A.cwiseAbs() * box_half;
   for (int i = 0; i < dim_; ++i) {
     const double hw =
         std::max(options_.min_half_width,
@@ -169,11 +186,15 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
     spacing_[i] = 2 * hw / (n_[i] - 1);
     // The box beyond double range (huge A, B u or noise): no representable grid.
     if (!std::isfinite(origin_[i]) || !(spacing_[i] > 0) || !std::isfinite(spacing_[i]) ||
-        !std::isfinite(origin_[i] + (n_[i] - 1) * spacing_[i])) {
-      Restore();
-      return {StepStatus::kNumericalFailure};
-    }
+        !std::isfinite(origin_[i] + (n_[i] - 1) * spacing_[i]))
+      return false;
   }
+  return true;
+}
+
+void GridObserver::PushForward(const Eigen::Ref<const Eigen::MatrixXd>& Ainv,
+                               const Eigen::Ref<const Eigen::VectorXd>& shift, const std::array<double, 3>& old_origin,
+                               const std::array<double, 3>& old_spacing) {
   // (1): f^d(x) = f_{k−1}(A⁻¹(x − B u)), multilinear interpolation in fractional old indices
   //      f = f0 + Σ_i j_i G(:, i).
   SmallVector new_origin(dim_);
@@ -223,9 +244,6 @@ StepReport GridObserver::PredictImpl(const models::LinearStateSpace& model, cons
     q_[idx] = v;
   }
   p_.swap(q_);
-  // (2): convolution with f_N.
-  Convolve(model.process_noise, log_noise);
-  return Commit();
 }
 
 void GridObserver::Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* log_noise) {

@@ -95,7 +95,16 @@ class GridObserver {
  private:
   StepReport PredictImpl(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                          const LogDensity* log_noise);
-  void Interpolate(const Eigen::MatrixXd& Ainv, const Eigen::VectorXd& shift);
+  // The support box of the density: centre and half-width per axis of the nodes above support_level · max.
+  void SupportBox(std::array<double, 3>& mid, std::array<double, 3>& half) const;
+  // Moves the grid onto the box's image under x ↦ A x + B u (shift = B u), widened by the process noise;
+  // false if that grid is beyond double range.
+  bool MoveGrid(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& shift,
+                const std::array<double, 3>& mid, const std::array<double, 3>& half);
+  // p ← the density before the step at A⁻¹(x − B u) on the moved grid (eq. (1)), multilinear interpolation
+  // between the old grid's nodes (old_origin, old_spacing).
+  void PushForward(const Eigen::Ref<const Eigen::MatrixXd>& Ainv, const Eigen::Ref<const Eigen::VectorXd>& shift,
+                   const std::array<double, 3>& old_origin, const std::array<double, 3>& old_spacing);
   void Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* log_noise);
   bool Normalise();
   bool UpdateMoments();  // false if a moment is not finite
