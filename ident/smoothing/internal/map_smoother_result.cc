@@ -68,6 +68,8 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmo
   // The interior point locates a dual state that is degenerate on a kink of f_t* only to O(sqrt(mu)),
   // so kinks closer than y_tolerance count as reached.
   const double y_tolerance = std::max(1e-7, 100 * std::sqrt(std::max(mu, 0.0)));
+  // and w_t = ∇f_t*(y_t) from the dual only to O(√mu) (relative): a primal w_t that far from it is the same point.
+  const double w_tolerance = std::max(1e-6, std::sqrt(std::max(mu, 0.0)));
   for (int t = 0; t <= T; ++t) {
     const Penalty& f = p.ft(t);
     double* xt = res->x_from_dual.col(t).data();
@@ -80,7 +82,7 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmo
       w_scale = std::max({w_scale, std::abs(xt[i]), std::abs(res->w(i, t))});
     }
     const double y_scale = 1 + res->y.col(t).cwiseAbs().maxCoeff();
-    if (!f.ConjugateIsDifferentiableNear(res->y.col(t), y_tolerance * y_scale) || w_diff > 1e-6 * w_scale)
+    if (!f.ConjugateIsDifferentiableNear(res->y.col(t), y_tolerance * y_scale) || w_diff > w_tolerance * w_scale)
       res->nonunique_steps.push_back(t);
     if (t > 0) AddMatVec<kN, kN>(p.Ft(t - 1).data(), n, n, xt - n, xt, 1.0);
   }

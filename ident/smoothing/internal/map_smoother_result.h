@@ -20,7 +20,8 @@ double MapSmootherDataUnit(const MapSmootherProblem& problem);
 
 // From res->x (states) and res->u (dual controls p + B'u of each measurement term, before projection),
 // both in the data's unit, computes w, the projected dual point u, y, both objectives, the gap,
-// x_from_dual and the non-unique reconstruction steps.
+// x_from_dual and the non-unique reconstruction steps. z_scale: the measurements' scale in the data's unit
+// (domain tolerances); mu: the final complementarity in the iteration's unit (how far the dual is located).
 void FinishMapSmootherResult(const MapSmootherProblem& problem, double z_scale, double mu, MapSmootherResult* res);
 
 // The iteration report shared by both paths: res->message from res->status and iterations.
