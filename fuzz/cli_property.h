@@ -195,8 +195,8 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
   std::vector<std::string> args = {"ident", command};
   if (command == "smooth") args.insert(args.end(), {"--model", model_path});
   if (command != "datasets" && command != "mems") args.push_back(data_path);
-  if (command == "mems") {  // a small study (200 steps, 16² grid: tens of milliseconds); sizes drawn below are refused
-    args.insert(args.end(), {"--steps", "200", "--grid-points", "16", "--t-mean", "0.5"});
+  if (command == "mems") {  // a small study (100 steps, 16² grid: milliseconds); sizes drawn below are refused
+    args.insert(args.end(), {"--steps", "100", "--grid-points", "16", "--t-mean", "0.5"});
     const int mems_options = in.Byte() % 5;
     for (int i = 0; i < mems_options; ++i) {
       const std::string option = Pick(in, kMemsOptions);
