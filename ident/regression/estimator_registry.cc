@@ -16,7 +16,7 @@
 namespace ident {
 namespace {
 
-using Factory = std::function<std::unique_ptr<AnyRegressionEstimator>(const EstimatorSettings&, int)>;
+using Factory = RegressionEstimatorFactory;
 
 std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int rho) {
   IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator 'rls'", *s.dof);
@@ -97,8 +97,8 @@ struct Entry {
   EstimatorTraits traits;
 };
 
-const std::vector<Entry>& Registry() {
-  static const std::vector<Entry> registry = {
+std::vector<Entry>& Registry() {
+  static std::vector<Entry> registry = {
       {"rls", MakeRls, {.data_scaled_prior = true}},
       {"cauchy", MakeCauchy, {.lock_in = true}},
       {"student", MakeStudentT, {.lock_in = true}},
@@ -148,6 +148,15 @@ std::vector<std::string> RegressionEstimatorNames() {
 }
 
 EstimatorTraits RegressionEstimatorTraits(std::string_view name) { return Find(name).traits; }
+
+void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFactory factory, EstimatorTraits traits) {
+  IDENT_REQUIRE(!name.empty() && name.find_first_of(":, ") == std::string::npos,
+                "estimator name '{}': need a non-empty name without ':', ',' or spaces", name);
+  IDENT_REQUIRE(factory, "estimator '{}': no factory", name);
+  for (const Entry& entry : Registry())
+    IDENT_REQUIRE(entry.name != name, "estimator '{}' is registered already", name);
+  Registry().push_back({name, std::move(factory), traits});
+}
 
 std::optional<RegressionPrior> DataScaledDefaultPrior(const EstimatorSettings& settings,
                                                       const Eigen::VectorXd& mean_squares) {

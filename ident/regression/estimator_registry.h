@@ -14,6 +14,7 @@
 //   auto est = ident::MakeRegressionEstimator(s, /*num_parameters=*/4);   // throws on bad options
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -67,6 +68,22 @@ struct EstimatorTraits {
 };
 // Throws InvalidArgument for an unknown name.
 EstimatorTraits RegressionEstimatorTraits(std::string_view name);
+
+// Builds an estimator from settings for ρ parameters; throws InvalidArgument naming a bad option.
+using RegressionEstimatorFactory =
+    std::function<std::unique_ptr<AnyRegressionEstimator>(const EstimatorSettings&, int num_parameters)>;
+
+// Adds an estimator under `name` (after the built-in ones): MakeRegressionEstimator, RegressionEstimatorNames,
+// the workflow and the command line's --estimator then know it. The usual one is the LD-form shell with a
+// weight rule of one's own (ident/regression/weighted_regression.h), e.g.
+//   RegisterRegressionEstimator("huber-weight", [](const EstimatorSettings& s, int rho) {
+//     return std::make_unique<RegressionEstimatorModel<BasicWeightedRegression<MyRule>>>(
+//         "huber-weight", rho, RlsOptions{s.forgetting, s.prior});
+//   });
+// Throws InvalidArgument for an empty name, one with ':', ',' or a space, a taken name or no factory.
+// Register before building estimators, from one thread (the registry is not locked).
+void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFactory factory,
+                                 EstimatorTraits traits = {});
 
 // The default prior in the data's own scale for `settings` — set when the estimator has one
 // (EstimatorTraits::data_scaled_prior), the settings leave the prior to it (no prior, not exact), and every
