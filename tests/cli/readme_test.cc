@@ -31,6 +31,7 @@ std::string Normalised(std::string line) {
     const auto last = line.find_last_of(' ', end);
     if (last != std::string::npos) line.erase(last);
   }
+  line.erase(line.find_last_not_of(' ') + 1);  // the timing's width varies
   return line;
 }
 
