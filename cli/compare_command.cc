@@ -14,7 +14,7 @@
 
 #include "common/error.h"
 #include "ident/io/csv.h"
-#include "ident/workflow/compare.h"
+#include "ident/workflow/compare_record.h"
 #include "cli/commands.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
@@ -54,59 +54,6 @@ void PlotCompare(OutputFile& out, const workflow::CompareResult& r, const workfl
     panel.series.push_back({s.estimator, seeds, fit});
   }
   RenderPlot(out, {panel});
-}
-
-nlohmann::ordered_json Number(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
-}
-
-nlohmann::ordered_json SpreadJson(const workflow::Spread& s) {
-  return {{"mean", Number(s.mean)},     {"std", Number(s.std)}, {"min", Number(s.min)},
-          {"median", Number(s.median)}, {"p90", Number(s.p90)}, {"max", Number(s.max)}};
-}
-
-std::vector<double> ToStd(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
-
-nlohmann::ordered_json ToJson(const workflow::CompareResult& r, const std::string& path,
-                              const workflow::OutlierSpec& spec, int trials, const std::string& cleaning) {
-  nlohmann::ordered_json j;
-  j["data"] = path;
-  j["structure"] = r.structure;
-  j["parameter_names"] = r.parameter_names;
-  j["estimation_rows"] = {r.estimation.first + 1, r.estimation.first + r.estimation.count};
-  j["validation_rows"] = {r.validation.first + 1, r.validation.first + r.validation.count};
-  j["outliers"] = {{"rate", spec.rate},
-                   {"size", spec.size},
-                   {"seed", spec.seed},
-                   {"per_trial", r.outliers_per_trial},
-                   {"sigma", r.sigma}};
-  j["trials"] = trials;
-  j["clean_regressors"] = cleaning;
-  j["reference"] = {{"estimator", "clean-data least squares"},
-                    {"theta", ToStd(r.theta_ls)},
-                    {"fit_percent",
-                     {{"one_step", r.reference.one_step},
-                      {"simulation", r.reference.simulation ? Number(*r.reference.simulation) : nullptr}}}};
-  auto& list = j["estimators"] = nlohmann::ordered_json::array();
-  for (const workflow::EstimatorScore& s : r.scores) {
-    nlohmann::ordered_json e;
-    e["estimator"] = s.estimator;
-    e["kind"] = s.kind;
-    e["passes"] = s.passes;
-    e["theta"] = ToStd(s.theta);
-    e["fit_percent"] = {{"one_step", Number(s.one_step.mean)},
-                        {"simulation", s.has_simulation ? Number(s.simulation.mean) : nullptr}};
-    e["theta_distance"] = Number(s.theta_distance.mean);
-    e["ns_per_update"] = s.ns_per_update;
-    e["spread"] = {{"fit_one_step", SpreadJson(s.one_step)},
-                   {"fit_simulation", s.has_simulation ? SpreadJson(s.simulation) : nullptr},
-                   {"theta_distance", SpreadJson(s.theta_distance)}};
-    e["cleaned_per_trial"] = Number(s.cleaned);
-    e["failed_trials"] = s.failed_trials;
-    e["failure"] = s.failure.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(s.failure);
-    list.push_back(std::move(e));
-  }
-  return j;
 }
 
 void PrintCsv(const workflow::CompareResult& r) {
@@ -192,51 +139,24 @@ void RunCompare(CompareCommandOptions& o) {
     plot.emplace(o.plot, "--plot file");
   }
 
-  io::DataTable table = io::ReadCsv(path);
-  std::unique_ptr<workflow::DataSource> source = structure.MakeSource(table.names, path);
-  // Each --estimators value is a comma-separated list; an empty name (as in "rls,,cauchy") is refused.
-  std::vector<std::string> names;
-  for (const std::string& list : o.estimators) {
-    for (std::size_t start = 0;;) {
-      const std::size_t comma = list.find(',', start);
-      const std::string name = list.substr(start, comma == std::string::npos ? comma : comma - start);
-      IDENT_REQUIRE(!name.empty(), "--estimators: an empty estimator name in '{}'", list);
-      names.push_back(name);
-      if (comma == std::string::npos) break;
-      start = comma + 1;
-    }
-  }
-  // The estimation part's rows as workflow::Fit splits them (0 = unknown for a split that Fit refuses).
-  const int n = table.num_rows();
-  const bool valid_split = std::isfinite(split) && split > 0 && split <= 1;
-  const long estimation_rows = !valid_split ? 0 : split == 1 ? n : static_cast<long>(std::floor(split * n));
-  std::vector<EstimatorSettings> settings;
-  for (const std::string& name : names) {
-    settings.push_back(o.estimator.Resolve(source->num_parameters(), name, estimation_rows));
-    // The lock-in options and delta are for the Kárný–Hangos estimators of the comparison (cauchy,
-    // student); the others have no such safeguard or convention.
-    if (!RegressionEstimatorTraits(settings.back().name).lock_in) {
-      settings.back().lock_in = {};
-      settings.back().delta.reset();
-    }
-  }
-
-  workflow::CompareOptions options;
-  options.fit.split = split;
-  options.fit.passes = o.passes;
-  options.fit.detrend = detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
-  options.fit.decision = structure.Decision();
-  options.outliers = spec;
-  options.trials = o.trials;
-  if (isatty(STDERR_FILENO)) options.progress = ProgressBar;
-  const workflow::CompareResult result = workflow::Compare(std::move(table), *source, settings, names, options);
+  workflow::CompareRequest request;
+  request.model = structure;
+  request.options = o.estimator;
+  request.estimators = o.estimators;
+  request.outliers = spec;
+  request.trials = o.trials;
+  request.passes = o.passes;
+  request.split = split;
+  request.detrend = detrend;
+  if (isatty(STDERR_FILENO)) request.progress = ProgressBar;
+  const workflow::CompareResult result = workflow::CompareRecord(io::ReadCsv(path), path, request);
   const std::string name = dataset ? dataset->name : path;
   if (plot) {
     PlotCompare(*plot, result, spec);
     plot->Commit();
   }
   if (o.json)
-    std::cout << ToJson(result, path, spec, o.trials, structure.clean_regressors).dump(2) << "\n";
+    std::cout << workflow::CompareJson(result, path, spec, o.trials, structure.clean_regressors).dump(2) << "\n";
   else if (o.csv)
     PrintCsv(result);
   else

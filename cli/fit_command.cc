@@ -8,11 +8,11 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-#include <nlohmann/json.hpp>
 
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/fit.h"
+#include "ident/workflow/fit_record.h"
 #include "ident/workflow/residual_analysis.h"
 #include "cli/commands.h"
 #include "cli/estimator_options.h"
@@ -41,64 +41,6 @@ struct FitCommandOptions {
   std::string plot;
 };
 
-nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events) {
-  nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (const RestartEvent& e : events)
-    list.push_back({{"update", e.update},
-                    {"replayed", e.replayed},
-                    {"dropped", e.dropped},
-                    {"low_weight_before", e.low_weight_before},
-                    {"low_weight_after", e.low_weight_after},
-                    {"resolved", e.resolved}});
-  return list;
-}
-
-nlohmann::ordered_json ToJson(const workflow::FitResult& r, const std::string& data, double split,
-                              const std::string& detrend) {
-  auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
-  nlohmann::ordered_json j;
-  j["data"] = data;
-  j["estimator"] = r.estimator;
-  j["kind"] = r.kind;
-  j["passes"] = r.passes;
-  j["structure"] = r.structure;
-  j["parameter_names"] = r.parameter_names;
-  j["theta"] = std::vector<double>(r.theta.data(), r.theta.data() + r.theta.size());
-  auto& std_dev = j["theta_std"] = nlohmann::ordered_json::array();
-  for (double v : r.theta_std) std_dev.push_back(number(v));
-  j["noise_std"] = number(r.noise_std);
-  j["fit_percent"] = {{"one_step", r.validation.one_step},
-                      {"simulation", r.validation.simulation ? nlohmann::ordered_json(*r.validation.simulation)
-                                                             : nlohmann::ordered_json()}};
-  j["rms"] = {{"one_step", r.validation.rms_one_step},
-              {"simulation", r.validation.rms_simulation ? nlohmann::ordered_json(*r.validation.rms_simulation)
-                                                         : nlohmann::ordered_json()}};
-  j["samples_estimation"] = r.samples_estimation;
-  j["samples_validation"] = r.samples_validation;
-  j["updates"] = r.updates;
-  j["rejected"] = r.rejected;
-  j["cleaned"] = r.cleaned;
-  // The robust estimators' lock-in safeguard (null for RLS and with --exact).
-  if (r.lock_in)
-    j["lock_in"] = {{"window", r.lock_in->window},
-                    {"threshold", r.lock_in->threshold},
-                    {"restart", r.lock_in->restart},
-                    {"flagged", r.lock_in->flagged},
-                    {"restarts", r.lock_in->restarts},
-                    {"low_weight_fraction", r.lock_in->low_weight_fraction},
-                    {"events", RestartEventsJson(r.lock_in->events)},
-                    {"start_update", r.lock_in->start_update},
-                    {"start_window", r.lock_in->start_window},
-                    {"start_at_end", r.lock_in->start_at_end}};
-  else
-    j["lock_in"] = nullptr;
-  j["nu"] = r.nu;
-  j["Dy"] = r.Dy;
-  j["split"] = split;
-  j["detrend"] = detrend;
-  return j;
-}
-
 void PrintResiduals(const workflow::ResidualAnalysis& a) {
   auto worst = [](const std::vector<double>& r, int first_lag) {
     std::size_t k = 0;
@@ -121,20 +63,6 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
         a.input_names[i], lags, a.OutsideCross(i), r_eu, tau_eu, a.QCross(i), a.QCrossLimit());
   }
   fmt::print("  {}\n", a.Verdict());
-}
-
-nlohmann::ordered_json ResidualJson(const workflow::ResidualAnalysis& a) {
-  nlohmann::ordered_json j;
-  j["samples"] = a.samples;
-  j["band"] = a.band;
-  j["autocorrelation"] = a.autocorrelation;
-  auto& cross = j["cross_correlation"] = nlohmann::ordered_json::object();
-  for (std::size_t i = 0; i < a.input_names.size(); ++i) cross[a.input_names[i]] = a.cross_correlation[i];
-  j["q_auto"] = a.QAuto();
-  j["q_auto_limit"] = a.QAutoLimit();
-  j["white"] = a.White();
-  j["independent"] = a.Independent();
-  return j;
 }
 
 void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o) {
@@ -189,33 +117,18 @@ void RunFit(const FitCommandOptions& o) {
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing};
   std::unique_ptr<workflow::DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
+  workflow::FitRequest request;
+  request.model = o.structure;
+  request.estimator = o.estimator;
+  request.split = o.split;
+  request.passes = o.passes;
+  request.detrend = o.detrend;
+  request.residual_lags = kResidualLags;
   // The record's length first: building an estimator costs O(rho^3) for large orders.
   workflow::FitOptions length_check;
   length_check.split = o.split;
   const int estimation_rows = workflow::CheckCsvRecordLength(path, csv, *source, length_check);
-  const int rho = source->num_parameters();
-  EstimatorSettings settings = o.estimator.Resolve(rho, "", estimation_rows);
-  std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, rho);  // checks the options
-  workflow::FitOptions options;
-  options.split = o.split;
-  options.passes = o.passes;
-  options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
-  options.decision = o.structure.Decision();
-  if (settings.prior) options.min_regressor_information = 0;  // the user's prior, the user's scale
-  // Default priors in the data's own scale, so that a record in small or large units fits as it does in
-  // units of 1: RLS gets the flat prior of RegressionPrior::Flat(mean squares) (unless --exact, which keeps
-  // the absolute flat prior of the recursion and with it the small-information check); the Kárný–Hangos
-  // estimators' data-driven start-up prior is scale-invariant already (ident/regression/student_regression.h).
-  const bool default_prior = !settings.prior && !settings.exact;
-  const bool scaled_prior = default_prior && RegressionEstimatorTraits(settings.name).data_scaled_prior;
-  if (default_prior && !scaled_prior) options.min_regressor_information = 0;
-  auto use_scaled_prior = [&](const Eigen::VectorXd& mean_squares) {
-    const std::optional<RegressionPrior> prior = DataScaledDefaultPrior(settings, mean_squares);
-    if (!prior) return;  // out of range (or no usable sample): the absolute flat prior, whose check names the problem
-    settings.prior = prior;
-    estimator = MakeRegressionEstimator(settings, rho);
-    options.min_regressor_information = 0;
-  };
+  workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
   // The trace and the plot go to temporary files, renamed onto their names only after the whole fit has
   // succeeded (cli/output_file.h): a fit that fails, e.g. on a bad row late in a streamed record, leaves
   // every existing file as it is. The report is printed after the renames, so a failed write leaves
@@ -223,7 +136,7 @@ void RunFit(const FitCommandOptions& o) {
   std::optional<OutputFile> trace, plot;
   if (!o.trace.empty()) {
     trace.emplace(o.trace, "--trace file");
-    options.trace = trace->stream();
+    plan.options.trace = trace->stream();
   }
   if (!o.plot.empty()) plot.emplace(o.plot, "--plot file");
   auto commit_outputs = [&] {
@@ -235,45 +148,34 @@ void RunFit(const FitCommandOptions& o) {
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
   if (o.plot.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
-    if (scaled_prior) use_scaled_prior(workflow::CsvEstimationMeanSquares(path, csv, *source, options));
-    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *estimator, options);
+    if (plan.scaled_prior) plan.UseScaledPrior(workflow::CsvEstimationMeanSquares(path, csv, *source, plan.options));
+    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
     commit_outputs();
     if (o.json) {
-      nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
-      j["residual_analysis"] = nlohmann::ordered_json();
-      std::cout << j.dump(2) << "\n";
+      std::cout << workflow::FitJson(result, path, o.split, o.detrend, nullptr).dump(2) << "\n";
     } else {
       PrintReport(result, path, o);
       fmt::print("\n  residual analysis: skipped (record of more than {} rows, streamed)\n", kInMemoryRows);
     }
     return;
   }
-  io::DataTable table = io::ReadCsv(path, csv);
   ParameterHistory history;
   if (!o.plot.empty()) {
     history.theta.resize(static_cast<std::size_t>(source->num_parameters()));
-    options.on_update = [&history](int row, const AnyRegressionEstimator& e) {
+    plan.options.on_update = [&history](int row, const AnyRegressionEstimator& e) {
       history.t.push_back(row + 1);
       const Eigen::VectorXd theta = e.parameters();
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
   }
-  // The split and detrended table, for the prior's scale and the residual analysis on the validation part.
-  io::DataTable prepared = table;
-  const auto [estimation, validation] = workflow::PrepareData(prepared, *source, options);
-  if (scaled_prior) use_scaled_prior(workflow::EstimationMeanSquares(prepared, estimation, *source));
-  const workflow::FitResult result = workflow::Fit(std::move(table), *source, *estimator, options);
-  std::optional<workflow::ResidualAnalysis> residuals;
-  if (validation.count - source->first_regression_index() > kResidualLags + 1)
-    residuals = workflow::AnalyseResiduals(prepared, validation, *source, result.theta, kResidualLags);
-  if (plot) PlotFit(*plot, prepared, validation, *source, result.theta, history);
+  const workflow::RecordFit fit = workflow::FitTable(io::ReadCsv(path, csv), *source, plan, kResidualLags);
+  if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
   commit_outputs();
+  const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   if (o.json) {
-    nlohmann::ordered_json j = ToJson(result, path, o.split, o.detrend);
-    j["residual_analysis"] = residuals ? ResidualJson(*residuals) : nlohmann::ordered_json();
-    std::cout << j.dump(2) << "\n";
+    std::cout << workflow::FitJson(fit.result, path, o.split, o.detrend, residuals).dump(2) << "\n";
   } else {
-    PrintReport(result, path, o);
+    PrintReport(fit.result, path, o);
     if (residuals) PrintResiduals(*residuals);
   }
 }

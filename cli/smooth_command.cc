@@ -1,7 +1,7 @@
 // ident smooth --model MODEL.json DATA.csv [--json]
 // MAP smoothing with convex penalties and the dual control problem (ident/smoothing/map_smoother.h): prints the
 // primal and dual objective values, the duality gap, the states x (one row per time) and the
-// interior-point iteration count. The model format is described in cli/smooth_model.h.
+// interior-point iteration count. The model format is described in ident/workflow/smoothing_model.h.
 #include <algorithm>
 #include <chrono>
 #include <ctime>
@@ -15,7 +15,7 @@
 #include "common/error.h"
 #include "ident/smoothing/map_smoother.h"
 #include "cli/commands.h"
-#include "cli/smooth_model.h"
+#include "ident/workflow/smoothing_model.h"
 
 namespace ident::cli {
 namespace {
@@ -33,7 +33,7 @@ std::vector<std::vector<double>> Rows(const Eigen::MatrixXd& m) {  // one row pe
 }
 
 void RunSmooth(const SmoothOptions& o) {
-  const MapSmootherProblem p = ReadSmoothProblem(o.model, o.data);
+  const MapSmootherProblem p = workflow::ReadSmoothProblem(o.model, o.data);
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   const MapSmootherResult r = SolveMapSmoother(p);

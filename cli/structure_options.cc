@@ -1,7 +1,5 @@
 #include "cli/structure_options.h"
 
-#include "common/error.h"
-
 namespace ident::cli {
 
 void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
@@ -50,32 +48,6 @@ bool StructureCliOptions::Given() const {
   return false;
 }
 
-std::unique_ptr<workflow::DataSource> StructureCliOptions::MakeSource(const std::vector<std::string>& columns,
-                                                                      const std::string& source) const {
-  // The cleaning options are checked whatever the structure: a bad value is an error, not ignored.
-  models::OutputCleaningOptions clean = cleaning;
-  clean.enabled = clean_regressors == "on";
-  const std::string error = clean.Validate();
-  IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
-  if (!regressors.empty()) {
-    models::StaticRegression regression{regressors, intercept};
-    return workflow::MakeStaticSource(columns, output, regression, source);
-  }
-  IDENT_REQUIRE(!inputs.empty(), "give --input (ARX/FIR model) or --regressors (static regression)");
-  const std::size_t m = inputs.size();
-  auto per_input = [m](const std::vector<int>& v, const char* name) {
-    IDENT_REQUIRE(v.size() == 1 || v.size() == m, "--{} has {} values; give one, or one per input ({})", name, v.size(),
-                  m);
-    return v.size() == m ? v : std::vector<int>(m, v[0]);
-  };
-  models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
-  return workflow::MakeArxSource(columns, output, inputs, arx, source, clean);
-}
-
-}  // namespace ident::cli
-
-namespace ident::cli {
-
 StructureCliOptions StructureCliOptions::WithDefaultsFrom(const StructureCliOptions& suggestion) const {
   enum { kOutput, kInput, kNa, kNb, kNk, kRegressors, kIntercept };
   auto given = [this](std::size_t i) { return i < options_.size() && options_[i]->count() > 0; };
@@ -93,13 +65,6 @@ StructureCliOptions StructureCliOptions::WithDefaultsFrom(const StructureCliOpti
   if (!given(kNb) && same_inputs) r.nb = suggestion.nb;
   if (!given(kNk) && same_inputs) r.nk = suggestion.nk;
   return r;
-}
-
-OutlierDecision StructureCliOptions::Decision() const {
-  OutlierDecision decision{clean_below};
-  const std::string error = decision.Validate();
-  IDENT_REQUIRE(error.empty(), "--clean-below: {}", error);
-  return decision;
 }
 
 }  // namespace ident::cli

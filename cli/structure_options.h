@@ -8,26 +8,12 @@
 
 #include <CLI/CLI.hpp>
 
-#include "ident/regression/outlier_decision.h"
-#include "ident/workflow/data_source.h"
-#include "models/output_cleaner.h"
+#include "ident/workflow/model_spec.h"
 
 namespace ident::cli {
 
-struct StructureCliOptions {
-  std::string output;
-  std::vector<std::string> inputs;
-  int na = 2;
-  std::vector<int> nb{2};
-  std::vector<int> nk{1};
-  std::vector<std::string> regressors;
-  bool intercept = false;
-  // Outlier cleaning of past outputs in ARX regressors (models/output_cleaner.h) and the decision
-  // threshold on the estimator's relative weight νβ (ident/regression/outlier_decision.h).
-  std::string clean_regressors = "on";     // "on" | "off" (on: safe by the study in docs/practice.md)
-  models::OutputCleaningOptions cleaning;  // clip etc.; `enabled` follows clean_regressors
-  double clean_below = 0.2;
-
+// The fields and their meaning are workflow::ModelSpec's; this adds the command line.
+struct StructureCliOptions : workflow::ModelSpec {
   // Adds the options to `app`. `require_output` = false lets a command fill the structure from a
   // dataset's suggestion (ident compare) when no structure option is given.
   void AddTo(CLI::App& app, bool require_output = true);
@@ -37,11 +23,6 @@ struct StructureCliOptions {
   // suggested structure): output; inputs/regressors unless either was given; orders per option
   // (nb/nk only if they fit the number of inputs).
   StructureCliOptions WithDefaultsFrom(const StructureCliOptions& suggestion) const;
-  // The estimator-side decision that goes with `cleaning`. Throws InvalidArgument if invalid.
-  OutlierDecision Decision() const;
-  // Throws InvalidArgument (inconsistent options) or DataError (unknown column).
-  std::unique_ptr<workflow::DataSource> MakeSource(const std::vector<std::string>& columns,
-                                                   const std::string& source) const;
 
  private:
   std::vector<const CLI::Option*> options_;  // set by AddTo, read by Given()

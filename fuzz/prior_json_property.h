@@ -1,4 +1,4 @@
-// Property of the prior-file reader cli::ReadPriorJson (the tool layer's JSON reader; the
+// Property of the prior-file reader workflow::ReadPriorJson (the tool layer's JSON reader; the
 // MODEL.json reader gets the same treatment once it lands) on arbitrary bytes.
 // Input: 1 byte ρ (1..4), then the file's bytes (written to a temporary file).
 // Holds if: nothing but ident::DataError is thrown, its message is one line, and a returned prior
@@ -32,7 +32,7 @@ inline std::string PriorJsonProperty(const std::uint8_t* data, std::size_t size)
     return {};  // cannot write the temporary file: nothing to test
   }
   try {
-    const RegressionPrior prior = cli::ReadPriorJson(path, rho);
+    const RegressionPrior prior = workflow::ReadPriorJson(path, rho);
     const auto j = nlohmann::json::parse(data + 1, data + size, nullptr, /*allow_exceptions=*/false);
     if (!j.is_object() || j.size() != 2) return "a prior file holds the keys nu0 and V0 only";
     if (!(std::isfinite(prior.nu0) && prior.nu0 > 0)) return "nu0 is positive and finite";

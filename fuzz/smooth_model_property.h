@@ -1,4 +1,4 @@
-// Property of the MODEL.json reader of `ident smooth` (cli::ParseSmoothModel) and of the MAP
+// Property of the MODEL.json reader of `ident smooth` (workflow::ParseSmoothModel) and of the MAP
 // smoother on what it accepts, on arbitrary bytes.
 // Input: 1 byte nz (1..2), 1 byte T+1 (1..5), nz·(T+1) bytes of measurements z = int8/8, then the
 // model's JSON text (text that is not JSON is the command's DataError path: nothing to check).
@@ -22,7 +22,7 @@
 #include "common/error.h"
 #include "fuzz/fuzz_util.h"
 #include "ident/smoothing/map_smoother.h"
-#include "cli/smooth_model.h"
+#include "ident/workflow/smoothing_model.h"
 
 namespace ident::fuzz {
 
@@ -59,7 +59,7 @@ inline std::string SmoothModelProperty(const std::uint8_t* data, std::size_t siz
   const nlohmann::json model = nlohmann::json::parse(data + used, data + size, nullptr, /*allow_exceptions=*/false);
   if (model.is_discarded()) return {};
   try {
-    cli::ParseSmoothModel(model, "model.json", &p);
+    workflow::ParseSmoothModel(model, "model.json", &p);
   } catch (const InvalidArgument&) {
     return {};  // the expected answer to a bad model
   } catch (...) {

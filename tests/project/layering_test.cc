@@ -4,7 +4,7 @@
 //   models/, approx/    common/ and themselves
 //   ident/linalg/       common/
 //   ident/<concept>/    common/, models/, approx/, ident/linalg/ as listed below, and itself
-// No folder of ident/ includes another except linalg/, and workflow/, which builds on regression/ and io/.
+// No folder of ident/ includes another except linalg/, and workflow/, which builds on regression/, smoothing/ and io/.
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -42,7 +42,8 @@ const std::map<std::string, std::set<std::string>>& Allowed() {
       {"ident/control", {"common", "ident/control"}},
       {"ident/io", {"common", "ident/io"}},
       {"ident/workflow",
-       {"common", "models", "approx", "ident/linalg", "ident/regression", "ident/io", "ident/workflow"}},
+       {"common", "models", "approx", "ident/linalg", "ident/regression", "ident/smoothing", "ident/io",
+        "ident/workflow"}},
   };
   return allowed;
 }

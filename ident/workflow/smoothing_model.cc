@@ -1,4 +1,4 @@
-#include "cli/smooth_model.h"
+#include "ident/workflow/smoothing_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 #include "common/error.h"
 #include "ident/io/csv.h"
 
-namespace ident::cli {
+namespace ident::workflow {
 namespace {
 
 using Json = nlohmann::json;
@@ -193,4 +193,4 @@ MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::s
   return p;
 }
 
-}  // namespace ident::cli
+}  // namespace ident::workflow

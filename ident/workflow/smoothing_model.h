@@ -22,7 +22,7 @@
 
 #include "ident/smoothing/map_smoother.h"
 
-namespace ident::cli {
+namespace ident::workflow {
 
 // Fills F, H and the penalties from `model`; z (nz x (T+1)) must already be set in `problem`.
 void ParseSmoothModel(const nlohmann::json& model, const std::string& source, MapSmootherProblem* problem);
@@ -31,4 +31,4 @@ models::Penalty ParsePenalty(const nlohmann::json& j, int dim, const std::string
 // Reads MODEL.json and DATA.csv into a validated problem. Throws DataError / InvalidArgument.
 MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::string& data_path);
 
-}  // namespace ident::cli
+}  // namespace ident::workflow

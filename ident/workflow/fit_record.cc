@@ -1,0 +1,140 @@
+#include "ident/workflow/fit_record.h"
+
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "common/error.h"
+
+namespace ident::workflow {
+namespace {
+
+nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const RestartEvent& e : events)
+    list.push_back({{"update", e.update},
+                    {"replayed", e.replayed},
+                    {"dropped", e.dropped},
+                    {"low_weight_before", e.low_weight_before},
+                    {"low_weight_after", e.low_weight_after},
+                    {"resolved", e.resolved}});
+  return list;
+}
+
+nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::string& data, double split,
+                              const std::string& detrend) {
+  auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
+  nlohmann::ordered_json j;
+  j["data"] = data;
+  j["estimator"] = r.estimator;
+  j["kind"] = r.kind;
+  j["passes"] = r.passes;
+  j["structure"] = r.structure;
+  j["parameter_names"] = r.parameter_names;
+  j["theta"] = std::vector<double>(r.theta.data(), r.theta.data() + r.theta.size());
+  auto& std_dev = j["theta_std"] = nlohmann::ordered_json::array();
+  for (double v : r.theta_std) std_dev.push_back(number(v));
+  j["noise_std"] = number(r.noise_std);
+  j["fit_percent"] = {{"one_step", r.validation.one_step},
+                      {"simulation", r.validation.simulation ? nlohmann::ordered_json(*r.validation.simulation)
+                                                             : nlohmann::ordered_json()}};
+  j["rms"] = {{"one_step", r.validation.rms_one_step},
+              {"simulation", r.validation.rms_simulation ? nlohmann::ordered_json(*r.validation.rms_simulation)
+                                                         : nlohmann::ordered_json()}};
+  j["samples_estimation"] = r.samples_estimation;
+  j["samples_validation"] = r.samples_validation;
+  j["updates"] = r.updates;
+  j["rejected"] = r.rejected;
+  j["cleaned"] = r.cleaned;
+  // The robust estimators' lock-in safeguard (null for RLS and with --exact).
+  if (r.lock_in)
+    j["lock_in"] = {{"window", r.lock_in->window},
+                    {"threshold", r.lock_in->threshold},
+                    {"restart", r.lock_in->restart},
+                    {"flagged", r.lock_in->flagged},
+                    {"restarts", r.lock_in->restarts},
+                    {"low_weight_fraction", r.lock_in->low_weight_fraction},
+                    {"events", RestartEventsJson(r.lock_in->events)},
+                    {"start_update", r.lock_in->start_update},
+                    {"start_window", r.lock_in->start_window},
+                    {"start_at_end", r.lock_in->start_at_end}};
+  else
+    j["lock_in"] = nullptr;
+  j["nu"] = r.nu;
+  j["Dy"] = r.Dy;
+  j["split"] = split;
+  j["detrend"] = detrend;
+  return j;
+}
+
+nlohmann::ordered_json ResidualJson(const ResidualAnalysis& a) {
+  nlohmann::ordered_json j;
+  j["samples"] = a.samples;
+  j["band"] = a.band;
+  j["autocorrelation"] = a.autocorrelation;
+  auto& cross = j["cross_correlation"] = nlohmann::ordered_json::object();
+  for (std::size_t i = 0; i < a.input_names.size(); ++i) cross[a.input_names[i]] = a.cross_correlation[i];
+  j["q_auto"] = a.QAuto();
+  j["q_auto_limit"] = a.QAutoLimit();
+  j["white"] = a.White();
+  j["independent"] = a.Independent();
+  return j;
+}
+
+}  // namespace
+
+void FitPlan::UseScaledPrior(const Eigen::VectorXd& mean_squares) {
+  const std::optional<RegressionPrior> prior = DataScaledDefaultPrior(settings, mean_squares);
+  if (!prior) return;  // out of range (or no usable sample): the absolute flat prior, whose check names the problem
+  settings.prior = prior;
+  estimator = MakeRegressionEstimator(settings, estimator->num_parameters());
+  options.min_regressor_information = 0;
+}
+
+long EstimationRows(long rows, double split) {
+  const bool valid_split = std::isfinite(split) && split > 0 && split <= 1;
+  return !valid_split ? 0 : split == 1 ? rows : static_cast<long>(std::floor(split * static_cast<double>(rows)));
+}
+
+FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_rows) {
+  FitPlan plan;
+  plan.settings = request.estimator.Resolve(num_parameters, "", estimation_rows);
+  plan.estimator = MakeRegressionEstimator(plan.settings, num_parameters);  // checks the options
+  const std::string detrend = request.ResolvedDetrend();
+  IDENT_REQUIRE(detrend == "mean" || detrend == "none", "--detrend '{}': need mean or none", detrend);
+  plan.options.split = request.split;
+  plan.options.passes = request.passes;
+  plan.options.detrend = detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  plan.options.decision = request.model.Decision();
+  if (plan.settings.prior) plan.options.min_regressor_information = 0;  // the user's prior, the user's scale
+  const bool default_prior = !plan.settings.prior && !plan.settings.exact;
+  plan.scaled_prior = default_prior && RegressionEstimatorTraits(plan.settings.name).data_scaled_prior;
+  if (default_prior && !plan.scaled_prior) plan.options.min_regressor_information = 0;
+  return plan;
+}
+
+RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags) {
+  RecordFit fit;
+  fit.prepared = table;
+  std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options);
+  if (plan.scaled_prior) plan.UseScaledPrior(EstimationMeanSquares(fit.prepared, fit.estimation, source));
+  fit.result = Fit(std::move(table), source, *plan.estimator, plan.options);
+  if (fit.validation.count - source.first_regression_index() > residual_lags + 1)
+    fit.residuals = AnalyseResiduals(fit.prepared, fit.validation, source, fit.result.theta, residual_lags);
+  return fit;
+}
+
+RecordFit FitRecord(io::DataTable table, const std::string& name, const FitRequest& request) {
+  std::unique_ptr<DataSource> source = request.model.MakeSource(table.names, name);
+  FitPlan plan = PlanFit(request, source->num_parameters(), EstimationRows(table.num_rows(), request.split));
+  return FitTable(std::move(table), *source, plan, request.residual_lags);
+}
+
+nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,
+                               const std::string& detrend, const ResidualAnalysis* residuals) {
+  nlohmann::ordered_json j = FitJsonWithoutResiduals(result, data, split, detrend);
+  j["residual_analysis"] = residuals ? ResidualJson(*residuals) : nlohmann::ordered_json();
+  return j;
+}
+
+}  // namespace ident::workflow

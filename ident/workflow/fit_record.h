@@ -1,0 +1,80 @@
+// Fitting a record from a request as a user states it (model, estimator, split, passes, detrending):
+// the steps `ident fit` and the Python package's `ident.fit` share.
+//
+//   PlanFit     resolves the estimator options and builds the estimator (before any data is read: a bad
+//               option fails first); says whether its default prior is to be put in the data's scale
+//   FitTable    splits and detrends a table in memory, scales the default prior, estimates, scores, and
+//               analyses the validation residuals
+//   FitRecord   both, from a table and a request
+//   FitJson     the result as the JSON object of `ident fit --json`
+//
+// Default priors are in the data's own scale, so that a record in small or large units fits as it does
+// in units of 1: RLS gets RegressionPrior::Flat(mean squares of the estimation part) unless `exact`, which
+// keeps the absolute flat prior of the recursion and with it the small-information check; the
+// Kárný–Hangos estimators' data-driven start-up prior is scale-invariant already.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "ident/io/csv.h"
+#include "ident/workflow/estimator_spec.h"
+#include "ident/workflow/fit.h"
+#include "ident/workflow/model_spec.h"
+#include "ident/workflow/residual_analysis.h"
+
+namespace ident::workflow {
+
+struct FitRequest {
+  ModelSpec model;
+  EstimatorSpec estimator;
+  double split = 0.5;
+  int passes = 1;
+  std::string detrend;  // "mean" | "none"; empty: model.DefaultDetrend()
+  int residual_lags = 20;
+
+  std::string ResolvedDetrend() const { return detrend.empty() ? model.DefaultDetrend() : detrend; }
+};
+
+struct FitPlan {
+  EstimatorSettings settings;
+  std::unique_ptr<AnyRegressionEstimator> estimator;
+  FitOptions options;  // split, passes, detrending, decision; trace and on_update are the caller's
+  bool scaled_prior = false;  // the default prior is to be put in the data's scale (UseScaledPrior)
+
+  // Rebuilds the estimator with DataScaledDefaultPrior(mean squares of y and the regressors over the
+  // estimation part); keeps the absolute flat prior (whose check then names the problem) when the mean
+  // squares are out of range or no sample is usable.
+  void UseScaledPrior(const Eigen::VectorXd& mean_squares);
+};
+
+// Throws InvalidArgument / DataError naming the option.
+FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_rows);
+
+struct RecordFit {
+  FitResult result;
+  io::DataTable prepared;  // the split and detrended table
+  Segment estimation, validation;
+  std::optional<ResidualAnalysis> residuals;  // when the validation part has more than residual_lags + 1 samples
+};
+
+// In memory. `plan.options.on_update` and `.trace`, if set, see every update.
+RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags = 20);
+
+// `name` is the record's name in messages (a path, "DataFrame", …).
+RecordFit FitRecord(io::DataTable table, const std::string& name, const FitRequest& request);
+
+// The rows of the estimation part for a split (0 for a split ∉ (0, 1], which Fit refuses by name).
+long EstimationRows(long rows, double split);
+
+// The JSON object of `ident fit --json`: data, estimator, kind, passes, structure, parameter_names, theta,
+// theta_std, noise_std, fit_percent, rms, samples_estimation, samples_validation, updates, rejected, cleaned,
+// lock_in, nu, Dy, split, detrend, residual_analysis (null when not computed). Non-finite numbers are null.
+nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,
+                               const std::string& detrend, const ResidualAnalysis* residuals);
+
+}  // namespace ident::workflow

@@ -1,0 +1,40 @@
+#include "ident/workflow/model_spec.h"
+
+#include "common/error.h"
+
+namespace ident::workflow {
+
+std::unique_ptr<DataSource> ModelSpec::MakeSource(const std::vector<std::string>& columns,
+                                                  const std::string& source) const {
+  // The cleaning options are checked whatever the structure: a bad value is an error, not ignored.
+  IDENT_REQUIRE(clean_regressors == "on" || clean_regressors == "off", "--clean-regressors '{}': need on or off",
+                clean_regressors);
+  models::OutputCleaningOptions clean = cleaning;
+  clean.enabled = clean_regressors == "on";
+  const std::string error = clean.Validate();
+  IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
+  if (!regressors.empty()) {
+    IDENT_REQUIRE(inputs.empty(), "give --input (ARX/FIR model) or --regressors (static regression), not both");
+    models::StaticRegression regression{regressors, intercept};
+    return MakeStaticSource(columns, output, regression, source);
+  }
+  IDENT_REQUIRE(!intercept, "--intercept needs --regressors (a static regression)");
+  IDENT_REQUIRE(!inputs.empty(), "give --input (ARX/FIR model) or --regressors (static regression)");
+  const std::size_t m = inputs.size();
+  auto per_input = [m](const std::vector<int>& v, const char* name) {
+    IDENT_REQUIRE(v.size() == 1 || v.size() == m, "--{} has {} values; give one, or one per input ({})", name, v.size(),
+                  m);
+    return v.size() == m ? v : std::vector<int>(m, v[0]);
+  };
+  models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
+  return MakeArxSource(columns, output, inputs, arx, source, clean);
+}
+
+OutlierDecision ModelSpec::Decision() const {
+  OutlierDecision decision{clean_below};
+  const std::string error = decision.Validate();
+  IDENT_REQUIRE(error.empty(), "--clean-below: {}", error);
+  return decision;
+}
+
+}  // namespace ident::workflow
