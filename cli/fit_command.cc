@@ -162,7 +162,7 @@ void RunFit(const FitCommandOptions& o) {
   ParameterHistory history;
   if (!o.plot.empty()) {
     history.theta.resize(static_cast<std::size_t>(source->num_parameters()));
-    plan.options.on_update = [&history](int row, const AnyRegressionEstimator& e) {
+    plan.options.on_update = [&history](int row, const StepReport&, const AnyRegressionEstimator& e) {
       history.t.push_back(row + 1);
       const Eigen::VectorXd theta = e.parameters();
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));

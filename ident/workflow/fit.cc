@@ -100,7 +100,7 @@ void WriteTraceRow(std::FILE* trace, const TraceRow& row) {
 
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, std::FILE* trace, const OutlierDecision& decision,
-                             const std::function<void(int row, const AnyRegressionEstimator&)>& on_update) {
+                             const std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)>& on_update) {
   FitOptions options;
   options.trace = trace;
   options.decision = decision;

@@ -47,8 +47,9 @@ struct FitOptions {
   // recursion from the previous pass's estimate, regressor cleaning included; estimators for which a
   // further pass cannot change the result (RLS, batch) run once. The trace shows the last pass.
   int passes = 1;
-  // If set: called after every estimator update with the (0-based) row (e.g. for parameter plots).
-  std::function<void(int row, const AnyRegressionEstimator&)> on_update;
+  // If set: called after every accepted update with the (0-based) row, the step (weight β(t), ν(t), prediction
+  // error) and the estimator (e.g. for parameter plots).
+  std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)> on_update;
 };
 
 struct FitScores {
@@ -93,7 +94,7 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
 // identifiable from them).
 std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
                              AnyRegressionEstimator& estimator, std::FILE* trace, const OutlierDecision& decision = {},
-                             const std::function<void(int row, const AnyRegressionEstimator&)>& on_update = {});
+                             const std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)>& on_update = {});
 
 // The same with every option of `options` that applies (trace, decision, on_update, min_regressor_information,
 // passes); `passes_run`, if given, receives the number of passes made.

@@ -103,7 +103,7 @@ class Estimation {
         ++updates_;
         ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);
         max_abs_ = max_abs_.cwiseMax(z_.cwiseAbs());
-        if (on_update_) on_update_(r, estimator_);
+        if (on_update_) on_update_(r, report, estimator_);
         if (trace_) {
           const Eigen::VectorXd theta = estimator_.parameters();
           WriteTraceRow(trace_, {.t = r + 1,
@@ -171,7 +171,7 @@ class Estimation {
   std::FILE* trace_;
   double min_information_;
   OutlierDecision decision_;
-  std::function<void(int row, const AnyRegressionEstimator&)> on_update_;
+  std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)> on_update_;
   Eigen::VectorXd z_, z_measured_;
   Eigen::MatrixXd ZtZ_;
   Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)

@@ -1,0 +1,27 @@
+// The model's outputs on a segment of a prepared (split and detrended) table, as workflow::Score
+// scores them: the one-step prediction θ'z(t) from measured past outputs, and (dynamic models) the
+// simulated output, which feeds back the model's own past outputs after the first t0 measured samples.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ident/io/csv.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
+
+namespace ident::workflow {
+
+struct SegmentPredictions {
+  std::vector<int> rows;             // 1-based rows of the record
+  std::vector<double> measured;      // y
+  std::vector<double> one_step;      // NaN where the segment has no regression (its first t0 rows, missing data)
+  std::vector<double> simulation;    // empty for static models; NaN as above
+};
+
+// `source` is Reset() before each walk.
+SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, DataSource& source,
+                                  const Eigen::VectorXd& theta);
+
+}  // namespace ident::workflow
