@@ -24,7 +24,7 @@ struct StructureCliOptions {
   bool intercept = false;
   // Outlier cleaning of past outputs in ARX regressors (models/output_cleaner.h) and the decision
   // threshold on the estimator's relative weight νβ (ident/regression/outlier_decision.h).
-  std::string clean_regressors = "on";     // "on" | "off" (on: safe by the study in docs/practice.md)
+  std::string clean_regressors = "on";     // "on" | "off" (on: safe by bench/cleaning_study.py)
   models::OutputCleaningOptions cleaning;  // clip etc.; `enabled` follows clean_regressors
   double clean_below = 0.2;
 
