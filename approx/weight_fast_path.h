@@ -8,7 +8,7 @@
 //
 // Why inline: on the estimators' data the update is limited by how many instructions the out-of-order
 // core can hold while the back substitution, the weight and the update of d wait on one another, not
-// by the length of the weight's own dependency chain (bench/kh_benchmark.cc, docs/kh.md): the call,
+// by the length of the weight's own dependency chain (bench/kh_benchmark.cc, docs/explanation/karny-hangos-estimator.md): the call,
 // the returned struct and the second, exact monotonicity test cost as much as the iteration.
 //
 //   Monotonicity [spec §5]: P'(β) = μ1 + 2μ2β + 3μ3β² ≤ μ1 + 2 max(μ2, 0) β_hi + 3 max(μ3, 0) β_hi² on

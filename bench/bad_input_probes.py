@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Runs every bad-input probe of docs/reliability.md ("Results that are not usable", "Limits", "Output
+"""Runs every bad-input probe of docs/reference/cli.md ("Results that are not usable", "Limits", "Output
 files") against the built `ident` and prints, per probe, its exit code, CPU seconds, peak resident memory
 (from /usr/bin/time -v) and the first stderr line; then checks that no input or pre-existing file was
 modified or removed.

@@ -4,7 +4,7 @@
 // tables give cauchy / RLS and student / RLS per ρ, measured in this run. Goal: cauchy ≤ 1.3× RLS.
 // BM_SafeCauchy: the Cauchy estimator with ident fit's lock-in safeguard (ident/regression/safe_student_regression.h).
 // BM_CauchyWithoutRoot splits the ratio: the Cauchy step with a free weight (β = 1/ν) against RLS, and
-// the full Cauchy step against it (what the root of the weighting cubic adds, docs/kh.md).
+// the full Cauchy step against it (what the root of the weighting cubic adds, docs/explanation/karny-hangos-estimator.md).
 //
 //   ./build/bench/kh_benchmark --benchmark_min_time=0.2
 //   ./build/bench/kh_benchmark --benchmark_repetitions=5 --benchmark_enable_random_interleaving=true

@@ -188,7 +188,7 @@ void AddCompareCommand(CLI::App& app) {
   cmd->add_option("--detrend", o->detrend, "Subtract the estimation-part means (mean) or not (none)")
       ->check(CLI::IsMember({"mean", "none"}));
   cmd->add_option("--plot", o->plot, "Draw the one-step fit per trial and estimator into FILE.svg or FILE.png");
-  auto* json = cmd->add_flag("--json", o->json, "Print one JSON object (schema in docs/practice.md)");
+  auto* json = cmd->add_flag("--json", o->json, "Print one JSON object (schema in docs/reference/cli.md)");
   cmd->add_flag("--csv", o->csv, "Print one CSV row per estimator")->excludes(json);
   cmd->callback([o] { RunCompare(*o); });
 }

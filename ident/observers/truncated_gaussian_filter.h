@@ -5,7 +5,7 @@
 // edge of an interval reading by a Gaussian, and the next, strongly dependent reading truncates that
 // Gaussian again (lc_plain's collapse), or — in EP — many nearly redundant Gaussian sites each count part
 // of the same truncation (Cunningham, Hennig & Lacoste-Julien 2011): lc_window's velocity variance is
-// ≈ 0.82 of the converged grid's after long runs of unchanged y = 0 (docs/observers.md). Here the
+// ≈ 0.82 of the converged grid's after long runs of unchanged y = 0 (docs/explanation/observers.md). Here the
 // hard edge of the *current* reading is kept exactly in the approximating family, so a repeated reading
 // only removes the mass that actually left the interval in one step; no Gaussian site stands in for it.
 //

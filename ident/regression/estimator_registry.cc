@@ -34,7 +34,7 @@ std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int 
 // Kárný–Hangos Student-t regression with k = dof; `name` is "cauchy" (k = 1) or "student".
 std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, int rho, const std::string& name,
                                                     double dof) {
-  SafeStudentOptions options;  // start-up prior and lock-in safeguards unless exact (docs/kh.md)
+  SafeStudentOptions options;  // start-up prior and lock-in safeguards unless exact (docs/explanation/karny-hangos-estimator.md)
   options.base.dof = dof;
   options.base.delta = s.delta.value_or(1);
   options.base.forgetting = s.forgetting;

@@ -5,7 +5,7 @@
 // ≈ 0 for an outlier. Outliers are by definition a minority: if more than half of the last M samples get
 // νβ < threshold (i.e. the median weight over the window is below it), the estimator no longer describes
 // most of the data. On ARX data with a binary input this is the signature of the Cauchy estimator's
-// lock-in (docs/kh.md): a wrong Θ̂ that fits one half of the samples with a small scale D_y.
+// lock-in (docs/explanation/karny-hangos-estimator.md): a wrong Θ̂ that fits one half of the samples with a small scale D_y.
 //
 // O(1) per sample (a ring of M flags and a running count), allocation-free after construction.
 //

@@ -56,7 +56,7 @@ struct RestartEvent {
                                  // a lock-in); the next restart then waits twice as long
 };
 
-// The state of a robust estimator's lock-in safeguard (ident/regression/lock_in_monitor.h, docs/kh.md "Lock-in"):
+// The state of a robust estimator's lock-in safeguard (ident/regression/lock_in_monitor.h, docs/explanation/karny-hangos-estimator.md):
 // the monitor flags a lock-in when more than half of the last `window` updated samples had a normalised
 // weight νβ below `threshold`; with `restart` the estimator then restarts from the recent samples.
 struct LockInStatus {

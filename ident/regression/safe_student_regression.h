@@ -1,6 +1,6 @@
 // SafeStudentRegression: the Kárný–Hangos Student-t/Cauchy estimator (ident/regression/student_regression.h) with the
 // safeguards that make it robust on data nobody tuned it for. It is what `ident fit --estimator cauchy`
-// and the registry's "cauchy"/"student" run, and what an embedding should use (docs/kh.md).
+// and the registry's "cauchy"/"student" run, and what an embedding should use (docs/explanation/karny-hangos-estimator.md).
 //
 //   1. Robust start. The first W = max(20, 4ρ) samples run on the provisional prior ν(0) = ρ+k+δ,
 //      V(0) = diag(1, 1e−3·I). Then a high-breakdown batch fit of the window (Cauchy maximum likelihood

@@ -38,7 +38,7 @@
 //   }
 //   Eigen::Vector4d theta = est.parameters();
 //
-// References: M. Kárný, K. M. Hangos, Kybernetika 24(5), 1988; [spec] shared/spec/cauchy-estimator.md.
+// References: M. Kárný, K. M. Hangos, Kybernetika 24(5), 1988; [spec] docs/explanation/cauchy-estimator-spec.md.
 #pragma once
 
 #include <algorithm>

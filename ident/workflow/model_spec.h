@@ -23,7 +23,7 @@ struct ModelSpec {
   std::vector<int> nk{1};
   std::vector<std::string> regressors;  // static regression (excludes inputs)
   bool intercept = false;
-  std::string clean_regressors = "on";     // "on" | "off"
+  std::string clean_regressors = "on";     // "on" | "off" (on: safe by bench/cleaning_study.py)
   models::OutputCleaningOptions cleaning;  // clip, gross; `enabled` follows clean_regressors
   double clean_below = 0.2;                // flag a sample as outlier when νβ is below this
 

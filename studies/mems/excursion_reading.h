@@ -5,7 +5,7 @@
 // Why: the exit wedge x1(k−1) ≥ T > x1(k) a few steps after the entry wedge x1(k_e−1) < T ≤ x1(k_e) is
 // largely implied by the entry and the dynamics. A Gaussian filter that projects after the entry has lost
 // the entry's hard edge and re-truncates its projection at the exit (the dependency that collapses the
-// plain assumed-density filter, on a small scale; docs/observers.md). Here every reading since k_e − 1
+// plain assumed-density filter, on a small scale; docs/explanation/observers.md). Here every reading since k_e − 1
 // stays a factor of its own on the jointly Gaussian stacked prediction:
 //   p(s, x(k) | readings) ∝ N((s, x(k)); μ0, Σ0) · 1{entry wedge}(s_{k_e−1}, s_{k_e})
 //                            · Π_{k_e < j < k} 1{y s_j ≥ T} · 1{exit wedge}(s_{k−1}, s_k)

@@ -138,10 +138,10 @@ double WindowEpFilter::Refit(Slot& s) {
     vt = t.covariance;
   }
   if (zero_site) {
-    const bool was_zero = s.lambda.isZero(0.0) && s.eta.isZero(0.0);
+    const bool already_zero = s.lambda.isZero(0.0) && s.eta.isZero(0.0);
     s.lambda.setZero();
     s.eta.setZero();
-    if (was_zero && std::isfinite(s.last_mean(0))) {
+    if (already_zero && std::isfinite(s.last_mean(0))) {
       s.last_mean = mt;
       s.last_cov = vt;
       return 0.0;

@@ -5,7 +5,7 @@
 // Why: the plain assumed-density filter projects 1{|x1(k)| < T} onto a Gaussian at every step and then
 // truncates that projection again at k + 1, although x1(k+1) < T is largely implied by x1(k) < T and the
 // dynamics (strongly dependent readings counted as if independent: the collapse of lc_plain,
-// docs/observers.md). Keeping the recent readings as factors of the stacked states and refitting each
+// docs/explanation/observers.md). Keeping the recent readings as factors of the stacked states and refitting each
 // against a cavity that already contains the others' information (EP, Minka 2001) removes the
 // re-truncation between readings inside the window; the paper's stationary σ_o reading is not used.
 //

@@ -1,4 +1,4 @@
-// The bad-input table of docs/reliability.md, one test per row: what `ident` is given, the one line
+// The bad-input table of docs/reference/cli.md, one test per row: what `ident` is given, the one line
 // it prints on stderr ("ident: error: ..."), and its exit code (1 bad data/options, 2 usage).
 #include <algorithm>
 #include <cmath>

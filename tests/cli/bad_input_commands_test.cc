@@ -1,4 +1,4 @@
-// The bad-input table of docs/reliability.md for the commands other than `ident fit` (compare,
+// The bad-input table of docs/reference/cli.md for the commands other than `ident fit` (compare,
 // datasets, mems, smooth, logcondens), one test per row: what `ident` is given, the one line it prints
 // on stderr ("ident: error: ..."), empty stdout, and the exit code (1 bad data/options, 2 usage).
 // Rows about the data file run every command that reads one (compare, smooth, logcondens) on the

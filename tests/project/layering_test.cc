@@ -1,4 +1,4 @@
-// The library's layers include downwards only (docs/layout.md): every quoted #include of a file in common/,
+// The library's layers include downwards only (docs/maintainer/architecture.md): every quoted #include of a file in common/,
 // models/, approx/ and each folder of ident/ names a file of its own folder or of a folder below it.
 //   common/             common/
 //   models/, approx/    common/ and themselves
@@ -61,7 +61,7 @@ TEST(Layering, LibraryIncludesRunDownwardsOnly) {
       const std::string layer = Layer(path);
       const auto allowed = Allowed().find(layer);
       if (allowed == Allowed().end()) {
-        violations.push_back(path + ": a folder the layering does not know (add it to docs/layout.md and here)");
+        violations.push_back(path + ": a folder the layering does not know (add it to docs/maintainer/architecture.md and here)");
         continue;
       }
       ++files;

@@ -1,4 +1,4 @@
-// The seeded ARX(2,2) record on which the Cauchy estimator locks in (docs/kh.md "Lock-in"),
+// The seeded ARX(2,2) record on which the Cauchy estimator locks in (docs/explanation/karny-hangos-estimator.md),
 // shared by the library test (lock_in_test.cc) and the command-line test (lock_in_cli_test.cc):
 // the model of examples/kh_outlier_study.cc, Θ = (1.5, −0.7, 1.0, 0.5), binary input, σ = 0.1, and a
 // fraction `outlier_rate` of innovation outliers of ±5.

@@ -24,7 +24,7 @@
 namespace ident {
 namespace {
 
-// Row order and coverage hold from the second pass on (--passes 2); the single pass is close (docs/kh.md,
+// Row order and coverage hold from the second pass on (--passes 2); the single pass is close (docs/explanation/karny-hangos-estimator.md,
 // "Robustness": coverage 0.917 for student:3 under t₃ noise at n = 100, order spread 1.04 std here).
 constexpr int kPasses = 2;
 
@@ -297,7 +297,7 @@ TEST(OutlierSize, ALargerOutlierIsNoHarderThanASmallerOne) {
   EXPECT_GE(large["cleaned_per_trial"].get<double>(), 40);
 }
 
-// The class docs/realtime.md embeds: an ARX(2,2) stream with 5 % output glitches of ±5 (σ = 0.1).
+// The class docs/how-to/embed-in-a-control-loop.md embeds: an ARX(2,2) stream with 5 % output glitches of ±5 (σ = 0.1).
 TEST(Embedding, TheSafeEstimatorIsRightOnAGlitchyArxStream) {
   const testing::LockInArx d = testing::SimulateLockInArx(3, 3000, 0.05);
   SafeStudentRegression est(4);

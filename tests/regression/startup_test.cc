@@ -57,7 +57,7 @@ TEST(StartupPrior, PriorFollowsTheRuleAndExactSwitchesItOff) {
 // compared with a range of fixed prior scales D_y(0) ∈ {1e−6, 1e−2, 1, 100} (ν0 = 6, V_z(0) = 1e−3·I,
 // plain recursion otherwise), whose validation fits spread by up to 21 points (gas_furnace with
 // cleaning), with the regressor cleaning on (the default) and off. The default must be within
-// 2.5 points of the best fixed scale and not below the worst by more than 0.5 (docs/kh.md has the table).
+// 2.5 points of the best fixed scale and not below the worst by more than 0.5.
 TEST(StartupPrior, DefaultIsCloseToTheBestFixedPriorScaleOnRealRecords) {
   for (const std::string data :
        {"dryer --output y --input u --na 2 --nb 2 --nk 3", "gas_furnace --output y --input u --na 2 --nb 2 --nk 3",

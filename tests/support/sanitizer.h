@@ -2,7 +2,7 @@
 // compute-heavy tests that check the same property on many cases: under the sanitizer they check a
 // fixed, named subset of their cases, with the same tolerances. The sanitizer build is there to find
 // memory errors and undefined behaviour on every code path, and a subset of cases runs the same paths;
-// the full case lists run in the Release suite (docs/build.md: "Fewer cases under the sanitizer").
+// the full case lists run in the Release suite (docs/maintainer/build-options.md).
 //
 // Example:
 //   for (int i = 0; i < static_cast<int>(cases.size()); ++i) {

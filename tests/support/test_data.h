@@ -11,7 +11,7 @@ namespace ident::testing {
 // <repo>/datasets/<name>
 std::string DatasetPath(const std::string& name);
 // <repo>/tests/data/shared/<relative>: the in-repository copy of the shared material tests need
-// (spec/vectors/*), so that a clean clone tests without ../shared.
+// (spec/vectors/*), so that a clean clone tests without anything outside the repository.
 std::string SharedPath(const std::string& relative);
 // Reads a whole CSV with a header of column names into `names` and a row-major matrix (test helper;
 // fails the test via exception on a bad file).
