@@ -12,9 +12,6 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
-#include "common/error.h"
-#include "ident/io/csv.h"
-#include "ident/workflow/compare_record.h"
 #include "cli/commands.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
@@ -22,6 +19,9 @@
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
 #include "cli/structure_options.h"
+#include "common/error.h"
+#include "ident/io/csv.h"
+#include "ident/workflow/compare_record.h"
 
 namespace ident::cli {
 namespace {

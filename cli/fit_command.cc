@@ -9,11 +9,6 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "common/error.h"
-#include "ident/io/csv.h"
-#include "ident/workflow/fit.h"
-#include "ident/workflow/fit_record.h"
-#include "ident/workflow/residual_analysis.h"
 #include "cli/commands.h"
 #include "cli/estimator_options.h"
 #include "cli/fit_plot.h"
@@ -21,6 +16,11 @@
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
 #include "cli/structure_options.h"
+#include "common/error.h"
+#include "ident/io/csv.h"
+#include "ident/workflow/fit.h"
+#include "ident/workflow/fit_record.h"
+#include "ident/workflow/residual_analysis.h"
 
 namespace ident::cli {
 namespace {

@@ -12,9 +12,9 @@
 #include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include "cli/commands.h"
 #include "common/error.h"
 #include "ident/smoothing/map_smoother.h"
-#include "cli/commands.h"
 #include "ident/workflow/smoothing_model.h"
 
 namespace ident::cli {
@@ -89,7 +89,8 @@ void AddSmoothCommand(CLI::App& app) {
   auto o = std::make_shared<SmoothOptions>();
   CLI::App* cmd =
       app.add_subcommand("smooth", "MAP state smoothing with convex penalties, and its dual control problem");
-  cmd->add_option("--model", o->model, "JSON model: F, H, initial, process, measurement (docs/reference/cli.md)")->required();
+  cmd->add_option("--model", o->model, "JSON model: F, H, initial, process, measurement (docs/reference/cli.md)")
+      ->required();
   cmd->add_option("DATA", o->data, "CSV with measurement column z (or z1, z2, ...), one row per time")->required();
   cmd->add_flag("--json", o->json, "Print one JSON object {primal, dual, gap, x, iterations, ...}");
   cmd->callback([o] { RunSmooth(*o); });

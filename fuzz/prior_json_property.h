@@ -15,9 +15,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/estimator_options.h"
 #include "common/error.h"
 #include "ident/linalg/ld_factor.h"
-#include "cli/estimator_options.h"
 
 namespace ident::fuzz {
 

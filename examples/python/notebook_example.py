@@ -1,4 +1,4 @@
-"""A notebook session with ident, cell by cell: fit a real record, see what the robust estimator
+"""ident in a notebook, cell by cell: fit a real record, see what the robust estimator
 discounts, compare estimators on injected outliers, and run an estimator on a live stream.
 
     PYTHONPATH=build/python /usr/bin/python3 examples/python/notebook_example.py [OUTPUT_DIR]

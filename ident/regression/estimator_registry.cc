@@ -34,7 +34,8 @@ std::unique_ptr<AnyRegressionEstimator> MakeRls(const EstimatorSettings& s, int 
 // Kárný–Hangos Student-t regression with k = dof; `name` is "cauchy" (k = 1) or "student".
 std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, int rho, const std::string& name,
                                                     double dof) {
-  SafeStudentOptions options;  // start-up prior and lock-in safeguards unless exact (docs/explanation/karny-hangos-estimator.md)
+  SafeStudentOptions
+      options;  // start-up prior and lock-in safeguards unless exact (docs/explanation/karny-hangos-estimator.md)
   options.base.dof = dof;
   options.base.delta = s.delta.value_or(1);
   options.base.forgetting = s.forgetting;
@@ -153,8 +154,7 @@ void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFac
   IDENT_REQUIRE(!name.empty() && name.find_first_of(":, ") == std::string::npos,
                 "estimator name '{}': need a non-empty name without ':', ',' or spaces", name);
   IDENT_REQUIRE(factory, "estimator '{}': no factory", name);
-  for (const Entry& entry : Registry())
-    IDENT_REQUIRE(entry.name != name, "estimator '{}' is registered already", name);
+  for (const Entry& entry : Registry()) IDENT_REQUIRE(entry.name != name, "estimator '{}' is registered already", name);
   Registry().push_back({name, std::move(factory), traits});
 }
 

@@ -23,8 +23,8 @@ std::vector<double> ToStd(const Eigen::VectorXd& v) { return std::vector<double>
 
 }  // namespace
 
-nlohmann::ordered_json CompareJson(const CompareResult& r, const std::string& path, const OutlierSpec& spec,
-                                   int trials, const std::string& cleaning) {
+nlohmann::ordered_json CompareJson(const CompareResult& r, const std::string& path, const OutlierSpec& spec, int trials,
+                                   const std::string& cleaning) {
   nlohmann::ordered_json j;
   j["data"] = path;
   j["structure"] = r.structure;

@@ -57,7 +57,10 @@ class ArxSource final : public DataSource {
 class StaticSource final : public DataSource {
  public:
   StaticSource(int output, std::vector<int> regressors, models::StaticRegression regression)
-      : output_(output), columns_(std::move(regressors)), regression_(std::move(regression)), x_(columns_.size()) {}
+      : output_(output), columns_(std::move(regressors)), regression_(std::move(regression)) {
+    IDENT_REQUIRE(columns_.size() == regression_.regressors.size(), "{} regressor columns for {} regressors",
+                  columns_.size(), regression_.regressors.size());
+  }
   std::unique_ptr<DataSource> Clone() const override { return std::make_unique<StaticSource>(*this); }
   int num_parameters() const override { return regression_.num_parameters(); }
   std::string structure() const override {
@@ -74,9 +77,12 @@ class StaticSource final : public DataSource {
     return used;
   }
   void Reset() override {}
+  // z = (1, x) or x as models::StaticRegression::Regressor builds it, written in place: this runs once per
+  // row in every pass over a record.
   bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) override {
-    for (std::size_t i = 0; i < columns_.size(); ++i) x_(static_cast<Eigen::Index>(i)) = row(columns_[i]);
-    regression_.Regressor(x_, z);
+    const int offset = regression_.intercept ? 1 : 0;
+    if (offset) z(0) = 1.0;
+    for (std::size_t i = 0; i < columns_.size(); ++i) z(offset + static_cast<Eigen::Index>(i)) = row(columns_[i]);
     return true;
   }
   void PushOutput(double) override {}
@@ -85,7 +91,6 @@ class StaticSource final : public DataSource {
   int output_;
   std::vector<int> columns_;
   models::StaticRegression regression_;
-  Eigen::VectorXd x_;
 };
 
 }  // namespace

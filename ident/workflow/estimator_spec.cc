@@ -10,8 +10,7 @@
 
 namespace ident::workflow {
 
-EstimatorSettings EstimatorSpec::Resolve(int num_parameters, const std::string& spec,
-                                               long estimation_rows) const {
+EstimatorSettings EstimatorSpec::Resolve(int num_parameters, const std::string& spec, long estimation_rows) const {
   const std::string& name = spec.empty() ? estimator : spec;
   EstimatorSettings s = ParseEstimatorSpec(name);
   if (dof) {
@@ -29,7 +28,8 @@ EstimatorSettings EstimatorSpec::Resolve(int num_parameters, const std::string& 
                 lock_in_window.value_or(0), estimation_rows, estimation_rows);
   s.lock_in = {lock_in_window, lock_in_threshold, !no_lock_in_restart};
   if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
-  IDENT_REQUIRE(!(prior && (nu0 || !prior_file.empty())), "give one prior: an explicit prior, nu0/vy0/vz0 or a prior file");
+  IDENT_REQUIRE(!(prior && (nu0 || !prior_file.empty())),
+                "give one prior: an explicit prior, nu0/vy0/vz0 or a prior file");
   IDENT_REQUIRE(!(nu0 && !prior_file.empty()), "--prior excludes --nu0/--vy0/--vz0");
   IDENT_REQUIRE(!nu0 || (vy0 && vz0), "--nu0 needs --vy0 and --vz0 (V(0) = diag(A, B·I))");
   IDENT_REQUIRE(nu0 || (!vy0 && !vz0), "--vy0 and --vz0 need --nu0");

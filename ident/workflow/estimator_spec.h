@@ -18,8 +18,8 @@ struct EstimatorSpec {
   std::optional<int> delta;       // unset: 1 (refused by the estimators without the convention)
   double forgetting = 1.0;
   bool stabilised = false;
-  std::optional<double> nu0, vy0, vz0;  // prior V(0) = diag(vy0, vz0·I), ν(0) = nu0 (all three or none)
-  std::string prior_file;               // prior as JSON {"nu0": N, "V0": [[...]]}
+  std::optional<double> nu0, vy0, vz0;   // prior V(0) = diag(vy0, vz0·I), ν(0) = nu0 (all three or none)
+  std::string prior_file;                // prior as JSON {"nu0": N, "V0": [[...]]}
   std::optional<RegressionPrior> prior;  // an explicit prior (excludes nu0/vy0/vz0 and prior_file)
   bool exact = false;
   std::optional<int> lock_in_window;

@@ -98,9 +98,10 @@ void WriteTraceRow(std::FILE* trace, const TraceRow& row) {
   std::fwrite(line.data(), 1, line.size(), trace);
 }
 
-std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace, const OutlierDecision& decision,
-                             const std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)>& on_update) {
+std::pair<int, int> Estimate(
+    const io::DataTable& data, Segment segment, DataSource& source, AnyRegressionEstimator& estimator, std::FILE* trace,
+    const OutlierDecision& decision,
+    const std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)>& on_update) {
   FitOptions options;
   options.trace = trace;
   options.decision = decision;
@@ -125,6 +126,11 @@ FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, 
 
 FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options) {
   const auto [estimation, validation] = PrepareData(data, source, options);
+  return FitPrepared(data, estimation, validation, source, estimator, options);
+}
+
+FitResult FitPrepared(const io::DataTable& data, Segment estimation, Segment validation, DataSource& source,
+                      AnyRegressionEstimator& estimator, const FitOptions& options) {
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
   int passes = 1;
   const auto [updates, rejected] = EstimateRows(data, estimation, source, estimator, options, &passes);

@@ -92,9 +92,10 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
 // Returns the number of updates and rejected steps (of the last pass, see FitOptions::passes). Throws
 // InvalidArgument if the regressors of the segment are constant or collinear (the model is not
 // identifiable from them).
-std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSource& source,
-                             AnyRegressionEstimator& estimator, std::FILE* trace, const OutlierDecision& decision = {},
-                             const std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)>& on_update = {});
+std::pair<int, int> Estimate(
+    const io::DataTable& data, Segment segment, DataSource& source, AnyRegressionEstimator& estimator, std::FILE* trace,
+    const OutlierDecision& decision = {},
+    const std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)>& on_update = {});
 
 // The same with every option of `options` that applies (trace, decision, on_update, min_regressor_information,
 // passes); `passes_run`, if given, receives the number of passes made.
@@ -123,6 +124,10 @@ Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvO
 
 // PrepareData + Estimate + Score.
 FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& estimator, const FitOptions& options);
+
+// Estimate + Score on a table PrepareData has already split and detrended into (estimation, validation).
+FitResult FitPrepared(const io::DataTable& prepared, Segment estimation, Segment validation, DataSource& source,
+                      AnyRegressionEstimator& estimator, const FitOptions& options);
 
 // The same on a CSV file, streamed (see above). `source` must have been built for the file's columns.
 // Throws DataError for unreadable/bad data (file:line:column), InvalidArgument as Fit does.

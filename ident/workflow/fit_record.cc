@@ -22,7 +22,7 @@ nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events
 }
 
 nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::string& data, double split,
-                              const std::string& detrend) {
+                                               const std::string& detrend) {
   auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
   nlohmann::ordered_json j;
   j["data"] = data;
@@ -115,11 +115,11 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
 
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags) {
   RecordFit fit;
-  fit.prepared = table;
+  fit.prepared = std::move(table);
   std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options);
   if (plan.scaled_prior) plan.UseScaledPrior(EstimationMeanSquares(fit.prepared, fit.estimation, source));
-  fit.result = Fit(std::move(table), source, *plan.estimator, plan.options);
-  if (fit.validation.count - source.first_regression_index() > residual_lags + 1)
+  fit.result = FitPrepared(fit.prepared, fit.estimation, fit.validation, source, *plan.estimator, plan.options);
+  if (residual_lags > 0 && fit.validation.count - source.first_regression_index() > residual_lags + 1)
     fit.residuals = AnalyseResiduals(fit.prepared, fit.validation, source, fit.result.theta, residual_lags);
   return fit;
 }

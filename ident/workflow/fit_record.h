@@ -34,8 +34,8 @@ struct FitRequest {
   EstimatorSpec estimator;
   double split = 0.5;
   int passes = 1;
-  std::string detrend;  // "mean" | "none"; empty: model.DefaultDetrend()
-  int residual_lags = 20;
+  std::string detrend;     // "mean" | "none"; empty: model.DefaultDetrend()
+  int residual_lags = 20;  // lags of the residual analysis; 0: none
 
   std::string ResolvedDetrend() const { return detrend.empty() ? model.DefaultDetrend() : detrend; }
 };
@@ -43,7 +43,7 @@ struct FitRequest {
 struct FitPlan {
   EstimatorSettings settings;
   std::unique_ptr<AnyRegressionEstimator> estimator;
-  FitOptions options;  // split, passes, detrending, decision; trace and on_update are the caller's
+  FitOptions options;         // split, passes, detrending, decision; trace and on_update are the caller's
   bool scaled_prior = false;  // the default prior is to be put in the data's scale (UseScaledPrior)
 
   // Rebuilds the estimator with DataScaledDefaultPrior(mean squares of y and the regressors over the
@@ -59,7 +59,8 @@ struct RecordFit {
   FitResult result;
   io::DataTable prepared;  // the split and detrended table
   Segment estimation, validation;
-  std::optional<ResidualAnalysis> residuals;  // when the validation part has more than residual_lags + 1 samples
+  // When residual_lags > 0 and the validation part has more than residual_lags + 1 samples.
+  std::optional<ResidualAnalysis> residuals;
 };
 
 // In memory. `plan.options.on_update` and `.trace`, if set, see every update.

@@ -10,9 +10,10 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
   constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   SegmentPredictions p;
   Eigen::VectorXd z(source.num_parameters());
+  Eigen::VectorXd row(data.values.cols());
   source.Reset();
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
-    const Eigen::VectorXd row = data.values.row(r).transpose();
+    row = data.values.row(r).transpose();
     const double y = row(source.output_column());
     p.rows.push_back(r + 1);
     p.measured.push_back(y);
@@ -23,7 +24,7 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
   source.Reset();
   const int t0 = source.first_regression_index();
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
-    const Eigen::VectorXd row = data.values.row(r).transpose();
+    row = data.values.row(r).transpose();
     if (source.Regressor(row, z)) {
       const double y_hat = theta.dot(z);
       p.simulation.push_back(y_hat);

@@ -14,10 +14,10 @@
 namespace ident::workflow {
 
 struct SegmentPredictions {
-  std::vector<int> rows;             // 1-based rows of the record
-  std::vector<double> measured;      // y
-  std::vector<double> one_step;      // NaN where the segment has no regression (its first t0 rows, missing data)
-  std::vector<double> simulation;    // empty for static models; NaN as above
+  std::vector<int> rows;           // 1-based rows of the record
+  std::vector<double> measured;    // y
+  std::vector<double> one_step;    // NaN where the segment has no regression (its first t0 rows, missing data)
+  std::vector<double> simulation;  // empty for static models; NaN as above
 };
 
 // `source` is Reset() before each walk.

@@ -1,5 +1,6 @@
 #include "ident/workflow/residual_analysis.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -10,18 +11,29 @@
 namespace ident::workflow {
 namespace {
 
-std::vector<double> Centred(const std::vector<double>& v) {
+std::vector<double> Centred(std::vector<double> v) {
   double mean = 0;
   for (double x : v) mean += x;
   mean /= static_cast<double>(v.size());
-  std::vector<double> c(v);
-  for (double& x : c) x -= mean;
-  return c;
+  for (double& x : v) x -= mean;
+  return v;
 }
 
-double SumSquares(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x * x;
+// s(τ) = Σ_{t ≥ τ} x(t) y(t − τ) for τ = first … last. The sums run block by block, every lag on one block
+// of x while it is in cache: one pass over memory instead of one per lag.
+std::vector<double> LaggedSums(const std::vector<double>& x_in, const std::vector<double>& y_in, int first, int last) {
+  constexpr Eigen::Index kBlock = 2048;
+  const auto n = static_cast<Eigen::Index>(x_in.size());
+  const Eigen::Map<const Eigen::VectorXd> x(x_in.data(), n), y(y_in.data(), n);
+  std::vector<double> s(static_cast<std::size_t>(last - first + 1), 0.0);
+  for (Eigen::Index begin = 0; begin < n; begin += kBlock) {
+    const Eigen::Index end = std::min(n, begin + kBlock);
+    for (int tau = first; tau <= last; ++tau) {
+      const Eigen::Index t0 = std::max<Eigen::Index>(begin, tau);  // x(t) with t ≥ τ
+      if (t0 < end)
+        s[static_cast<std::size_t>(tau - first)] += x.segment(t0, end - t0).dot(y.segment(t0 - tau, end - t0));
+    }
+  }
   return s;
 }
 
@@ -31,14 +43,9 @@ std::vector<double> Autocorrelation(const std::vector<double>& e_in, int max_lag
   IDENT_REQUIRE(max_lag >= 1 && static_cast<std::size_t>(max_lag) < e_in.size(),
                 "max_lag = {}; need 1 <= max_lag < {} (the number of residuals)", max_lag, e_in.size());
   const std::vector<double> e = Centred(e_in);
-  const double ee = SumSquares(e);
-  std::vector<double> r;
-  for (int tau = 1; tau <= max_lag; ++tau) {
-    double s = 0;
-    for (std::size_t t = static_cast<std::size_t>(tau); t < e.size(); ++t)
-      s += e[t] * e[t - static_cast<std::size_t>(tau)];
-    r.push_back(ee > 0 ? s / ee : 0.0);
-  }
+  const double ee = LaggedSums(e, e, 0, 0)[0];
+  std::vector<double> r = LaggedSums(e, e, 1, max_lag);
+  for (double& v : r) v = ee > 0 ? v / ee : 0.0;
   return r;
 }
 
@@ -47,14 +54,9 @@ std::vector<double> CrossCorrelation(const std::vector<double>& e_in, const std:
   IDENT_REQUIRE(max_lag >= 0 && static_cast<std::size_t>(max_lag) < e_in.size(), "max_lag = {}; need 0 <= max_lag < {}",
                 max_lag, e_in.size());
   const std::vector<double> e = Centred(e_in), u = Centred(u_in);
-  const double norm = std::sqrt(SumSquares(e) * SumSquares(u));
-  std::vector<double> r;
-  for (int tau = 0; tau <= max_lag; ++tau) {
-    double s = 0;
-    for (std::size_t t = static_cast<std::size_t>(tau); t < e.size(); ++t)
-      s += e[t] * u[t - static_cast<std::size_t>(tau)];
-    r.push_back(norm > 0 ? s / norm : 0.0);
-  }
+  const double norm = std::sqrt(LaggedSums(e, e, 0, 0)[0] * LaggedSums(u, u, 0, 0)[0]);
+  std::vector<double> r = LaggedSums(e, u, 0, max_lag);
+  for (double& v : r) v = norm > 0 ? v / norm : 0.0;
   return r;
 }
 
@@ -105,13 +107,18 @@ ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, Da
   std::vector<int> input_columns = source.used_columns();
   input_columns.pop_back();  // the output is last
   Eigen::VectorXd z(source.num_parameters());
+  Eigen::VectorXd row(data.values.cols());
   std::vector<double> e;
   std::vector<std::vector<double>> u(input_columns.size());
+  e.reserve(static_cast<std::size_t>(segment.count));
+  for (std::vector<double>& column : u) column.reserve(static_cast<std::size_t>(segment.count));
   source.Reset();
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
-    const Eigen::VectorXd row = data.values.row(r).transpose();
+    row = data.values.row(r).transpose();
     const double y = row(source.output_column());
-    if (source.Regressor(row, z) && std::isfinite(y) && z.allFinite() && row(input_columns).allFinite()) {
+    bool inputs_finite = true;
+    for (int column : input_columns) inputs_finite = inputs_finite && std::isfinite(row(column));
+    if (source.Regressor(row, z) && std::isfinite(y) && z.allFinite() && inputs_finite) {
       e.push_back(y - theta.dot(z));
       for (std::size_t i = 0; i < input_columns.size(); ++i) u[i].push_back(row(input_columns[i]));
     }

@@ -85,14 +85,22 @@ class FitResult:
     """The result of ``ident.fit``: the fields of ``ident fit --json`` as attributes (numpy arrays for
     vectors), ``to_dict()``, the validation predictions, and the update history when asked for."""
 
-    def __init__(self, raw):
+    def __init__(self, raw, predict):
         self._dict = json.loads(raw["json"])
-        self.predictions = {k: np.asarray(v) for k, v in raw["predictions"].items()}
+        self._predict = predict
+        self._predictions = None
         self.history = raw.get("history")
         for key, value in self._dict.items():
             if key in ("theta", "theta_std"):
                 value = np.array([np.nan if v is None else v for v in value], dtype=float)
             setattr(self, key, value)
+
+    @property
+    def predictions(self):
+        """The validation part: row (1-based), measured, one_step and (dynamic models) simulation outputs."""
+        if self._predictions is None:
+            self._predictions = {k: np.asarray(v) for k, v in self._predict(self.theta).items()}
+        return self._predictions
 
     def to_dict(self):
         """The JSON object of ``ident fit --json`` (a fresh copy)."""
@@ -119,7 +127,8 @@ class FitResult:
 
 
 def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rls", *, regressors=None,
-        intercept=None, split=None, passes=1, detrend=None, missing=False, history=False, **options):
+        intercept=None, split=None, passes=1, detrend=None, missing=False, history=False, residual_lags=20,
+        **options):
     """Fits a model to a record with one estimator, as ``ident fit`` does.
 
     Structure: ``output`` with ``inputs``, ``na``, ``nb``, ``nk`` (ARX/FIR) or with ``regressors`` and
@@ -129,6 +138,7 @@ def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rl
     snake case: dof, delta, forgetting, stabilised, nu0, vy0, vz0, prior (a JSON file), exact,
     lock_in_window, lock_in_threshold, lock_in_restart, clean_regressors (bool), clean_clip, clean_gross,
     clean_below. ``history=True`` keeps every update's weight, ν, θ̂ and its standard errors (for plot()).
+    ``residual_lags``: lags of the residual analysis of the validation part (0: none, residual_analysis None).
     """
     columns, values, name, bundled = _table(data, missing)
     kwargs = dict(output=output, inputs=inputs, na=na, nb=nb, nk=nk, regressors=regressors, intercept=intercept)
@@ -137,8 +147,10 @@ def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rl
     split = _default_split(split, bundled, given)
     model.update(options)
     model["estimator"] = estimator
-    raw = _ident.fit(columns, values, name, split, int(passes), detrend or "", bool(history), model)
-    return FitResult(raw)
+    raw = _ident.fit(columns, values, name, split, int(passes), detrend or "", bool(history), int(residual_lags),
+                     model)
+    structure = {k: v for k, v in model.items() if k in _STRUCTURE_KEYS}
+    return FitResult(raw, lambda theta: _ident.predict(columns, values, name, split, detrend or "", theta, structure))
 
 
 class CompareResult(pd.DataFrame):

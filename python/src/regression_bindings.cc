@@ -57,9 +57,9 @@ class Estimator {
       py::gil_scoped_release release;
       const Guard guard(*this);
       for (py::ssize_t t = 0; t < count; ++t) {
-        const StepStatus s =
-            enabled_ ? estimator_->Update(ys[t], Eigen::Map<const Eigen::VectorXd>(zs + t * n, n)).status
-                     : StepStatus::kSkipped;
+        const StepStatus s = enabled_
+                                 ? estimator_->Update(ys[t], Eigen::Map<const Eigen::VectorXd>(zs + t * n, n)).status
+                                 : StepStatus::kSkipped;
         out[t] = static_cast<std::int8_t>(s);
       }
     }
@@ -76,8 +76,8 @@ class Estimator {
     IDENT_REQUIRE(z.ndim() == 2 && z.shape(1) == n, "z must be a regressor of {} entries or a 2-D array of them", n);
     py::array_t<double> y_hat(z.shape(0));
     const Eigen::VectorXd theta = estimator_->parameters();
-    const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> rows(
-        z.data(), z.shape(0), n);
+    const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> rows(z.data(),
+                                                                                                        z.shape(0), n);
     Eigen::Map<Eigen::VectorXd>(y_hat.mutable_data(), z.shape(0)) = rows * theta;
     return y_hat;
   }
@@ -184,9 +184,9 @@ void RegisterRegression(py::module_& m) {
   py::class_<Estimator>(m, "Estimator",
                         "A recursive (or batch reference) regression estimator y = theta'z + e, chosen by name")
       .def(py::init([](const std::string& name, int n, std::optional<double> dof, std::optional<int> delta,
-                       double forgetting, bool stabilised, std::optional<double> nu0,
-                       std::optional<Eigen::MatrixXd> V0, bool exact, std::optional<int> lock_in_window,
-                       std::optional<double> lock_in_threshold, bool lock_in_restart) {
+                       double forgetting, bool stabilised, std::optional<double> nu0, std::optional<Eigen::MatrixXd> V0,
+                       bool exact, std::optional<int> lock_in_window, std::optional<double> lock_in_threshold,
+                       bool lock_in_restart) {
              return std::make_unique<Estimator>(name, n,
                                                 SpecFrom(dof, delta, forgetting, stabilised, nu0, std::move(V0), exact,
                                                          lock_in_window, lock_in_threshold, lock_in_restart));
@@ -212,14 +212,16 @@ void RegisterRegression(py::module_& m) {
       .def_property_readonly("parameters", &Estimator::parameters, "theta-hat (numpy array, n)")
       .def_property_readonly("covariance", &Estimator::covariance, "Covariance of theta-hat (n x n)")
       .def_property_readonly("name", [](const Estimator& e) { return e.get().name(); })
-      .def_property_readonly("kind", [](const Estimator& e) { return e.get().kind(); }, "'recursive' or 'batch'")
+      .def_property_readonly(
+          "kind", [](const Estimator& e) { return e.get().kind(); }, "'recursive' or 'batch'")
       .def_property_readonly("n", [](const Estimator& e) { return e.get().num_parameters(); })
       .def_property_readonly("nu", [](const Estimator& e) { return e.get().nu(); })
       .def_property_readonly("Dy", [](const Estimator& e) { return e.get().Dy(); })
       .def_property_readonly("noise_std", [](const Estimator& e) { return e.get().noise_std(); })
       .def_property_readonly("in_startup", [](const Estimator& e) { return e.get().in_startup(); })
-      .def_property_readonly("lock_in", [](const Estimator& e) { return LockInDict(e.get().lock_in()); },
-                             "The lock-in safeguard's state (a dict), or None");
+      .def_property_readonly(
+          "lock_in", [](const Estimator& e) { return LockInDict(e.get().lock_in()); },
+          "The lock-in safeguard's state (a dict), or None");
 }
 
 }  // namespace ident::python

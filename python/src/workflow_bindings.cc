@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
 #include <pybind11/eigen.h>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <nlohmann/json.hpp>
 
 #include "common/error.h"
 #include "ident/density/logconcave_mle.h"
@@ -32,8 +32,8 @@ namespace ident::python {
 namespace {
 
 io::DataTable Table(const std::vector<std::string>& columns, Eigen::MatrixXd values, const std::string& name) {
-  IDENT_REQUIRE(static_cast<Eigen::Index>(columns.size()) == values.cols(), "{}: {} column names for {} columns",
-                name, columns.size(), values.cols());
+  IDENT_REQUIRE(static_cast<Eigen::Index>(columns.size()) == values.cols(), "{}: {} column names for {} columns", name,
+                columns.size(), values.cols());
   io::DataTable table;
   table.source = name;
   table.names = columns;
@@ -54,30 +54,54 @@ Options ReadOptions(const py::dict& kw) {
   for (const auto& [key_handle, value] : kw) {
     const std::string key = py::str(key_handle);
     if (value.is_none()) continue;
-    if (key == "output") m.output = value.cast<std::string>();
-    else if (key == "inputs") m.inputs = value.cast<std::vector<std::string>>();
-    else if (key == "na") m.na = value.cast<int>();
-    else if (key == "nb") m.nb = value.cast<std::vector<int>>();
-    else if (key == "nk") m.nk = value.cast<std::vector<int>>();
-    else if (key == "regressors") m.regressors = value.cast<std::vector<std::string>>();
-    else if (key == "intercept") m.intercept = value.cast<bool>();
-    else if (key == "clean_regressors") m.clean_regressors = value.cast<bool>() ? "on" : "off";
-    else if (key == "clean_clip") m.cleaning.clip = value.cast<double>();
-    else if (key == "clean_gross") m.cleaning.gross = value.cast<double>();
-    else if (key == "clean_below") m.clean_below = value.cast<double>();
-    else if (key == "estimator") e.estimator = value.cast<std::string>();
-    else if (key == "dof") e.dof = value.cast<double>();
-    else if (key == "delta") e.delta = value.cast<int>();
-    else if (key == "forgetting") e.forgetting = value.cast<double>();
-    else if (key == "stabilised") e.stabilised = value.cast<bool>();
-    else if (key == "nu0") e.nu0 = value.cast<double>();
-    else if (key == "vy0") e.vy0 = value.cast<double>();
-    else if (key == "vz0") e.vz0 = value.cast<double>();
-    else if (key == "prior") e.prior_file = value.cast<std::string>();
-    else if (key == "exact") e.exact = value.cast<bool>();
-    else if (key == "lock_in_window") e.lock_in_window = value.cast<int>();
-    else if (key == "lock_in_threshold") e.lock_in_threshold = value.cast<double>();
-    else if (key == "lock_in_restart") e.no_lock_in_restart = !value.cast<bool>();
+    if (key == "output")
+      m.output = value.cast<std::string>();
+    else if (key == "inputs")
+      m.inputs = value.cast<std::vector<std::string>>();
+    else if (key == "na")
+      m.na = value.cast<int>();
+    else if (key == "nb")
+      m.nb = value.cast<std::vector<int>>();
+    else if (key == "nk")
+      m.nk = value.cast<std::vector<int>>();
+    else if (key == "regressors")
+      m.regressors = value.cast<std::vector<std::string>>();
+    else if (key == "intercept")
+      m.intercept = value.cast<bool>();
+    else if (key == "clean_regressors")
+      m.clean_regressors = value.cast<bool>() ? "on" : "off";
+    else if (key == "clean_clip")
+      m.cleaning.clip = value.cast<double>();
+    else if (key == "clean_gross")
+      m.cleaning.gross = value.cast<double>();
+    else if (key == "clean_below")
+      m.clean_below = value.cast<double>();
+    else if (key == "estimator")
+      e.estimator = value.cast<std::string>();
+    else if (key == "dof")
+      e.dof = value.cast<double>();
+    else if (key == "delta")
+      e.delta = value.cast<int>();
+    else if (key == "forgetting")
+      e.forgetting = value.cast<double>();
+    else if (key == "stabilised")
+      e.stabilised = value.cast<bool>();
+    else if (key == "nu0")
+      e.nu0 = value.cast<double>();
+    else if (key == "vy0")
+      e.vy0 = value.cast<double>();
+    else if (key == "vz0")
+      e.vz0 = value.cast<double>();
+    else if (key == "prior")
+      e.prior_file = value.cast<std::string>();
+    else if (key == "exact")
+      e.exact = value.cast<bool>();
+    else if (key == "lock_in_window")
+      e.lock_in_window = value.cast<int>();
+    else if (key == "lock_in_threshold")
+      e.lock_in_threshold = value.cast<double>();
+    else if (key == "lock_in_restart")
+      e.no_lock_in_restart = !value.cast<bool>();
     else
       throw InvalidArgument("unknown option '" + key + "'");
   }
@@ -98,7 +122,7 @@ py::array_t<double> Matrix(const std::vector<double>& flat, std::size_t columns)
 }
 
 py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, const std::string& name, double split,
-             int passes, const std::string& detrend, bool history, const py::dict& kw) {
+             int passes, const std::string& detrend, bool history, int residual_lags, const py::dict& kw) {
   const Options o = ReadOptions(kw);
   workflow::FitRequest request;
   request.model = o.model;
@@ -106,11 +130,12 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
   request.split = split;
   request.passes = passes;
   request.detrend = detrend;
+  IDENT_REQUIRE(residual_lags >= 0, "residual_lags = {}; need 0 (no residual analysis) or more", residual_lags);
+  request.residual_lags = residual_lags;
   io::DataTable table = Table(columns, std::move(values), name);
   std::unique_ptr<workflow::DataSource> source = request.model.MakeSource(table.names, name);
   const int rho = source->num_parameters();
-  workflow::FitPlan plan =
-      workflow::PlanFit(request, rho, workflow::EstimationRows(table.num_rows(), request.split));
+  workflow::FitPlan plan = workflow::PlanFit(request, rho, workflow::EstimationRows(table.num_rows(), request.split));
   History h;
   if (history)
     plan.options.on_update = [&h, rho](int row, const StepReport& step, const AnyRegressionEstimator& e) {
@@ -133,15 +158,6 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   py::dict out;
   out["json"] = workflow::FitJson(fit.result, name, split, request.ResolvedDetrend(), residuals).dump();
-  const workflow::SegmentPredictions p = workflow::PredictSegment(fit.prepared, fit.validation, *source, fit.result.theta);
-  py::dict predictions;
-  predictions["row"] = py::array_t<int>(static_cast<py::ssize_t>(p.rows.size()), p.rows.data());
-  predictions["measured"] = py::array_t<double>(static_cast<py::ssize_t>(p.measured.size()), p.measured.data());
-  predictions["one_step"] = py::array_t<double>(static_cast<py::ssize_t>(p.one_step.size()), p.one_step.data());
-  if (!p.simulation.empty())
-    predictions["simulation"] =
-        py::array_t<double>(static_cast<py::ssize_t>(p.simulation.size()), p.simulation.data());
-  out["predictions"] = predictions;
   if (history) {
     py::dict d;
     d["row"] = py::array_t<double>(static_cast<py::ssize_t>(h.row.size()), h.row.data());
@@ -154,6 +170,32 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
     out["history"] = d;
   }
   return out;
+}
+
+// The validation part's measured, one-step and simulated outputs of θ, on the table prepared as Fit prepares it.
+py::dict Predict(const std::vector<std::string>& columns, Eigen::MatrixXd values, const std::string& name, double split,
+                 const std::string& detrend, const Eigen::VectorXd& theta, const py::dict& kw) {
+  const Options o = ReadOptions(kw);
+  workflow::FitRequest request;
+  request.model = o.model;
+  request.split = split;
+  request.detrend = detrend;
+  io::DataTable table = Table(columns, std::move(values), name);
+  std::unique_ptr<workflow::DataSource> source = request.model.MakeSource(table.names, name);
+  IDENT_REQUIRE(theta.size() == source->num_parameters(), "theta has {} entries; the model has {} parameters",
+                theta.size(), source->num_parameters());
+  workflow::FitOptions options;
+  options.split = split;
+  options.detrend = request.ResolvedDetrend() == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
+  const workflow::Segment validation = workflow::PrepareData(table, *source, options).second;
+  const workflow::SegmentPredictions p = workflow::PredictSegment(table, validation, *source, theta);
+  py::dict predictions;
+  predictions["row"] = py::array_t<int>(static_cast<py::ssize_t>(p.rows.size()), p.rows.data());
+  predictions["measured"] = py::array_t<double>(static_cast<py::ssize_t>(p.measured.size()), p.measured.data());
+  predictions["one_step"] = py::array_t<double>(static_cast<py::ssize_t>(p.one_step.size()), p.one_step.data());
+  if (!p.simulation.empty())
+    predictions["simulation"] = py::array_t<double>(static_cast<py::ssize_t>(p.simulation.size()), p.simulation.data());
+  return predictions;
 }
 
 std::string Compare(const std::vector<std::string>& columns, Eigen::MatrixXd values, const std::string& name,
@@ -227,16 +269,21 @@ py::dict LogConcave(const std::vector<double>& samples) {
 
 void RegisterWorkflow(py::module_& m) {
   m.def("fit", &Fit, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("split"), py::arg("passes"),
-        py::arg("detrend"), py::arg("history"), py::arg("options"));
+        py::arg("detrend"), py::arg("history"), py::arg("residual_lags"), py::arg("options"));
+  m.def("predict", &Predict, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("split"),
+        py::arg("detrend"), py::arg("theta"), py::arg("options"));
   m.def("compare", &Compare, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("estimators"),
         py::arg("outliers"), py::arg("trials"), py::arg("passes"), py::arg("split"), py::arg("detrend"),
         py::arg("options"));
   m.def("smooth", &Smooth, py::arg("model_json"), py::arg("z"));
   m.def("logcondens", &LogConcave, py::arg("samples"));
-  m.def("read_csv", [](const std::string& path, bool missing) {
-    io::DataTable t = io::ReadCsv(path, {.missing_as_nan = missing});
-    return py::make_tuple(t.names, t.values);
-  }, py::arg("path"), py::arg("missing") = false);
+  m.def(
+      "read_csv",
+      [](const std::string& path, bool missing) {
+        io::DataTable t = io::ReadCsv(path, {.missing_as_nan = missing});
+        return py::make_tuple(t.names, t.values);
+      },
+      py::arg("path"), py::arg("missing") = false);
 }
 
 }  // namespace ident::python

@@ -9,7 +9,7 @@ import pytest
 SOURCE = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def cli():
     """Runs `ident ARGS` and returns its parsed --json output."""
     program = os.environ.get("IDENT_CLI", os.path.join(SOURCE, "build", "bin", "ident"))
@@ -23,6 +23,6 @@ def cli():
     return run
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def source_dir():
     return SOURCE

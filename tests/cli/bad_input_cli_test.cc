@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "tests/cli/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
-#include "tests/cli/scaled_dryer.h"
 
 namespace ident::testing {
 namespace {

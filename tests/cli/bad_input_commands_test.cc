@@ -11,9 +11,9 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "tests/cli/scaled_dryer.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
-#include "tests/cli/scaled_dryer.h"
 
 namespace ident::testing {
 namespace {

@@ -61,7 +61,8 @@ TEST(Layering, LibraryIncludesRunDownwardsOnly) {
       const std::string layer = Layer(path);
       const auto allowed = Allowed().find(layer);
       if (allowed == Allowed().end()) {
-        violations.push_back(path + ": a folder the layering does not know (add it to docs/maintainer/architecture.md and here)");
+        violations.push_back(
+            path + ": a folder the layering does not know (add it to docs/maintainer/architecture.md and here)");
         continue;
       }
       ++files;
