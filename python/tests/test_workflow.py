@@ -189,3 +189,15 @@ def test_bad_input_raises_value_error_with_the_library_message(tmp_path):
         ident.fit("nope", output="y", inputs=["u"])
     with pytest.raises(ValueError, match="give output"):
         ident.fit(frame)
+
+
+def test_the_readme_python_example_runs_as_written(source_dir):
+    with open(os.path.join(source_dir, "README.md"), encoding="utf-8") as f:
+        text = f.read()
+    blocks = text.split("```python\n")
+    assert len(blocks) == 2, "README.md has exactly one ```python block"
+    code = blocks[1].split("```")[0]
+    assert len([l for l in code.splitlines() if l.strip()]) == 3
+    namespace = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    assert namespace["result"].estimator == "cauchy"
