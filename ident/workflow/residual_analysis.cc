@@ -11,11 +11,15 @@
 namespace ident::workflow {
 namespace {
 
-std::vector<double> Centred(std::vector<double> v) {
+void Centre(std::vector<double>& v) {
   double mean = 0;
   for (double x : v) mean += x;
   mean /= static_cast<double>(v.size());
   for (double& x : v) x -= mean;
+}
+
+std::vector<double> Centred(std::vector<double> v) {
+  Centre(v);
   return v;
 }
 
@@ -37,27 +41,34 @@ std::vector<double> LaggedSums(const std::vector<double>& x_in, const std::vecto
   return s;
 }
 
-}  // namespace
-
-std::vector<double> Autocorrelation(const std::vector<double>& e_in, int max_lag) {
-  IDENT_REQUIRE(max_lag >= 1 && static_cast<std::size_t>(max_lag) < e_in.size(),
-                "max_lag = {}; need 1 <= max_lag < {} (the number of residuals)", max_lag, e_in.size());
-  const std::vector<double> e = Centred(e_in);
+// r_ee and r_eu of centred sequences.
+std::vector<double> CentredAutocorrelation(const std::vector<double>& e, int max_lag) {
   const double ee = LaggedSums(e, e, 0, 0)[0];
   std::vector<double> r = LaggedSums(e, e, 1, max_lag);
   for (double& v : r) v = ee > 0 ? v / ee : 0.0;
   return r;
 }
 
-std::vector<double> CrossCorrelation(const std::vector<double>& e_in, const std::vector<double>& u_in, int max_lag) {
-  IDENT_REQUIRE(e_in.size() == u_in.size(), "{} residuals but {} input samples", e_in.size(), u_in.size());
-  IDENT_REQUIRE(max_lag >= 0 && static_cast<std::size_t>(max_lag) < e_in.size(), "max_lag = {}; need 0 <= max_lag < {}",
-                max_lag, e_in.size());
-  const std::vector<double> e = Centred(e_in), u = Centred(u_in);
+std::vector<double> CentredCrossCorrelation(const std::vector<double>& e, const std::vector<double>& u, int max_lag) {
   const double norm = std::sqrt(LaggedSums(e, e, 0, 0)[0] * LaggedSums(u, u, 0, 0)[0]);
   std::vector<double> r = LaggedSums(e, u, 0, max_lag);
   for (double& v : r) v = norm > 0 ? v / norm : 0.0;
   return r;
+}
+
+}  // namespace
+
+std::vector<double> Autocorrelation(const std::vector<double>& e_in, int max_lag) {
+  IDENT_REQUIRE(max_lag >= 1 && static_cast<std::size_t>(max_lag) < e_in.size(),
+                "max_lag = {}; need 1 <= max_lag < {} (the number of residuals)", max_lag, e_in.size());
+  return CentredAutocorrelation(Centred(e_in), max_lag);
+}
+
+std::vector<double> CrossCorrelation(const std::vector<double>& e_in, const std::vector<double>& u_in, int max_lag) {
+  IDENT_REQUIRE(e_in.size() == u_in.size(), "{} residuals but {} input samples", e_in.size(), u_in.size());
+  IDENT_REQUIRE(max_lag >= 0 && static_cast<std::size_t>(max_lag) < e_in.size(), "max_lag = {}; need 0 <= max_lag < {}",
+                max_lag, e_in.size());
+  return CentredCrossCorrelation(Centred(e_in), Centred(u_in), max_lag);
 }
 
 int ResidualAnalysis::OutsideAuto() const {
@@ -129,10 +140,12 @@ ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, Da
   IDENT_REQUIRE(a.samples > max_lag + 1, "{}: {} residuals are too few for correlations up to lag {}", data.source,
                 a.samples, max_lag);
   a.band = 2.58 / std::sqrt(static_cast<double>(a.samples));
-  a.autocorrelation = Autocorrelation(e, max_lag);
+  Centre(e);  // in place: a record's residuals and inputs are large
+  a.autocorrelation = CentredAutocorrelation(e, max_lag);
   for (std::size_t i = 0; i < input_columns.size(); ++i) {
     a.input_names.push_back(data.names[static_cast<std::size_t>(input_columns[i])]);
-    a.cross_correlation.push_back(CrossCorrelation(e, u[i], max_lag));
+    Centre(u[i]);
+    a.cross_correlation.push_back(CentredCrossCorrelation(e, u[i], max_lag));
   }
   return a;
 }

@@ -43,13 +43,15 @@ def _table(data, missing=False):
         name = "dict"
     else:
         raise TypeError("data must be a pandas DataFrame, a dict of arrays, a CSV path or a bundled record's name")
-    if not missing:
+    if not missing and not np.isfinite(values).all():
         bad = ~np.isfinite(values)
         if bad.any():
             row, col = np.argwhere(bad)[0]
             raise ValueError(f"{name}: row {row + 1}, column '{columns[col]}': {values[row, col]} is not a finite "
                              "number (pass missing=True to treat it as a missing sample)")
-    return columns, np.ascontiguousarray(values), name, None
+    # Column-major, the layout of the C++ table: a DataFrame's float block usually is already, and the
+    # conversion is then one copy.
+    return columns, np.asfortranarray(values), name, None
 
 
 def _structure(kwargs, bundled):
