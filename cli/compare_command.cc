@@ -3,10 +3,12 @@
 // Without structure options a bundled dataset uses its suggested structure and split (datasets/index.json).
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -33,6 +35,7 @@ struct CompareCommandOptions {
   std::vector<std::string> estimators{"rls,cauchy,student:3"};  // comma-separated lists, split by RunCompare
   std::string outliers = "0.05:20:1";
   int trials = 1;
+  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   int passes = 1;
   std::optional<double> split;
   std::string detrend;
@@ -145,6 +148,8 @@ void RunCompare(CompareCommandOptions& o) {
   request.estimators = o.estimators;
   request.outliers = spec;
   request.trials = o.trials;
+  IDENT_REQUIRE(o.jobs >= 1 && o.jobs <= 1024, "--jobs {}; need 1 <= jobs <= 1024", o.jobs);
+  request.jobs = o.jobs;
   request.passes = o.passes;
   request.split = split;
   request.detrend = detrend;
@@ -179,6 +184,8 @@ void AddCompareCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--trials", o->trials, "Repeat with seeds SEED, SEED+1, …; report mean and spread")
       ->capture_default_str();
+  cmd->add_option("--jobs", o->jobs,
+                  "Threads the trials run on (default: every core); the results do not depend on it");
   o->structure.AddTo(*cmd, /*require_output=*/false);
   o->estimator.AddTo(*cmd, /*with_estimator=*/false);
   cmd->add_option("--passes", o->passes,

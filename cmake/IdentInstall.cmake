@@ -38,3 +38,15 @@ write_basic_package_version_file("${PROJECT_BINARY_DIR}/IdentConfigVersion.cmake
 install(FILES "${PROJECT_BINARY_DIR}/IdentConfig.cmake" "${PROJECT_BINARY_DIR}/IdentConfigVersion.cmake"
         DESTINATION ${IDENT_INSTALL_CMAKEDIR}
         COMPONENT ident_development)
+
+# A Debian package of everything installed (`cpack --config <build>/CPackConfig.cmake`): the way to put
+# the program, the library and the Python package on the workers of a Dask cluster. Under /usr/local,
+# where Debian's python3 finds the package (lib/python3.X/dist-packages).
+set(CPACK_GENERATOR DEB)
+set(CPACK_PACKAGE_NAME ident)
+set(CPACK_PACKAGE_CONTACT "ident maintainers")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "recursive, outlier-robust system identification (C++, CLI, Python)")
+set(CPACK_PACKAGING_INSTALL_PREFIX /usr/local)
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "libeigen3-dev, libboost-dev, libfmt-dev, nlohmann-json3-dev, python3, python3-numpy, python3-pandas, python3-matplotlib")
+include(CPack)

@@ -1,10 +1,14 @@
 #include "ident/workflow/compare.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <numeric>
 #include <random>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -13,18 +17,47 @@
 namespace ident::workflow {
 namespace {
 
-// Forwards to an estimator and records every (y, z) it was given, so the exact update sequence
-// (which depends on the estimator when regressor cleaning is on) can be replayed for timing.
+// The exact update sequence an estimator was given (it depends on the estimator when regressor cleaning
+// is on), kept to replay it for timing.
+struct Recording {
+  Eigen::VectorXd y;
+  Eigen::MatrixXd z;
+  Eigen::Index count = 0;
+
+  // Nanoseconds per update of `fresh` over the recorded sequence and the read-out of its estimate
+  // (repeated to last ≥ 5 ms).
+  double TimeReplay(AnyRegressionEstimator& fresh) const {
+    if (count == 0) return 0;
+    using Clock = std::chrono::steady_clock;
+    long updates = 0;
+    double checksum = 0;
+    const auto start = Clock::now();
+    do {
+      fresh.Reset();
+      for (Eigen::Index i = 0; i < count; ++i) checksum += fresh.Update(y(i), z.col(i)).weight;
+      checksum += fresh.parameters()(0);  // a batch estimator solves here: its time is part of the fit
+      updates += count;
+    } while (Clock::now() - start < std::chrono::milliseconds(5));
+    const double ns = std::chrono::duration<double, std::nano>(Clock::now() - start).count();
+    if (checksum == -1) fmt::print(stderr, " ");  // keep the loop observable
+    return ns / static_cast<double>(updates);
+  }
+};
+
+// Forwards to an estimator and records every (y, z) it was given into a Recording.
 class RecordingEstimator final : public AnyRegressionEstimator {
  public:
-  RecordingEstimator(AnyRegressionEstimator& inner, int capacity)
-      : inner_(inner), y_(capacity), z_(inner.num_parameters(), capacity) {}
+  RecordingEstimator(AnyRegressionEstimator& inner, int capacity, Recording& out) : inner_(inner), out_(out) {
+    out_.y.resize(capacity);
+    out_.z.resize(inner.num_parameters(), capacity);
+    out_.count = 0;
+  }
   std::string name() const override { return inner_.name(); }
   StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) override {
-    if (count_ < y_.size()) {
-      y_(count_) = y;
-      z_.col(count_) = z;
-      ++count_;
+    if (out_.count < out_.y.size()) {
+      out_.y(out_.count) = y;
+      out_.z.col(out_.count) = z;
+      ++out_.count;
     }
     return inner_.Update(y, z);
   }
@@ -40,36 +73,15 @@ class RecordingEstimator final : public AnyRegressionEstimator {
   bool judges_outliers() const override { return inner_.judges_outliers(); }
   std::string kind() const override { return inner_.kind(); }
   bool BeginPass() override {
-    count_ = 0;  // the timed replay is of the last pass
+    out_.count = 0;  // the timed replay is of the last pass
     return inner_.BeginPass();
   }
   bool in_startup() const override { return inner_.in_startup(); }
   bool FinishStartup() override { return inner_.FinishStartup(); }
 
-  // Nanoseconds per update of `fresh` over the recorded sequence and the read-out of its estimate
-  // (repeated to last ≥ 5 ms).
-  double TimeReplay(AnyRegressionEstimator& fresh) const {
-    if (count_ == 0) return 0;
-    using Clock = std::chrono::steady_clock;
-    long updates = 0;
-    double checksum = 0;
-    const auto start = Clock::now();
-    do {
-      fresh.Reset();
-      for (Eigen::Index i = 0; i < count_; ++i) checksum += fresh.Update(y_(i), z_.col(i)).weight;
-      checksum += fresh.parameters()(0);  // a batch estimator solves here: its time is part of the fit
-      updates += count_;
-    } while (Clock::now() - start < std::chrono::milliseconds(5));
-    const double ns = std::chrono::duration<double, std::nano>(Clock::now() - start).count();
-    if (checksum == -1) fmt::print(stderr, " ");  // keep the loop observable
-    return ns / static_cast<double>(updates);
-  }
-
  private:
   AnyRegressionEstimator& inner_;
-  Eigen::VectorXd y_;
-  Eigen::MatrixXd z_;
-  Eigen::Index count_ = 0;
+  Recording& out_;
 };
 
 constexpr int kTimedTrials = 5;  // time per update: median over the first trials
@@ -192,7 +204,19 @@ TrialSettings ScaledSettings(const io::DataTable& data, Segment estimation, Data
   return t;
 }
 
-// One estimator's results over the trials.
+// One estimator on one corrupted record, scored on the clean data.
+struct TrialRun {
+  std::string failure;  // why the estimate is unusable; "" if usable
+  std::string kind;
+  int passes = 1;
+  Eigen::VectorXd theta;
+  FitScores scores;
+  double distance = 0, cleaned = 0;
+  Recording recording;  // the update sequence (kept for the timed trials)
+};
+
+// One estimator's results over the trials, added in trial order (so that any number of threads gives the
+// same sums).
 struct Tally {
   std::vector<double> one_step, simulation, distance, ns, cleaned, one_step_per_trial;
   Eigen::VectorXd theta_sum;
@@ -201,6 +225,21 @@ struct Tally {
 
   Tally(int rho, int trials) : one_step_per_trial(static_cast<std::size_t>(trials), std::nan("")) {
     theta_sum = Eigen::VectorXd::Zero(rho);
+  }
+
+  void Add(const TrialRun& run, int trial) {
+    kind = run.kind;
+    passes = run.passes;
+    if (!run.failure.empty()) {
+      if (failed++ == 0) failure = fmt::format("trial {}: {}", trial + 1, run.failure);
+      return;
+    }
+    cleaned.push_back(run.cleaned);
+    theta_sum += run.theta;
+    one_step.push_back(run.scores.one_step);
+    one_step_per_trial[static_cast<std::size_t>(trial)] = run.scores.one_step;
+    if (run.scores.simulation) simulation.push_back(*run.scores.simulation);
+    distance.push_back(run.distance);
   }
 
   EstimatorScore Summary(const std::string& label, int trials) const {
@@ -225,42 +264,76 @@ struct Tally {
   }
 };
 
-// Runs one estimator on one corrupted record and adds its result to `tally`; scores on the clean `data`.
-void RunTrial(const io::DataTable& data, const io::DataTable& corrupted, DataSource& source,
-              const EstimatorSettings& settings, const FitOptions& fit, const CompareResult& result, int trial,
-              Tally& tally) {
-  const int rho = source.num_parameters();
-  auto estimator = MakeRegressionEstimator(settings, rho);
-  tally.kind = estimator->kind();
-  RecordingEstimator recorder(*estimator, result.estimation.count);
+// Runs one estimator on one corrupted record; scores on the clean `data`.
+TrialRun RunTrial(const io::DataTable& data, const io::DataTable& corrupted, DataSource& source,
+                  const EstimatorSettings& settings, const FitOptions& fit, const CompareResult& result) {
+  TrialRun run;
+  auto estimator = MakeRegressionEstimator(settings, source.num_parameters());
+  run.kind = estimator->kind();
+  RecordingEstimator recorder(*estimator, result.estimation.count, run.recording);
   // One estimator's failure on one trial is that estimator's result, reported beside the others.
-  std::string failure;
   try {
-    const int updates = Estimate(corrupted, result.estimation, source, recorder, fit, &tally.passes).first;
-    failure = UnusableResult(*estimator, result.parameter_names, updates);
+    const int updates = Estimate(corrupted, result.estimation, source, recorder, fit, &run.passes).first;
+    run.failure = UnusableResult(*estimator, result.parameter_names, updates);
   } catch (const DataError& error) {
-    failure = error.what();
+    run.failure = error.what();
   } catch (const InvalidArgument& error) {
-    failure = error.what();
+    run.failure = error.what();
   }
-  if (!failure.empty()) {
-    if (tally.failed++ == 0) tally.failure = fmt::format("trial {}: {}", trial + 1, failure);
-    return;
-  }
-  tally.cleaned.push_back(static_cast<double>(source.cleaned()));
-  const Eigen::VectorXd theta = estimator->parameters();
-  tally.theta_sum += theta;
+  if (!run.failure.empty()) return run;
+  run.cleaned = static_cast<double>(source.cleaned());
+  run.theta = estimator->parameters();
   // Scored on the uncorrupted record: with split = 1 the validation rows are the estimation rows,
   // whose corrupted outputs would reward the estimator that fits the outliers.
-  const FitScores s = Score(data, result.validation, source, theta);
-  tally.one_step.push_back(s.one_step);
-  tally.one_step_per_trial[static_cast<std::size_t>(trial)] = s.one_step;
-  if (s.simulation) tally.simulation.push_back(*s.simulation);
-  tally.distance.push_back((theta - result.theta_ls).norm() / result.theta_ls.norm());
-  if (trial < kTimedTrials) {
-    auto fresh = MakeRegressionEstimator(settings, rho);
-    tally.ns.push_back(recorder.TimeReplay(*fresh));
-  }
+  run.scores = Score(data, result.validation, source, run.theta);
+  run.distance = (run.theta - result.theta_ls).norm() / result.theta_ls.norm();
+  return run;
+}
+
+// Every (trial, estimator) run, trials spread over `jobs` threads (each with its own copy of the data
+// source); runs[trial][estimator]. Rethrows the first unexpected exception of a thread.
+std::vector<std::vector<TrialRun>> RunTrials(const io::DataTable& data, const DataSource& source,
+                                             const TrialSettings& settings, CompareResult& result,
+                                             const CompareOptions& options) {
+  const std::size_t estimators = settings.estimators.size();
+  std::vector<std::vector<TrialRun>> runs(static_cast<std::size_t>(options.trials));
+  std::atomic<int> next{0};
+  std::mutex progress_mutex;
+  int done = 0;
+  const int total = options.trials * static_cast<int>(estimators);
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(std::max(1, options.jobs)));
+  auto work = [&](std::size_t worker) {
+    try {
+      const std::unique_ptr<DataSource> local = source.Clone();
+      for (int trial = next++; trial < options.trials; trial = next++) {
+        io::DataTable corrupted = data;
+        const std::vector<int> rows = InjectOutliers(corrupted.values.col(local->output_column()), result.estimation,
+                                                     options.outliers.rate, options.outliers.size * result.sigma,
+                                                     options.outliers.seed + static_cast<std::uint64_t>(trial));
+        std::vector<TrialRun>& row = runs[static_cast<std::size_t>(trial)];
+        for (std::size_t e = 0; e < estimators; ++e) {
+          row.push_back(RunTrial(data, corrupted, *local, settings.estimators[e], settings.fit, result));
+          if (trial >= kTimedTrials) row.back().recording = {};
+          if (options.progress) {
+            const std::lock_guard<std::mutex> lock(progress_mutex);
+            options.progress(++done, total);
+          }
+        }
+        if (trial == 0) result.outliers_per_trial = static_cast<int>(rows.size());
+      }
+    } catch (...) {
+      errors[worker] = std::current_exception();
+      next = options.trials;  // the other threads stop after their current trial
+    }
+  };
+  const int jobs = std::clamp(options.jobs, 1, options.trials);
+  std::vector<std::thread> threads;
+  for (int j = 1; j < jobs; ++j) threads.emplace_back(work, static_cast<std::size_t>(j));
+  work(0);
+  for (std::thread& t : threads) t.join();
+  for (const std::exception_ptr& error : errors)
+    if (error) std::rethrow_exception(error);
+  return runs;
 }
 
 }  // namespace
@@ -289,18 +362,17 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   IDENT_REQUIRE(std::isfinite(result.sigma), "{}: the clean least-squares fit has no residual std (too few samples)",
                 data.source);
 
+  const std::vector<std::vector<TrialRun>> runs = RunTrials(data, source, settings, result, options);
   std::vector<Tally> tallies(estimators.size(), Tally(rho, options.trials));
-  const int total = options.trials * static_cast<int>(estimators.size());
-  int done = 0;
   for (int trial = 0; trial < options.trials; ++trial) {
-    io::DataTable corrupted = data;
-    const std::vector<int> rows =
-        InjectOutliers(corrupted.values.col(source.output_column()), result.estimation, options.outliers.rate,
-                       options.outliers.size * result.sigma, options.outliers.seed + static_cast<std::uint64_t>(trial));
-    result.outliers_per_trial = static_cast<int>(rows.size());
     for (std::size_t e = 0; e < estimators.size(); ++e) {
-      RunTrial(data, corrupted, source, settings.estimators[e], settings.fit, result, trial, tallies[e]);
-      if (options.progress) options.progress(++done, total);
+      const TrialRun& run = runs[static_cast<std::size_t>(trial)][e];
+      tallies[e].Add(run, trial);
+      // Timed one at a time after the runs, so that other threads do not disturb the timing.
+      if (trial < kTimedTrials && run.failure.empty()) {
+        auto fresh = MakeRegressionEstimator(settings.estimators[e], rho);
+        tallies[e].ns.push_back(run.recording.TimeReplay(*fresh));
+      }
     }
   }
   bool any = false;

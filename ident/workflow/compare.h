@@ -54,7 +54,12 @@ struct CompareOptions {
   FitOptions fit;  // split, detrend, outlier decision for regressor cleaning, passes
   OutlierSpec outliers;
   int trials = 1;
-  // Called after each (trial, estimator) run with (done, total).
+  // Threads the trials are spread over (1: this thread only). The result is the same for any number: each
+  // trial is seeded by its index and the trials are summed in order; the timed replays run afterwards,
+  // one at a time.
+  int jobs = 1;
+  // Called after each (trial, estimator) run with (done, total), from the thread that made the run (one
+  // call at a time).
   std::function<void(int, int)> progress;
 };
 

@@ -80,6 +80,7 @@ CompareResult CompareRecord(io::DataTable table, const std::string& name, const 
   options.fit.decision = request.model.Decision();
   options.outliers = request.outliers;
   options.trials = request.trials;
+  options.jobs = request.jobs;
   options.progress = request.progress;
   return Compare(std::move(table), *source, settings, names, options);
 }

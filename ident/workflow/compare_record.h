@@ -21,6 +21,7 @@ struct CompareRequest {
   std::vector<std::string> estimators{"rls", "cauchy", "student:3"};
   OutlierSpec outliers;
   int trials = 1;
+  int jobs = 1;  // threads for the trials (CompareOptions::jobs); the result does not depend on it
   int passes = 1;
   double split = 0.5;
   std::string detrend;  // "mean" | "none"; empty: model.DefaultDetrend()

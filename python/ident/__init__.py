@@ -21,12 +21,12 @@ from ident._ident import (Measurement, GaussianMeasurement, LaplaceMeasurement, 
 from ident.estimators import Estimator, RLS, Cauchy, Student, Huber, CauchyML
 from ident.observers import Observer, KalmanFilter, LcGaussianFilter, GridObserver
 from ident.workflow import FitResult, CompareResult, fit, compare, smooth, logcondens
-from ident import datasets
+from ident import datasets, distributed
 
 __all__ = [
     "StepReport", "StepStatus", "estimator_names", "observer_names",
     "Measurement", "GaussianMeasurement", "LaplaceMeasurement", "ThresholdSensor", "UniformQuantizer",
     "Estimator", "RLS", "Cauchy", "Student", "Huber", "CauchyML",
     "Observer", "KalmanFilter", "LcGaussianFilter", "GridObserver",
-    "FitResult", "CompareResult", "fit", "compare", "smooth", "logcondens", "datasets",
+    "FitResult", "CompareResult", "fit", "compare", "smooth", "logcondens", "datasets", "distributed",
 ]

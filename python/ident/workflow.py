@@ -171,12 +171,13 @@ class CompareResult(pd.DataFrame):
         return plotting.plot_compare(self, *args, **kwargs)
 
 
-def compare(data, estimators=("rls", "cauchy", "student:3"), *, outliers="0.05:20:1", trials=1, passes=1,
+def compare(data, estimators=("rls", "cauchy", "student:3"), *, outliers="0.05:20:1", trials=1, jobs=1, passes=1,
             split=None, detrend=None, output=None, inputs=None, na=None, nb=None, nk=None, regressors=None,
             intercept=None, **options):
     """Compares estimators on a record with injected outliers, scored on its clean rows (``ident compare``).
 
-    ``outliers``: "RATE:SIZE[:SEED]" or "none". Returns a DataFrame, one row per estimator (best one-step
+    ``outliers``: "RATE:SIZE[:SEED]" or "none"; ``jobs``: threads for the trials (the same table for any
+    number; 0: every core). Returns a DataFrame, one row per estimator (best one-step
     fit first): estimator, kind, passes, fit_one_step, fit_simulation, theta_distance (means over the
     trials), their spreads, ns_per_update, failed_trials and one column per parameter; ``.json`` is the
     object of ``ident compare --json``."""
@@ -188,8 +189,9 @@ def compare(data, estimators=("rls", "cauchy", "student:3"), *, outliers="0.05:2
     model.update(options)
     if isinstance(estimators, str):
         estimators = [estimators]
-    text = _ident.compare(columns, values, name, list(estimators), str(outliers), int(trials), int(passes), split,
-                          detrend or "", model)
+    jobs = (os.cpu_count() or 1) if jobs == 0 else int(jobs)
+    text = _ident.compare(columns, values, name, list(estimators), str(outliers), int(trials), jobs, int(passes),
+                          split, detrend or "", model)
     report = json.loads(text)
     rows = []
     for e in report["estimators"]:

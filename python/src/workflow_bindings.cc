@@ -199,8 +199,8 @@ py::dict Predict(const std::vector<std::string>& columns, Eigen::MatrixXd values
 }
 
 std::string Compare(const std::vector<std::string>& columns, Eigen::MatrixXd values, const std::string& name,
-                    const std::vector<std::string>& estimators, const std::string& outliers, int trials, int passes,
-                    double split, const std::string& detrend, const py::dict& kw) {
+                    const std::vector<std::string>& estimators, const std::string& outliers, int trials, int jobs,
+                    int passes, double split, const std::string& detrend, const py::dict& kw) {
   const Options o = ReadOptions(kw);
   IDENT_REQUIRE(o.estimator.estimator == "rls", "compare takes estimators=[...], not estimator=");
   workflow::CompareRequest request;
@@ -209,6 +209,8 @@ std::string Compare(const std::vector<std::string>& columns, Eigen::MatrixXd val
   request.estimators = estimators;
   request.outliers = workflow::OutlierSpec::Parse(outliers);
   request.trials = trials;
+  IDENT_REQUIRE(jobs >= 1 && jobs <= 1024, "jobs = {}; need 1 <= jobs <= 1024", jobs);
+  request.jobs = jobs;
   request.passes = passes;
   request.split = split;
   request.detrend = detrend;
@@ -273,8 +275,8 @@ void RegisterWorkflow(py::module_& m) {
   m.def("predict", &Predict, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("split"),
         py::arg("detrend"), py::arg("theta"), py::arg("options"));
   m.def("compare", &Compare, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("estimators"),
-        py::arg("outliers"), py::arg("trials"), py::arg("passes"), py::arg("split"), py::arg("detrend"),
-        py::arg("options"));
+        py::arg("outliers"), py::arg("trials"), py::arg("jobs"), py::arg("passes"), py::arg("split"),
+        py::arg("detrend"), py::arg("options"));
   m.def("smooth", &Smooth, py::arg("model_json"), py::arg("z"));
   m.def("logcondens", &LogConcave, py::arg("samples"));
   m.def(

@@ -219,6 +219,19 @@ TEST(CompareCommand, RepeatedRunsAreIdenticalApartFromTiming) {
   EXPECT_EQ(a, b);
 }
 
+TEST(CompareCommand, AnyNumberOfThreadsGivesTheSameFigures) {
+  // Trials on 1, 2 and 5 threads (more threads than cores, so that they interleave), recursive and batch
+  // estimators among them: the figures are summed in trial order whatever thread made them.
+  const std::string args = "gas_furnace --estimators rls,cauchy,student:3,huber --trials 9 --outliers 0.1:50:4";
+  nlohmann::json one = CompareJson(args + " --jobs 1");
+  for (const char* jobs : {" --jobs 2", " --jobs 5"}) {
+    nlohmann::json many = CompareJson(args + jobs);
+    for (auto* j : {&one, &many})
+      for (auto& e : (*j)["estimators"]) e.erase("ns_per_update");
+    EXPECT_EQ(one, many) << jobs;
+  }
+}
+
 TEST(CompareCommand, TableAndCsv) {
   const CliResult t = RunCli("compare dryer --estimators rls");
   ASSERT_EQ(t.exit_code, 0) << t.err;
