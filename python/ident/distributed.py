@@ -93,7 +93,8 @@ def _run(function, batches, extra, client, retries):
     with _Cluster(client) as c:
         # The batches travel inside the tasks (not scattered onto one worker): a task lost with its worker
         # is rerun elsewhere from what the scheduler holds, so nothing is lost.
-        futures = c.map(function, batches, [extra] * len(batches), retries=retries, pure=False)
+        # One submission per batch: the first tasks start while later batches are still on their way.
+        futures = [c.submit(function, batch, extra, retries=retries, pure=False) for batch in batches]
         return c.gather(futures)
 
 
@@ -107,6 +108,7 @@ def fit_many(records, spec, client=None, *, key=None, batch_size=None, retries=3
     ``error`` (the message; empty when ok). ``retries``: how often a task lost with its worker is rerun.
     """
     spec = dict(spec)
+    spec.setdefault("residual_lags", 0)  # the table has no residual analysis: do not compute one
     items = _records(records, key)
     if not items:
         return pd.DataFrame(columns=_FIT_COLUMNS)
