@@ -27,6 +27,7 @@ int RunCommandLine(int argc, char** argv) {
   AddFitCommand(app);
   AddDatasetsCommand(app);
   AddCompareCommand(app);
+  AddOrdersCommand(app);
   AddMemsCommand(app);
   AddLogcondensCommand(app);
   AddSmoothCommand(app);

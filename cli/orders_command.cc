@@ -1,0 +1,123 @@
+// ident orders DATA --output y --input u [--na 1:10] [--nb 1:10] [--nk 0:5] [--criterion aic|bic|fpe|mdl|validation]
+//              [--split 0.5] [--detrend mean|none] [--top N] [--json]
+// ARX order and delay selection (ident/workflow/order_selection.h): every structure of the grid fitted by
+// least squares on the same estimation samples, ranked by the criterion.
+#include <iostream>
+#include <memory>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "cli/commands.h"
+#include "cli/estimator_options.h"
+#include "common/error.h"
+#include "ident/io/csv.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/order_selection.h"
+
+namespace ident::cli {
+namespace {
+
+struct OrdersOptions {
+  std::string data, output, input;
+  std::string na = "1:5", nb = "1:5", nk = "1:5";
+  std::string criterion = "aic";
+  double split = 0.5;
+  std::string detrend = "mean";
+  int top = 20;
+  bool json = false;
+};
+
+nlohmann::ordered_json ScoreJson(const workflow::StructureScore& s) {
+  nlohmann::ordered_json j;
+  j["na"] = s.na;
+  j["nb"] = s.nb;
+  j["nk"] = s.nk;
+  j["n_parameters"] = s.n_parameters;
+  j["loss"] = s.loss;
+  j["aic"] = s.aic;
+  j["bic"] = s.bic;
+  j["fpe"] = s.fpe;
+  j["mdl"] = s.mdl;
+  j["validation_loss"] = s.validation_loss ? nlohmann::ordered_json(*s.validation_loss) : nlohmann::ordered_json();
+  j["theta"] = std::vector<double>(s.theta.data(), s.theta.data() + s.theta.size());
+  return j;
+}
+
+void RunOrders(const OrdersOptions& o) {
+  const std::string path = ResolveDataPath(o.data);
+  workflow::OrderGrid grid;
+  std::tie(grid.na_min, grid.na_max) = workflow::OrderGrid::ParseRange(o.na, "--na");
+  std::tie(grid.nb_min, grid.nb_max) = workflow::OrderGrid::ParseRange(o.nb, "--nb");
+  std::tie(grid.nk_min, grid.nk_max) = workflow::OrderGrid::ParseRange(o.nk, "--nk");
+  IDENT_REQUIRE(grid.na_min >= 0 && grid.nb_min >= 1 && grid.nk_min >= 0,
+                "orders: need na >= 0, nb >= 1 and nk >= 0 (got --na {} --nb {} --nk {})", o.na, o.nb, o.nk);
+  io::DataTable table = io::ReadCsv(path);
+  // The largest structure's source: it reads the output and the input, and splits and detrends them.
+  const models::ArxStructure largest(grid.na_max, {grid.nb_max}, {grid.nk_max});
+  std::unique_ptr<workflow::DataSource> source =
+      workflow::MakeArxSource(table.names, o.output, {o.input}, largest, path);
+  workflow::FitOptions options;
+  options.split = o.split;
+  options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
+  const auto [estimation, validation] = workflow::PrepareData(table, *source, options);
+  const workflow::OrderSelection r =
+      workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
+                             table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion);
+  if (o.json) {
+    nlohmann::ordered_json j;
+    j["data"] = path;
+    j["criterion"] = r.criterion;
+    j["samples"] = r.samples;
+    j["validation_samples"] = r.validation_samples;
+    j["best"] = ScoreJson(r.structures.front());
+    auto& list = j["structures"] = nlohmann::ordered_json::array();
+    for (const auto& s : r.structures) list.push_back(ScoreJson(s));
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  fmt::print("{}: {} ARX structures (na {}, nb {}, nk {}) fitted by least squares on the same {} samples{}\n", path,
+             r.structures.size(), o.na, o.nb, o.nk, r.samples,
+             r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
+  fmt::print("ranked by {} (lower is better)\n\n", r.criterion);
+  fmt::print("  {:>3} {:>3} {:>3} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk", "d", "loss", "AIC",
+             "BIC", "FPE", "MDL", r.validation_samples ? fmt::format(" {:>12}", "validation") : "");
+  const std::size_t shown = std::min<std::size_t>(r.structures.size(), static_cast<std::size_t>(std::max(1, o.top)));
+  for (std::size_t i = 0; i < shown; ++i) {
+    const auto& s = r.structures[i];
+    fmt::print("  {:>3} {:>3} {:>3} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g}{}\n", s.na, s.nb, s.nk,
+               s.n_parameters, s.loss, s.aic, s.bic, s.fpe, s.mdl,
+               s.validation_loss ? fmt::format(" {:>12.6g}", *s.validation_loss) : "");
+  }
+  if (shown < r.structures.size()) fmt::print("  … {} more (--top, --json)\n", r.structures.size() - shown);
+  const auto& best = r.structures.front();
+  fmt::print("\nbest by {}: ARX({},{},{})  (ident fit {} --output {} --input {} --na {} --nb {} --nk {})\n",
+             r.criterion, best.na, best.nb, best.nk, o.data, o.output, o.input, best.na, best.nb, best.nk);
+}
+
+}  // namespace
+
+void AddOrdersCommand(CLI::App& app) {
+  auto o = std::make_shared<OrdersOptions>();
+  CLI::App* cmd =
+      app.add_subcommand("orders", "Select ARX orders and delay: loss and AIC/BIC/FPE/MDL of every structure");
+  cmd->add_option("DATA", o->data, "CSV file with a header, or a bundled dataset's name (e.g. dryer)")->required();
+  cmd->add_option("--output", o->output, "Output column y")->required();
+  cmd->add_option("--input", o->input, "Input column u (one input)")->required();
+  cmd->add_option("--na", o->na, "Range of na, A:B or N")->capture_default_str();
+  cmd->add_option("--nb", o->nb, "Range of nb (>= 1), A:B or N")->capture_default_str();
+  cmd->add_option("--nk", o->nk, "Range of the delay nk, A:B or N")->capture_default_str();
+  cmd->add_option("--criterion", o->criterion, "Rank by aic, bic, fpe, mdl or validation (loss on the validation part)")
+      ->check(CLI::IsMember({"aic", "bic", "fpe", "mdl", "validation"}))
+      ->capture_default_str();
+  cmd->add_option("--split", o->split, "Fraction of rows used for estimation; the rest validate")
+      ->capture_default_str();
+  cmd->add_option("--detrend", o->detrend, "Subtract the estimation-part means (mean) or not (none)")
+      ->check(CLI::IsMember({"mean", "none"}))
+      ->capture_default_str();
+  cmd->add_option("--top", o->top, "Rows of the table to print")->capture_default_str();
+  cmd->add_flag("--json", o->json, "Print one JSON object {criterion, samples, best, structures: [...]}");
+  cmd->callback([o] { RunOrders(*o); });
+}
+
+}  // namespace ident::cli

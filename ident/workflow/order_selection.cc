@@ -1,0 +1,165 @@
+#include "ident/workflow/order_selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+#include <Eigen/Cholesky>
+
+#include "common/error.h"
+
+namespace ident::workflow {
+namespace {
+
+// The lag layout of w(t): index 0 is y(t); 1 … na_max are −y(t−1) … −y(t−na_max); then u(t−k) for
+// k = nk_min … nk_max + nb_max − 1.
+struct Layout {
+  int na_max, nk_min, u_lags;  // u_lags = nk_max + nb_max − nk_min
+  int size() const { return 1 + na_max + u_lags; }
+  int y_lag(int i) const { return i; }                          // −y(t−i), i ≥ 1
+  int u_lag(int k) const { return 1 + na_max + (k - nk_min); }  // u(t−k)
+  int max_lag() const { return std::max(na_max, nk_min + u_lags - 1); }
+};
+
+// w(t) for row r of the segment (r ≥ first + max_lag); false if any entry is not finite.
+bool Lagged(const io::DataTable& data, int r, int output, int input, const Layout& l, Eigen::VectorXd& w) {
+  w(0) = data.values(r, output);
+  for (int i = 1; i <= l.na_max; ++i) w(l.y_lag(i)) = -data.values(r - i, output);
+  for (int k = l.nk_min; k < l.nk_min + l.u_lags; ++k) w(l.u_lag(k)) = data.values(r - k, input);
+  return w.allFinite();
+}
+
+std::vector<int> StructureIndices(const Layout& l, int na, int nb, int nk) {
+  std::vector<int> idx;
+  for (int i = 1; i <= na; ++i) idx.push_back(l.y_lag(i));
+  for (int k = nk; k < nk + nb; ++k) idx.push_back(l.u_lag(k));
+  return idx;
+}
+
+}  // namespace
+
+std::pair<int, int> OrderGrid::ParseRange(const std::string& text, const std::string& option) {
+  const auto colon = text.find(':');
+  auto number = [&](const std::string& s) {
+    std::size_t used = 0;
+    int v = -1;
+    try {
+      v = std::stoi(s, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    IDENT_REQUIRE(!s.empty() && used == s.size(), "{} '{}': need N or A:B with whole numbers", option, text);
+    return v;
+  };
+  if (colon == std::string::npos) {
+    const int v = number(text);
+    return {v, v};
+  }
+  const int a = number(text.substr(0, colon)), b = number(text.substr(colon + 1));
+  IDENT_REQUIRE(a <= b, "{} '{}': the range is empty (A > B)", option, text);
+  return {a, b};
+}
+
+double CriterionValue(const StructureScore& s, const std::string& criterion) {
+  if (criterion == "aic") return s.aic;
+  if (criterion == "bic") return s.bic;
+  if (criterion == "fpe") return s.fpe;
+  if (criterion == "mdl") return s.mdl;
+  return s.validation_loss.value_or(std::numeric_limits<double>::infinity());
+}
+
+OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, Segment validation, int output,
+                            int input, const OrderGrid& grid, const std::string& criterion) {
+  IDENT_REQUIRE(
+      criterion == "aic" || criterion == "bic" || criterion == "fpe" || criterion == "mdl" || criterion == "validation",
+      "--criterion '{}': need aic, bic, fpe, mdl or validation", criterion);
+  IDENT_REQUIRE(grid.na_min >= 0 && grid.nb_min >= 1 && grid.nk_min >= 0,
+                "orders: need na >= 0, nb >= 1 and nk >= 0 (got na {}:{}, nb {}:{}, nk {}:{})", grid.na_min,
+                grid.na_max, grid.nb_min, grid.nb_max, grid.nk_min, grid.nk_max);
+  IDENT_REQUIRE(grid.na_max <= 100 && grid.nb_max <= 100 && grid.nk_max <= 1000,
+                "orders: at most na 100, nb 100, nk 1000 (got {}, {}, {})", grid.na_max, grid.nb_max, grid.nk_max);
+  IDENT_REQUIRE(criterion != "validation" || validation.count > 0,
+                "--criterion validation needs a validation part (--split below 1)");
+  const Layout layout{grid.na_max, grid.nk_min, grid.nk_max + grid.nb_max - grid.nk_min};
+  const int m = layout.size();
+  const int t0 = layout.max_lag();
+
+  // G over the estimation samples.
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd w(m);
+  OrderSelection result;
+  result.criterion = criterion;
+  for (int r = estimation.first + t0; r < estimation.first + estimation.count; ++r) {
+    if (!Lagged(prepared, r, output, input, layout, w)) continue;
+    G.selfadjointView<Eigen::Lower>().rankUpdate(w);
+    ++result.samples;
+  }
+  G = G.selfadjointView<Eigen::Lower>();
+  // The validation part's Gram matrix H: a structure's residual sum of squares there is
+  // H_yy − 2θ'H_zy + θ'H_zz θ, whatever the number of samples.
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
+  for (int r = validation.first + t0; r < validation.first + validation.count; ++r) {
+    if (!Lagged(prepared, r, output, input, layout, w)) continue;
+    H.selfadjointView<Eigen::Lower>().rankUpdate(w);
+    ++result.validation_samples;
+  }
+  H = H.selfadjointView<Eigen::Lower>();
+
+  const double n = result.samples;
+  const int d_max = grid.na_max + grid.nb_max;
+  IDENT_REQUIRE(result.samples > d_max + 1,
+                "{}: {} usable estimation samples are too few for up to {} parameters (na {} + nb {})", prepared.source,
+                result.samples, d_max, grid.na_max, grid.nb_max);
+  for (int nk = grid.nk_min; nk <= grid.nk_max; ++nk) {
+    for (int na = grid.na_min; na <= grid.na_max; ++na) {
+      for (int nb = grid.nb_min; nb <= grid.nb_max; ++nb) {
+        const std::vector<int> idx = StructureIndices(layout, na, nb, nk);
+        const int d = static_cast<int>(idx.size());
+        Eigen::MatrixXd Gzz(d, d);
+        Eigen::VectorXd Gzy(d);
+        for (int i = 0; i < d; ++i) {
+          Gzy(i) = G(idx[i], 0);
+          for (int j = 0; j < d; ++j) Gzz(i, j) = G(idx[i], idx[j]);
+        }
+        const Eigen::LLT<Eigen::MatrixXd> llt(Gzz);
+        IDENT_REQUIRE(llt.info() == Eigen::Success && llt.matrixL().toDenseMatrix().diagonal().minCoeff() >
+                                                          1e-10 * std::sqrt(Gzz.diagonal().maxCoeff()),
+                      "{}: ARX({},{},{}) is not determined by the data (its regressors are collinear)", prepared.source,
+                      na, nb, nk);
+        StructureScore s;
+        s.na = na;
+        s.nb = nb;
+        s.nk = nk;
+        s.n_parameters = d;
+        s.theta = llt.solve(Gzy);
+        s.loss = std::max(0.0, (G(0, 0) - Gzy.dot(s.theta)) / n);
+        const double log_v = std::log(s.loss);
+        s.aic = n * log_v + 2.0 * d;
+        s.bic = n * log_v + d * std::log(n);
+        s.fpe = s.loss * (1 + d / n) / (1 - d / n);
+        s.mdl = s.loss * (1 + d * std::log(n) / n);
+        if (result.validation_samples > 0) {
+          Eigen::MatrixXd Hzz(d, d);
+          Eigen::VectorXd Hzy(d);
+          for (int i = 0; i < d; ++i) {
+            Hzy(i) = H(idx[i], 0);
+            for (int j = 0; j < d; ++j) Hzz(i, j) = H(idx[i], idx[j]);
+          }
+          const double sum = H(0, 0) - 2 * s.theta.dot(Hzy) + s.theta.dot(Hzz * s.theta);
+          s.validation_loss = std::max(0.0, sum) / result.validation_samples;
+        }
+        result.structures.push_back(std::move(s));
+      }
+    }
+  }
+  std::stable_sort(result.structures.begin(), result.structures.end(),
+                   [&criterion](const StructureScore& a, const StructureScore& b) {
+                     const double x = CriterionValue(a, criterion), y = CriterionValue(b, criterion);
+                     if (x != y) return x < y;
+                     return a.n_parameters < b.n_parameters;  // ties: the smaller model
+                   });
+  return result;
+}
+
+}  // namespace ident::workflow
