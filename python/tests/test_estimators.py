@@ -139,3 +139,17 @@ def test_numpy_arrays_of_other_layouts_are_accepted():
     a.update_many(Y, Z)
     b.update_many(list(Y), np.asfortranarray(Z))  # a list and a column-major array are converted
     np.testing.assert_array_equal(a.parameters, b.parameters)
+
+
+def test_further_passes_move_the_recursive_estimate_to_the_batch_optimum():
+    Y, Z, _ = regression(n=300, rho=2, noise=lambda rng, n: 0.2 * rng.standard_cauchy(n))
+    est = ident.Cauchy(2)
+    est.update_many(Y, Z)
+    est.finish_startup()
+    one_pass = np.linalg.norm(est.parameters - cauchy_ml(Y, Z))
+    for _ in range(3):
+        assert est.begin_pass()
+        est.update_many(Y, Z)
+    assert np.linalg.norm(est.parameters - cauchy_ml(Y, Z)) <= one_pass + 1e-12
+    assert not ident.RLS(2).begin_pass()  # least squares reaches its optimum in one pass
+    assert set(ident.estimator_names()) >= {"rls", "cauchy", "student", "huber", "cauchy-ml"}

@@ -87,3 +87,19 @@ def test_bad_observer_input_raises_value_error():
         kf.update_many(np.zeros(3))
     with pytest.raises(ValueError, match="no option"):
         ident.GridObserver(A, Q, ident.GaussianMeasurement(C, R), X0, P0, B=B, colour=3)
+
+
+def test_interval_readings_keep_the_state_inside_their_intervals():
+    Y, U = simulate(n=60)
+    step = 0.05
+    quantised = step * np.round((Y - np.sqrt(R) * 0) / step)
+    q = ident.LcGaussianFilter(A, Q, ident.UniformQuantizer(C, step), X0, P0, B=B)
+    assert (q.update_many(quantised, U) == int(ident.StepStatus.UPDATED)).all()
+    assert abs(C @ q.mean - quantised[-1]) <= step  # the reading's interval, widened by one prior step
+    sensor = ident.ThresholdSensor(C, 1.0)
+    assert sensor.name and sensor.num_states == 2
+    readings = np.where(np.abs(Y) >= 1.0, np.sign(Y), 0.0)
+    grid = ident.Observer("grid", A, B, Q, sensor, X0, P0, {"points": "48"})
+    assert (grid.update_many(readings, U) == int(ident.StepStatus.UPDATED)).all()
+    assert np.isfinite(grid.mean).all() and np.linalg.eigvalsh(grid.covariance).min() > 0
+    assert "grid" in ident.observer_names() and grid.name == "grid"
