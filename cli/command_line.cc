@@ -28,6 +28,7 @@ int RunCommandLine(int argc, char** argv) {
   AddDatasetsCommand(app);
   AddCompareCommand(app);
   AddOrdersCommand(app);
+  AddPredictCommand(app);
   AddMemsCommand(app);
   AddLogcondensCommand(app);
   AddSmoothCommand(app);

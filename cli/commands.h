@@ -14,6 +14,7 @@ void AddMemsCommand(CLI::App& app);        // ident mems       (mems_command.cc)
 void AddLogcondensCommand(CLI::App& app);  // ident logcondens (logcondens_command.cc)
 void AddSmoothCommand(CLI::App& app);      // ident smooth     (smooth_command.cc)
 void AddOrdersCommand(CLI::App& app);      // ident orders     (orders_command.cc)
+void AddPredictCommand(CLI::App& app);     // ident predict    (predict_command.cc)
 
 // Exit codes of every subcommand.
 inline constexpr int kExitOk = 0;

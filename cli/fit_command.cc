@@ -21,6 +21,7 @@
 #include "ident/workflow/fit.h"
 #include "ident/workflow/fit_record.h"
 #include "ident/workflow/residual_analysis.h"
+#include "ident/workflow/saved_model.h"
 
 namespace ident::cli {
 namespace {
@@ -39,7 +40,34 @@ struct FitCommandOptions {
   bool json = false;
   std::string trace;
   std::string plot;
+  std::string save;
 };
+
+// The model file of --save (ident/workflow/saved_model.h).
+workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow::FitRequest& request,
+                                 const std::string& path, const AnyRegressionEstimator& estimator) {
+  workflow::SavedModel m;
+  m.model = request.model;
+  m.structure_name = fit.result.structure;
+  m.parameter_names = fit.result.parameter_names;
+  m.theta = fit.result.theta;
+  m.theta_std = fit.result.theta_std;
+  m.covariance = estimator.covariance();
+  m.noise_std = fit.result.noise_std;
+  m.detrend = request.ResolvedDetrend();
+  for (const auto& [column, mean] : fit.detrend_means)
+    m.detrend_means.emplace_back(fit.prepared.names[static_cast<std::size_t>(column)], mean);
+  m.estimator = fit.result.estimator;
+  m.kind = fit.result.kind;
+  m.passes = fit.result.passes;
+  m.data_path = path;
+  m.data_rows = fit.prepared.num_rows();
+  m.data_checksum = workflow::FileChecksum(path);
+  m.split = request.split;
+  m.validation = fit.validation;
+  m.validation_scores = fit.result.validation;
+  return m;
+}
 
 void PrintResiduals(const workflow::ResidualAnalysis& a) {
   auto worst = [](const std::vector<double>& r, int first_lag) {
@@ -112,7 +140,7 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
 
 void RunFit(const FitCommandOptions& o) {
   const std::string path = ResolveDataPath(o.data);
-  CheckOutputPaths({{"--trace", o.trace}, {"--plot", o.plot}},
+  CheckOutputPaths({{"--trace", o.trace}, {"--plot", o.plot}, {"--save", o.save}},
                    {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing};
@@ -133,21 +161,22 @@ void RunFit(const FitCommandOptions& o) {
   // succeeded (cli/output_file.h): a fit that fails, e.g. on a bad row late in a streamed record, leaves
   // every existing file as it is. The report is printed after the renames, so a failed write leaves
   // stdout empty.
-  std::optional<OutputFile> trace, plot;
+  std::optional<OutputFile> trace, plot, save;
   if (!o.trace.empty()) {
     trace.emplace(o.trace, "--trace file");
     plan.options.trace = trace->stream();
   }
   if (!o.plot.empty()) plot.emplace(o.plot, "--plot file");
+  if (!o.save.empty()) save.emplace(o.save, "--save file");
   auto commit_outputs = [&] {
-    for (std::optional<OutputFile>* f : {&trace, &plot})
+    for (std::optional<OutputFile>* f : {&trace, &plot, &save})
       if (*f) (*f)->Close();
-    for (std::optional<OutputFile>* f : {&trace, &plot})
+    for (std::optional<OutputFile>* f : {&trace, &plot, &save})
       if (*f) (*f)->Commit();
   };
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
-  if (o.plot.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
+  if (o.plot.empty() && o.save.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
     if (plan.scaled_prior) plan.UseScaledPrior(workflow::CsvEstimationMeanSquares(path, csv, *source, plan.options));
     const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
     commit_outputs();
@@ -170,6 +199,7 @@ void RunFit(const FitCommandOptions& o) {
   }
   const workflow::RecordFit fit = workflow::FitTable(io::ReadCsv(path, csv), *source, plan, kResidualLags);
   if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
+  if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
   commit_outputs();
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   if (o.json) {
@@ -202,6 +232,9 @@ void AddFitCommand(CLI::App& app) {
   fit->add_option("--plot", o->plot,
                   "Draw measured vs one-step and simulated output (validation) and the parameter trajectories "
                   "into FILE.svg or FILE.png (needs gnuplot)");
+  fit->add_option("--save", o->save,
+                  "Write the fitted model (structure, theta, covariance, detrending means, ...) as JSON for "
+                  "ident predict");
   fit->add_flag("--json", o->json, "Print one JSON object instead of the report");
   fit->callback([o] {
     if (o->detrend.empty()) o->detrend = o->structure.intercept ? "none" : "mean";

@@ -68,13 +68,17 @@ std::string UnusableResult(const AnyRegressionEstimator& estimator, const std::v
   return "";
 }
 
-std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options) {
+std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options,
+                                        std::vector<std::pair<int, double>>* means) {
   const auto [estimation, validation] = Split(data.num_rows(), source, options, data.source);
+  if (means) means->clear();
   if (options.detrend == Detrend::kMean) {
     for (int c : source.used_columns()) {
       RunningMean mean;
       for (int r = 0; r < estimation.count; ++r) mean.Add(data.values(r, c));
-      data.values.col(c).array() -= mean.Get(data.source, data.names[c]);
+      const double m = mean.Get(data.source, data.names[c]);
+      data.values.col(c).array() -= m;
+      if (means) means->emplace_back(c, m);
     }
   }
   return {estimation, validation};

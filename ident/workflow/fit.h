@@ -84,7 +84,9 @@ struct Segment {
 
 // Splits and detrends `data` in place as described above and returns (estimation, validation).
 // Throws InvalidArgument if split ∉ (0, 1] or a part is too short for the structure.
-std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options);
+// `means`, if given, receives (column, subtracted mean) of every detrended column.
+std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& source, const FitOptions& options,
+                                        std::vector<std::pair<int, double>>* means = nullptr);
 
 // Runs the estimator over the segment (one Update per regression), writing trace rows if asked.
 // Each measured output is then stored for later regressors through source.PushCheckedOutput with

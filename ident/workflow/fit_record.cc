@@ -116,7 +116,7 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags) {
   RecordFit fit;
   fit.prepared = std::move(table);
-  std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options);
+  std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options, &fit.detrend_means);
   if (plan.scaled_prior) plan.UseScaledPrior(EstimationMeanSquares(fit.prepared, fit.estimation, source));
   fit.result = FitPrepared(fit.prepared, fit.estimation, fit.validation, source, *plan.estimator, plan.options);
   if (residual_lags > 0 && fit.validation.count - source.first_regression_index() > residual_lags + 1)

@@ -59,6 +59,7 @@ struct RecordFit {
   FitResult result;
   io::DataTable prepared;  // the split and detrended table
   Segment estimation, validation;
+  std::vector<std::pair<int, double>> detrend_means;  // (column of prepared, mean subtracted); empty: none
   // When residual_lags > 0 and the validation part has more than residual_lags + 1 samples.
   std::optional<ResidualAnalysis> residuals;
 };

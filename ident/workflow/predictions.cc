@@ -37,4 +37,30 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
   return p;
 }
 
+std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, const models::ArxStructure& arx,
+                                  int output_column, const std::vector<int>& input_columns,
+                                  const Eigen::VectorXd& theta, int k) {
+  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  const int t0 = arx.first_regression_index();
+  const int first = segment.first, end = segment.first + segment.count;
+  std::vector<double> out(static_cast<std::size_t>(segment.count), kNone);
+  std::vector<double> own(static_cast<std::size_t>(k));  // ỹ(t−k+1) … ỹ(t)
+  Eigen::VectorXd z(arx.num_parameters());
+  auto y_at = [&](int t, int j) {  // ỹ(j) while predicting ŷ(t)
+    return j <= t - k || j < first + t0 ? data.values(j, output_column)
+                                        : own[static_cast<std::size_t>(j - (t - k + 1))];
+  };
+  for (int t = first + t0; t < end; ++t) {
+    for (int j = std::max(t - k + 1, first + t0); j <= t; ++j) {
+      int i = 0;
+      for (int lag = 1; lag <= arx.na(); ++lag) z(i++) = -y_at(t, j - lag);
+      for (std::size_t in = 0; in < input_columns.size(); ++in)
+        for (int l = 0; l < arx.nb()[in]; ++l) z(i++) = data.values(j - arx.nk()[in] - l, input_columns[in]);
+      own[static_cast<std::size_t>(j - (t - k + 1))] = theta.dot(z);
+    }
+    out[static_cast<std::size_t>(t - first)] = own[static_cast<std::size_t>(k - 1)];
+  }
+  return out;
+}
+
 }  // namespace ident::workflow

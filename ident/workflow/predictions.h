@@ -10,6 +10,7 @@
 #include "ident/io/csv.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"
+#include "models/arx.h"
 
 namespace ident::workflow {
 
@@ -23,5 +24,12 @@ struct SegmentPredictions {
 // `source` is Reset() before each walk.
 SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, DataSource& source,
                                   const Eigen::VectorXd& theta);
+
+// k-step-ahead predictions ŷ(t | t−k) of an ARX model over a segment: the outputs after t−k are the
+// model's own predictions, those up to t−k (and the segment's first t0, which have no regressor) measured.
+// k = 1 is the one-step prediction of PredictSegment. NaN where the segment has no regression.
+std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, const models::ArxStructure& arx,
+                                  int output_column, const std::vector<int>& input_columns,
+                                  const Eigen::VectorXd& theta, int k);
 
 }  // namespace ident::workflow

@@ -1,0 +1,216 @@
+#include "ident/workflow/saved_model.h"
+
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+
+#include <fmt/format.h>
+
+#include "common/error.h"
+
+namespace ident::workflow {
+namespace {
+
+using Json = nlohmann::json;
+using OrderedJson = nlohmann::ordered_json;
+
+OrderedJson ModelNumber(double v) { return std::isfinite(v) ? OrderedJson(v) : OrderedJson(); }
+
+OrderedJson Vector(const Eigen::VectorXd& v) {
+  OrderedJson a = OrderedJson::array();
+  for (double x : v) a.push_back(ModelNumber(x));
+  return a;
+}
+
+// The value at `key` of `j`, or a DataError naming the file and the key.
+const Json& At(const Json& j, const std::string& key, const std::string& source) {
+  if (!j.is_object() || !j.contains(key))
+    throw DataError(fmt::format("{}: no key \"{}\" (not an ident model?)", source, key));
+  return j.at(key);
+}
+
+template <class T>
+T Get(const Json& j, const std::string& key, const std::string& source) {
+  try {
+    return At(j, key, source).get<T>();
+  } catch (const Json::exception&) {
+    throw DataError(fmt::format("{}: \"{}\" has the wrong type", source, key));
+  }
+}
+
+double GetNumber(const Json& j, const std::string& key, const std::string& source) {
+  const Json& v = At(j, key, source);
+  if (v.is_null()) return std::nan("");
+  if (!v.is_number()) throw DataError(fmt::format("{}: \"{}\" is not a number", source, key));
+  return v.get<double>();
+}
+
+Eigen::VectorXd ToVector(const Json& a, const std::string& key, const std::string& source) {
+  if (!a.is_array()) throw DataError(fmt::format("{}: \"{}\" is not an array", source, key));
+  Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!a[i].is_number() && !a[i].is_null())
+      throw DataError(fmt::format("{}: \"{}\"[{}] is not a number", source, key, i));
+    v(static_cast<Eigen::Index>(i)) = a[i].is_null() ? std::nan("") : a[i].get<double>();
+  }
+  return v;
+}
+
+Eigen::VectorXd GetVector(const Json& j, const std::string& key, const std::string& source) {
+  return ToVector(At(j, key, source), key, source);
+}
+
+Eigen::VectorXd GetVector(const Json& rows, std::size_t index, const std::string& source) {
+  return ToVector(rows.at(index), fmt::format("covariance[{}]", index), source);
+}
+
+}  // namespace
+
+OrderedJson SavedModel::ToJson() const {
+  OrderedJson j;
+  j["format"] = "ident-model";
+  j["version"] = 1;
+  OrderedJson s;
+  if (!model.regressors.empty()) {
+    s["kind"] = "static";
+    s["output"] = model.output;
+    s["regressors"] = model.regressors;
+    s["intercept"] = model.intercept;
+  } else {
+    s["kind"] = "arx";
+    s["output"] = model.output;
+    s["inputs"] = model.inputs;
+    s["na"] = model.na;
+    s["nb"] = model.nb;
+    s["nk"] = model.nk;
+  }
+  j["structure"] = s;
+  j["structure_name"] = structure_name;
+  j["parameter_names"] = parameter_names;
+  j["theta"] = Vector(theta);
+  OrderedJson cov = OrderedJson::array();
+  for (Eigen::Index r = 0; r < covariance.rows(); ++r) cov.push_back(Vector(covariance.row(r).transpose()));
+  j["covariance"] = cov;
+  j["theta_std"] = Vector(theta_std);
+  j["noise_std"] = ModelNumber(noise_std);
+  j["detrend"] = detrend;
+  OrderedJson means = OrderedJson::object();
+  for (const auto& [name, mean] : detrend_means) means[name] = mean;
+  j["detrend_means"] = means;
+  j["estimator"] = {{"name", estimator}, {"kind", kind}, {"passes", passes}};
+  j["data"] = {{"path", data_path}, {"rows", data_rows}, {"fnv1a64", data_checksum}};
+  j["split"] = split;
+  j["validation_rows"] = {validation.first + 1, validation.first + validation.count};
+  j["fit_percent"] = {
+      {"one_step", ModelNumber(validation_scores.one_step)},
+      {"simulation", validation_scores.simulation ? ModelNumber(*validation_scores.simulation) : nullptr}};
+  j["rms"] = {
+      {"one_step", ModelNumber(validation_scores.rms_one_step)},
+      {"simulation", validation_scores.rms_simulation ? ModelNumber(*validation_scores.rms_simulation) : nullptr}};
+  return j;
+}
+
+SavedModel SavedModel::FromJson(const Json& j, const std::string& source) {
+  if (!j.is_object() || j.value("format", "") != "ident-model")
+    throw DataError(fmt::format(
+        "{}: not an ident model (no \"format\": \"ident-model\"; write one with ident fit --save)", source));
+  if (Get<int>(j, "version", source) != 1)
+    throw DataError(fmt::format("{}: model version {} is not supported (this program reads version 1)", source,
+                                Get<int>(j, "version", source)));
+  SavedModel m;
+  const Json& s = At(j, "structure", source);
+  const std::string kind = Get<std::string>(s, "kind", source);
+  m.model.output = Get<std::string>(s, "output", source);
+  if (kind == "static") {
+    m.model.regressors = Get<std::vector<std::string>>(s, "regressors", source);
+    m.model.intercept = Get<bool>(s, "intercept", source);
+  } else if (kind == "arx") {
+    m.model.inputs = Get<std::vector<std::string>>(s, "inputs", source);
+    m.model.na = Get<int>(s, "na", source);
+    m.model.nb = Get<std::vector<int>>(s, "nb", source);
+    m.model.nk = Get<std::vector<int>>(s, "nk", source);
+  } else {
+    throw DataError(fmt::format("{}: structure kind \"{}\"; need arx or static", source, kind));
+  }
+  m.structure_name = Get<std::string>(j, "structure_name", source);
+  m.parameter_names = Get<std::vector<std::string>>(j, "parameter_names", source);
+  m.theta = GetVector(j, "theta", source);
+  if (!m.theta.allFinite()) throw DataError(fmt::format("{}: \"theta\" has entries that are not finite", source));
+  m.theta_std = GetVector(j, "theta_std", source);
+  const Json& cov = At(j, "covariance", source);
+  const auto rho = m.theta.size();
+  if (!cov.is_array() || static_cast<Eigen::Index>(cov.size()) != rho)
+    throw DataError(fmt::format("{}: \"covariance\" needs {} rows of {} numbers", source, rho, rho));
+  m.covariance.resize(rho, rho);
+  for (Eigen::Index r = 0; r < rho; ++r) {
+    const Eigen::VectorXd row = GetVector(cov, static_cast<std::size_t>(r), source);
+    if (row.size() != rho)
+      throw DataError(fmt::format("{}: \"covariance\" row {} has {} numbers; need {}", source, r + 1, row.size(), rho));
+    m.covariance.row(r) = row.transpose();
+  }
+  m.noise_std = GetNumber(j, "noise_std", source);
+  m.detrend = Get<std::string>(j, "detrend", source);
+  if (m.detrend != "mean" && m.detrend != "none")
+    throw DataError(fmt::format("{}: \"detrend\" is \"{}\"; need mean or none", source, m.detrend));
+  const Json& means = At(j, "detrend_means", source);
+  if (!means.is_object()) throw DataError(fmt::format("{}: \"detrend_means\" is not an object", source));
+  for (const auto& item : means.items()) {
+    if (!item.value().is_number())
+      throw DataError(fmt::format("{}: detrend mean of '{}' is not a number", source, item.key()));
+    m.detrend_means.emplace_back(item.key(), item.value().get<double>());
+  }
+  const Json& e = At(j, "estimator", source);
+  m.estimator = Get<std::string>(e, "name", source);
+  m.kind = Get<std::string>(e, "kind", source);
+  m.passes = Get<int>(e, "passes", source);
+  const Json& d = At(j, "data", source);
+  m.data_path = Get<std::string>(d, "path", source);
+  m.data_rows = Get<long>(d, "rows", source);
+  m.data_checksum = Get<std::string>(d, "fnv1a64", source);
+  m.split = GetNumber(j, "split", source);
+  const auto rows = Get<std::vector<int>>(j, "validation_rows", source);
+  if (rows.size() != 2) throw DataError(fmt::format("{}: \"validation_rows\" needs [first, last]", source));
+  m.validation = {rows[0] - 1, rows[1] - rows[0] + 1};
+  const Json& fit = At(j, "fit_percent", source);
+  const Json& rms = At(j, "rms", source);
+  m.validation_scores.one_step = GetNumber(fit, "one_step", source);
+  m.validation_scores.rms_one_step = GetNumber(rms, "one_step", source);
+  if (!At(fit, "simulation", source).is_null()) {
+    m.validation_scores.simulation = GetNumber(fit, "simulation", source);
+    m.validation_scores.rms_simulation = GetNumber(rms, "simulation", source);
+  }
+  return m;
+}
+
+SavedModel SavedModel::Read(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw DataError(fmt::format("cannot read '{}': it is a directory", path));
+  std::ifstream in(path);
+  if (!in) throw DataError(fmt::format("cannot open model file '{}'", path));
+  Json j;
+  try {
+    j = Json::parse(in);
+  } catch (const Json::exception& e) {
+    throw DataError(fmt::format("{}: not valid JSON ({})", path, e.what()));
+  }
+  return FromJson(j, path);
+}
+
+std::string FileChecksum(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw DataError(fmt::format("cannot open '{}'", path));
+  std::uint64_t h = 14695981039346656037ull;
+  char buffer[1 << 16];
+  while (in) {
+    in.read(buffer, sizeof buffer);
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      h ^= static_cast<unsigned char>(buffer[i]);
+      h *= 1099511628211ull;
+    }
+  }
+  return fmt::format("{:016x}", h);
+}
+
+}  // namespace ident::workflow
