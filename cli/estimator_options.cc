@@ -7,6 +7,7 @@
 #include <fmt/ranges.h>
 
 #include "common/error.h"
+#include "ident/io/csv.h"
 
 #ifndef IDENT_DATASETS_DIR
 #define IDENT_DATASETS_DIR "datasets"
@@ -48,7 +49,7 @@ void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
 std::string ResolveDataPath(const std::string& name) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  if (fs::exists(name, ec) || name.find('/') != std::string::npos) return name;
+  if (name == io::kStandardInput || fs::exists(name, ec) || name.find('/') != std::string::npos) return name;
   const char* env = std::getenv("IDENT_DATASETS");
   for (const std::string& dir : {std::string(env ? env : ""), std::string(IDENT_DATASETS_DIR)}) {
     if (dir.empty()) continue;

@@ -62,7 +62,7 @@ workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow:
   m.passes = fit.result.passes;
   m.data_path = path;
   m.data_rows = fit.prepared.num_rows();
-  m.data_checksum = workflow::FileChecksum(path);
+  m.data_checksum = io::CanReadTwice(path) ? workflow::FileChecksum(path) : "";  // standard input: gone
   m.split = request.split;
   m.validation = fit.validation;
   m.validation_scores = fit.result.validation;
@@ -144,7 +144,12 @@ void RunFit(const FitCommandOptions& o) {
                    {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing};
-  std::unique_ptr<workflow::DataSource> source = o.structure.MakeSource(io::CsvReader(path, csv).names(), path);
+  // Standard input, a pipe or a device is read once, into memory; a regular file is first checked by its
+  // header and length, and streamed when long.
+  std::optional<io::DataTable> once;
+  if (!io::CanReadTwice(path)) once = io::ReadCsv(path, csv);
+  std::unique_ptr<workflow::DataSource> source =
+      o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
   workflow::FitRequest request;
   request.model = o.structure;
   request.estimator = o.estimator;
@@ -155,7 +160,8 @@ void RunFit(const FitCommandOptions& o) {
   // The record's length first: building an estimator costs O(rho^3) for large orders.
   workflow::FitOptions length_check;
   length_check.split = o.split;
-  const int estimation_rows = workflow::CheckCsvRecordLength(path, csv, *source, length_check);
+  const long estimation_rows = once ? workflow::EstimationRows(once->num_rows(), o.split)
+                                    : workflow::CheckCsvRecordLength(path, csv, *source, length_check);
   workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
   // The trace and the plot go to temporary files, renamed onto their names only after the whole fit has
   // succeeded (cli/output_file.h): a fit that fails, e.g. on a bad row late in a streamed record, leaves
@@ -176,7 +182,7 @@ void RunFit(const FitCommandOptions& o) {
   };
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
-  if (o.plot.empty() && o.save.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
+  if (!once && o.plot.empty() && o.save.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
     if (plan.scaled_prior) plan.UseScaledPrior(workflow::CsvEstimationMeanSquares(path, csv, *source, plan.options));
     const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
     commit_outputs();
@@ -197,7 +203,8 @@ void RunFit(const FitCommandOptions& o) {
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
   }
-  const workflow::RecordFit fit = workflow::FitTable(io::ReadCsv(path, csv), *source, plan, kResidualLags);
+  const workflow::RecordFit fit =
+      workflow::FitTable(once ? std::move(*once) : io::ReadCsv(path, csv), *source, plan, kResidualLags);
   if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
   if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
   commit_outputs();

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <limits>
 #include <sstream>
 #include <unordered_map>
@@ -78,6 +79,12 @@ std::string ShowCell(std::string_view cell) {
 }
 
 CsvReader::CsvReader(const std::string& path, const CsvOptions& options) : path_(path), options_(options) {
+  if (path == kStandardInput) {  // a stream that shares standard input's buffer (not owned)
+    path_ = "standard input";
+    in_ = std::make_unique<std::istream>(std::cin.rdbuf());
+    ReadHeader();
+    return;
+  }
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw DataError(fmt::format("cannot read '{}': it is a directory", path));
@@ -266,6 +273,11 @@ DataTable ReadAll(CsvReader& reader) {
 }
 
 }  // namespace
+
+bool CanReadTwice(const std::string& path) {
+  std::error_code ec;
+  return path != kStandardInput && std::filesystem::is_regular_file(path, ec);
+}
 
 DataTable ReadCsv(const std::string& path, const CsvOptions& options) {
   CsvReader reader(path, options);

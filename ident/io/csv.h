@@ -50,6 +50,13 @@ inline constexpr std::size_t kMaxCsvLineBytes = 1 << 20;
 // The most columns a header may name.
 inline constexpr int kMaxCsvColumns = 100'000;
 
+// The path that names standard input ("-", as most command-line tools take it).
+inline constexpr const char* kStandardInput = "-";
+
+// True for a regular file, which can be read more than once; false for standard input, a pipe, a FIFO or
+// a device, which must be read once (into memory).
+bool CanReadTwice(const std::string& path);
+
 struct CsvOptions {
   bool missing_as_nan = false;  // store empty/NaN/Inf cells as NaN instead of rejecting them
 };
@@ -57,7 +64,7 @@ struct CsvOptions {
 // Streams a CSV file row by row (constant memory).
 class CsvReader {
  public:
-  // Opens the file and reads the header. Throws DataError.
+  // Opens the file (kStandardInput: reads standard input) and reads the header. Throws DataError.
   explicit CsvReader(const std::string& path, const CsvOptions& options = {});
   // Reads from `in`; `source` names it in messages (as the path does for files). Throws DataError.
   CsvReader(std::unique_ptr<std::istream> in, const std::string& source, const CsvOptions& options = {});

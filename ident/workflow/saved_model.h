@@ -7,7 +7,8 @@
 //   structure_name, parameter_names, theta, covariance (ρ×ρ), theta_std, noise_std
 //   detrend          "mean" or "none"; detrend_means {column: mean subtracted before fitting}
 //   estimator        {"name", "kind", "passes"}
-//   data             {"path", "rows", "fnv1a64": checksum of the file's bytes, 16 hex digits}
+//   data             {"path", "rows", "fnv1a64": checksum of the file's bytes, 16 hex digits ("" when the
+//                    record came from standard input or a pipe)}
 //   split, validation_rows [first, last] (1-based), fit_percent and rms of the fit's validation
 // Numbers carry 17 significant digits, so θ and the means read back bit for bit.
 #pragma once
