@@ -135,6 +135,8 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
   fmt::print("  validation fit: one-step {} (RMS {:.4g})", percent(r.validation.one_step), r.validation.rms_one_step);
   if (r.validation.simulation)
     fmt::print(", simulation {} (RMS {:.4g})", percent(*r.validation.simulation), *r.validation.rms_simulation);
+  if (r.validation.simulation_diverged_at)
+    fmt::print(", simulation: unstable model (simulation diverged at row {})", *r.validation.simulation_diverged_at);
   fmt::print("\n");
 }
 

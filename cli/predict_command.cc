@@ -98,6 +98,8 @@ void RunPredict(const PredictOptions& o) {
                         {"simulation", scores.simulation ? FiniteOrNull(*scores.simulation) : nullptr}};
     j["rms"] = {{"one_step", FiniteOrNull(scores.rms_one_step)},
                 {"simulation", scores.rms_simulation ? FiniteOrNull(*scores.rms_simulation) : nullptr}};
+    j["simulation_diverged_at"] =
+        scores.simulation_diverged_at ? nlohmann::ordered_json(*scores.simulation_diverged_at) : nullptr;
     if (!k_step.empty()) {
       const auto [fit, rms] = FitOf(p.measured, k_step);
       j["k_step"] = {{"fit_percent", FiniteOrNull(fit)}, {"rms", FiniteOrNull(rms)}};

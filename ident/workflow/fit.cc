@@ -119,7 +119,7 @@ std::pair<int, int> Estimate(const io::DataTable& data, Segment segment, DataSou
 }
 
 FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, const Eigen::VectorXd& theta) {
-  Scoring scoring(source, theta);
+  Scoring scoring(source, theta, segment.first);
   Eigen::VectorXd row(data.values.cols());
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
     row = data.values.row(r).transpose();

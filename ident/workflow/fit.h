@@ -58,6 +58,9 @@ struct FitScores {
   std::optional<double> simulation;  // fit % (dynamic models only)
   std::optional<double> rms_simulation;
   int scored = 0;  // validation samples scored
+  // An unstable model: the 1-based row at which the simulated output first left 1000 times the segment's
+  // largest measured |y| (or stopped being finite). The simulation then has no fit % (simulation unset).
+  std::optional<int> simulation_diverged_at;
 };
 
 struct FitResult {

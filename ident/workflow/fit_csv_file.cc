@@ -154,7 +154,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
     result.updates = updates;
     result.rejected = rejected;
     RequireUsable(result, estimator, path);
-    scoring = std::make_unique<Scoring>(source, result.theta);
+    scoring = std::make_unique<Scoring>(source, result.theta, validation.first);
   };
   while (reader.Next(row)) {
     row -= offset;

@@ -41,6 +41,8 @@ nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::st
   j["rms"] = {{"one_step", r.validation.rms_one_step},
               {"simulation", r.validation.rms_simulation ? nlohmann::ordered_json(*r.validation.rms_simulation)
                                                          : nlohmann::ordered_json()}};
+  j["simulation_diverged_at"] =
+      r.validation.simulation_diverged_at ? nlohmann::ordered_json(*r.validation.simulation_diverged_at) : nullptr;
   j["samples_estimation"] = r.samples_estimation;
   j["samples_validation"] = r.samples_validation;
   j["updates"] = r.updates;

@@ -133,3 +133,29 @@ TEST(Predict, BadInputExitsOneWithOneLine) {
 
 }  // namespace
 }  // namespace ident::testing
+
+namespace ident::testing {
+namespace {
+
+TEST(Predict, AnUnstableModelIsReportedWithTheRowWhereItsSimulationDiverged) {
+  const std::string dir = TempDir();
+  const std::string model = dir + "/stable.json";
+  ASSERT_EQ(RunCli("fit dryer --output y --input u --na 2 --nb 2 --nk 3 --save " + model).exit_code, 0);
+  nlohmann::json m = nlohmann::json::parse(ReadFile(model));
+  const nlohmann::json stable = Json("predict " + model + " dryer --rows 501:1000 --json");
+  EXPECT_TRUE(stable["simulation_diverged_at"].is_null());
+  EXPECT_TRUE(stable["fit_percent"]["simulation"].is_number());
+  // A(q) = 1 − 2.5 q⁻¹ + 1.2 q⁻²: poles 1.87 and 0.64, one outside the unit circle.
+  m["theta"] = {-2.5, 1.2, 0.06, 0.05};
+  const std::string unstable = WriteFile("unstable.json", m.dump());
+  const nlohmann::json j = Json("predict " + unstable + " dryer --rows 501:1000 --json");
+  EXPECT_TRUE(j["fit_percent"]["simulation"].is_null());
+  EXPECT_TRUE(j["rms"]["simulation"].is_null());
+  const int row = j["simulation_diverged_at"].get<int>();
+  EXPECT_GT(row, 504);  // after the first t0 = 4 rows of the segment, which are measured
+  EXPECT_LT(row, 600);  // 1.87ⁿ passes 1000 within a few dozen samples
+  EXPECT_TRUE(j["fit_percent"]["one_step"].is_number());  // the one-step predictor is still scored
+}
+
+}  // namespace
+}  // namespace ident::testing

@@ -3,6 +3,7 @@
 // cleaning and passes, scoring, the summary and its usability check, the mean squares for data-scaled priors.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -203,8 +204,10 @@ class FitAccumulator {
 // One-step and simulation scoring of θ, one row at a time (rows of one segment, in order).
 class Scoring {
  public:
-  Scoring(const DataSource& source, const Eigen::VectorXd& theta)
-      : one_step_source_(source.Clone()),
+  // `first_row`: the 0-based record row of the segment's first row (for the row of a diverging simulation).
+  Scoring(const DataSource& source, const Eigen::VectorXd& theta, int first_row = 0)
+      : first_row_(first_row),
+        one_step_source_(source.Clone()),
         simulation_source_(source.Clone()),
         theta_(theta),
         z_(source.num_parameters()),
@@ -217,9 +220,12 @@ class Scoring {
     const double y = row(one_step_source_->output_column());
     if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) one_step_.Add(y, theta_.dot(z_));
     one_step_source_->PushOutput(y);
+    if (std::isfinite(y)) y_scale_ = std::max(y_scale_, std::abs(y));
     if (simulation_source_->dynamic()) {
       if (simulation_source_->Regressor(row, z_)) {
         const double yhat = theta_.dot(z_);
+        const double size = std::isfinite(yhat) ? std::abs(yhat) : HUGE_VAL;
+        if (size > (highs_.empty() ? 0.0 : highs_.back().second)) highs_.emplace_back(row_, size);
         if (std::isfinite(y) && std::isfinite(yhat)) simulation_.Add(y, yhat);
         simulation_source_->PushOutput(yhat);
       } else {
@@ -237,7 +243,14 @@ class Scoring {
     scores.scored = static_cast<int>(one_step_.count());
     scores.one_step = one_step_.Percent();
     scores.rms_one_step = one_step_.Rms();
-    if (simulation_source_->dynamic() && simulation_.count() >= 2 && simulation_.finite()) {
+    // Divergence: the first record high of |ŷ| beyond 1000 times the largest measured |y|.
+    for (const auto& [row, size] : highs_)
+      if (size > kDivergence * y_scale_) {
+        scores.simulation_diverged_at = first_row_ + row + 1;
+        break;
+      }
+    if (simulation_source_->dynamic() && simulation_.count() >= 2 && simulation_.finite() &&
+        !scores.simulation_diverged_at) {
       scores.simulation = simulation_.Percent();
       scores.rms_simulation = simulation_.Rms();
     }
@@ -245,11 +258,15 @@ class Scoring {
   }
 
  private:
+  static constexpr double kDivergence = 1e3;
+  int first_row_;
   std::unique_ptr<DataSource> one_step_source_, simulation_source_;
   Eigen::VectorXd theta_, z_;
   int t0_;
   int row_ = 0;
   FitAccumulator one_step_, simulation_;
+  double y_scale_ = 0;                         // largest measured |y| so far
+  std::vector<std::pair<int, double>> highs_;  // (row in the segment, |ŷ|) at each new largest |ŷ|
 };
 
 // Runs `pass(options)` (one pass over the estimation part, returning its (updates, rejected)) options.passes
