@@ -55,8 +55,7 @@ workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow:
   m.covariance = estimator.covariance();
   m.noise_std = fit.result.noise_std;
   m.detrend = request.ResolvedDetrend();
-  for (const auto& [column, mean] : fit.detrend_means)
-    m.detrend_means.emplace_back(fit.prepared.names[static_cast<std::size_t>(column)], mean);
+  m.detrend_means = workflow::DetrendMeans(fit);
   m.estimator = fit.result.estimator;
   m.kind = fit.result.kind;
   m.passes = fit.result.passes;
@@ -93,7 +92,8 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
   fmt::print("  {}\n", a.Verdict());
 }
 
-void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o) {
+void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o,
+                 const std::vector<std::pair<std::string, double>>& means = {}) {
   fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
              r.passes > 1 ? fmt::format(", {} passes", r.passes) : "", o.detrend);
   if (o.split == 1)
@@ -108,7 +108,15 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
   fmt::print("\n\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
   for (int i = 0; i < r.theta.size(); ++i)
     fmt::print("  {:<12} {:>14.6g} {:>12.4g}\n", r.parameter_names[i], r.theta(i), r.theta_std(i));
-  fmt::print("\n  noise std {:.4g}\n", r.noise_std);
+  // Least squares estimates a standard deviation; the robust and batch estimators a scale (Cauchy's
+  // has no standard deviation).
+  fmt::print("\n  noise {} {:.4g}\n", r.estimator == "rls" ? "std" : "scale", r.noise_std);
+  if (!means.empty()) {
+    fmt::print("  detrending means (estimation part, subtracted):");
+    for (std::size_t i = 0; i < means.size(); ++i)
+      fmt::print("{} {} = {:.6g}", i ? "," : "", means[i].first, means[i].second);
+    fmt::print("\n");
+  }
   if (r.lock_in) {
     const LockInStatus& l = *r.lock_in;
     fmt::print(
@@ -189,7 +197,7 @@ void RunFit(const FitCommandOptions& o) {
     const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
     commit_outputs();
     if (o.json) {
-      std::cout << workflow::FitJson(result, path, o.split, o.detrend, nullptr).dump(2) << "\n";
+      std::cout << workflow::FitJson(result, path, o.split, o.detrend, nullptr, nullptr).dump(2) << "\n";
     } else {
       PrintReport(result, path, o);
       fmt::print("\n  residual analysis: skipped (record of more than {} rows, streamed)\n", kInMemoryRows);
@@ -212,9 +220,10 @@ void RunFit(const FitCommandOptions& o) {
   commit_outputs();
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   if (o.json) {
-    std::cout << workflow::FitJson(fit.result, path, o.split, o.detrend, residuals).dump(2) << "\n";
+    const auto means = workflow::DetrendMeans(fit);
+    std::cout << workflow::FitJson(fit.result, path, o.split, o.detrend, residuals, &means).dump(2) << "\n";
   } else {
-    PrintReport(fit.result, path, o);
+    PrintReport(fit.result, path, o, workflow::DetrendMeans(fit));
     if (residuals) PrintResiduals(*residuals);
   }
 }

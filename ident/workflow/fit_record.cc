@@ -132,9 +132,23 @@ RecordFit FitRecord(io::DataTable table, const std::string& name, const FitReque
   return FitTable(std::move(table), *source, plan, request.residual_lags);
 }
 
+std::vector<std::pair<std::string, double>> DetrendMeans(const RecordFit& fit) {
+  std::vector<std::pair<std::string, double>> means;
+  for (const auto& [column, mean] : fit.detrend_means)
+    means.emplace_back(fit.prepared.names[static_cast<std::size_t>(column)], mean);
+  return means;
+}
+
 nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,
-                               const std::string& detrend, const ResidualAnalysis* residuals) {
+                               const std::string& detrend, const ResidualAnalysis* residuals,
+                               const std::vector<std::pair<std::string, double>>* means) {
   nlohmann::ordered_json j = FitJsonWithoutResiduals(result, data, split, detrend);
+  if (means) {
+    auto& object = j["detrend_means"] = nlohmann::ordered_json::object();
+    for (const auto& [name, mean] : *means) object[name] = mean;
+  } else {
+    j["detrend_means"] = nullptr;
+  }
   j["residual_analysis"] = residuals ? ResidualJson(*residuals) : nlohmann::ordered_json();
   return j;
 }

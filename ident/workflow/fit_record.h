@@ -73,10 +73,16 @@ RecordFit FitRecord(io::DataTable table, const std::string& name, const FitReque
 // The rows of the estimation part for a split (0 for a split ∉ (0, 1], which Fit refuses by name).
 long EstimationRows(long rows, double split);
 
+// The means a fit subtracted, by column name (empty without detrending).
+std::vector<std::pair<std::string, double>> DetrendMeans(const RecordFit& fit);
+
 // The JSON object of `ident fit --json`: data, estimator, kind, passes, structure, parameter_names, theta,
-// theta_std, noise_std, fit_percent, rms, samples_estimation, samples_validation, updates, rejected, cleaned,
-// lock_in, nu, Dy, split, detrend, residual_analysis (null when not computed). Non-finite numbers are null.
+// theta_std, noise_std, fit_percent, rms, simulation_diverged_at, samples_estimation, samples_validation,
+// updates, rejected, cleaned, lock_in, nu, Dy, split, detrend, detrend_means ({column: mean}; null when
+// `means` is null, as for a streamed record), residual_analysis (null when not computed). Non-finite numbers
+// are null.
 nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,
-                               const std::string& detrend, const ResidualAnalysis* residuals);
+                               const std::string& detrend, const ResidualAnalysis* residuals,
+                               const std::vector<std::pair<std::string, double>>* means);
 
 }  // namespace ident::workflow

@@ -157,7 +157,8 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
   }
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   py::dict out;
-  out["json"] = workflow::FitJson(fit.result, name, split, request.ResolvedDetrend(), residuals).dump();
+  const auto means = workflow::DetrendMeans(fit);
+  out["json"] = workflow::FitJson(fit.result, name, split, request.ResolvedDetrend(), residuals, &means).dump();
   if (history) {
     py::dict d;
     d["row"] = py::array_t<double>(static_cast<py::ssize_t>(h.row.size()), h.row.data());
