@@ -41,6 +41,7 @@ struct FitCommandOptions {
   std::string trace;
   std::string plot;
   std::string save;
+  std::string validate;
 };
 
 // The model file of --save (ident/workflow/saved_model.h).
@@ -96,14 +97,17 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
                  const std::vector<std::pair<std::string, double>>& means = {}) {
   fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
              r.passes > 1 ? fmt::format(", {} passes", r.passes) : "", o.detrend);
-  if (o.split == 1)
+  const bool separate = !r.validation_data.empty();
+  if (o.split == 1 && !separate)
     fmt::print("estimation and validation on all {} rows ({} updates", r.samples_estimation, r.updates);
   else
     fmt::print("estimation rows 1-{} ({} updates", r.samples_estimation, r.updates);
   if (r.rejected) fmt::print(", {} samples rejected as missing/invalid", r.rejected);
   if (r.cleaned) fmt::print(", {} outputs cleaned in later regressors", r.cleaned);
   fmt::print(")");
-  if (o.split != 1)
+  if (separate)
+    fmt::print(", validation on {} (all {} rows)", r.validation_data, r.samples_validation);
+  else if (o.split != 1)
     fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
   fmt::print("\n\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
   for (int i = 0; i < r.theta.size(); ++i)
@@ -192,7 +196,8 @@ void RunFit(const FitCommandOptions& o) {
   };
   // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
   // stream through the estimator in constant memory (without the residual analysis).
-  if (!once && o.plot.empty() && o.save.empty() && workflow::CountCsvDataRows(path) > kInMemoryRows) {
+  if (!once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
+      workflow::CountCsvDataRows(path) > kInMemoryRows) {
     if (plan.scaled_prior) plan.UseScaledPrior(workflow::CsvEstimationMeanSquares(path, csv, *source, plan.options));
     const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
     commit_outputs();
@@ -213,8 +218,12 @@ void RunFit(const FitCommandOptions& o) {
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
   }
-  const workflow::RecordFit fit =
+  workflow::RecordFit fit =
       workflow::FitTable(once ? std::move(*once) : io::ReadCsv(path, csv), *source, plan, kResidualLags);
+  if (!o.validate.empty()) {
+    const std::string validation_path = ResolveDataPath(o.validate);
+    workflow::ValidateOn(fit, io::ReadCsv(validation_path, csv), validation_path, request.model, kResidualLags);
+  }
   if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
   if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
   commit_outputs();
@@ -250,12 +259,17 @@ void AddFitCommand(CLI::App& app) {
   fit->add_option("--plot", o->plot,
                   "Draw measured vs one-step and simulated output (validation) and the parameter trajectories "
                   "into FILE.svg or FILE.png (needs gnuplot)");
+  fit->add_option("--validate", o->validate,
+                  "Validate on this separate record (CSV or bundled name) instead of the rest of DATA; "
+                  "--split then defaults to 1");
   fit->add_option("--save", o->save,
                   "Write the fitted model (structure, theta, covariance, detrending means, ...) as JSON for "
                   "ident predict");
   fit->add_flag("--json", o->json, "Print one JSON object instead of the report");
-  fit->callback([o] {
+  auto* split_option = fit->get_option("--split");
+  fit->callback([o, split_option] {
     if (o->detrend.empty()) o->detrend = o->structure.intercept ? "none" : "mean";
+    if (!o->validate.empty() && split_option->count() == 0) o->split = 1;  // all of DATA estimates
     RunFit(*o);
   });
 }

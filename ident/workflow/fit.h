@@ -71,6 +71,7 @@ struct FitResult {
   double noise_std = 0;
   double nu = 0, Dy = 0;
   int samples_estimation = 0, samples_validation = 0;
+  std::string validation_data;          // a separate validation record (ident fit --validate); "" for the record's own
   std::string kind;                     // "recursive" or "batch"
   int passes = 1;                       // passes over the estimation part that ran
   int updates = 0, rejected = 0;        // estimator steps taken / rejected (missing or invalid samples), last pass

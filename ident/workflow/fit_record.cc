@@ -45,6 +45,8 @@ nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::st
       r.validation.simulation_diverged_at ? nlohmann::ordered_json(*r.validation.simulation_diverged_at) : nullptr;
   j["samples_estimation"] = r.samples_estimation;
   j["samples_validation"] = r.samples_validation;
+  j["validation_data"] =
+      r.validation_data.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(r.validation_data);
   j["updates"] = r.updates;
   j["rejected"] = r.rejected;
   j["cleaned"] = r.cleaned;
@@ -118,7 +120,10 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags) {
   RecordFit fit;
   fit.prepared = std::move(table);
-  std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options, &fit.detrend_means);
+  std::vector<std::pair<int, double>> means;
+  std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options, &means);
+  for (const auto& [column, mean] : means)
+    fit.detrend_means.emplace_back(fit.prepared.names[static_cast<std::size_t>(column)], mean);
   if (plan.scaled_prior) plan.UseScaledPrior(EstimationMeanSquares(fit.prepared, fit.estimation, source));
   fit.result = FitPrepared(fit.prepared, fit.estimation, fit.validation, source, *plan.estimator, plan.options);
   if (residual_lags > 0 && fit.validation.count - source.first_regression_index() > residual_lags + 1)
@@ -132,11 +137,22 @@ RecordFit FitRecord(io::DataTable table, const std::string& name, const FitReque
   return FitTable(std::move(table), *source, plan, request.residual_lags);
 }
 
-std::vector<std::pair<std::string, double>> DetrendMeans(const RecordFit& fit) {
-  std::vector<std::pair<std::string, double>> means;
-  for (const auto& [column, mean] : fit.detrend_means)
-    means.emplace_back(fit.prepared.names[static_cast<std::size_t>(column)], mean);
-  return means;
+void ValidateOn(RecordFit& fit, io::DataTable record, const std::string& name, const ModelSpec& model,
+                int residual_lags) {
+  std::unique_ptr<DataSource> source = model.MakeSource(record.names, name);
+  for (const auto& [column, mean] : fit.detrend_means) record.values.col(record.ColumnIndex(column)).array() -= mean;
+  const Segment all{0, record.num_rows()};
+  IDENT_REQUIRE(all.count > source->first_regression_index() + 1,
+                "{}: {} rows are too few to validate {} (the first {} have no regressor)", name, all.count,
+                source->structure(), source->first_regression_index());
+  fit.result.validation = Score(record, all, *source, fit.result.theta);
+  fit.result.samples_validation = all.count;
+  fit.result.validation_data = name;
+  fit.residuals.reset();
+  if (residual_lags > 0 && all.count - source->first_regression_index() > residual_lags + 1)
+    fit.residuals = AnalyseResiduals(record, all, *source, fit.result.theta, residual_lags);
+  fit.prepared = std::move(record);
+  fit.validation = all;
 }
 
 nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,

@@ -59,7 +59,7 @@ struct RecordFit {
   FitResult result;
   io::DataTable prepared;  // the split and detrended table
   Segment estimation, validation;
-  std::vector<std::pair<int, double>> detrend_means;  // (column of prepared, mean subtracted); empty: none
+  std::vector<std::pair<std::string, double>> detrend_means;  // (column, mean subtracted); empty: none
   // When residual_lags > 0 and the validation part has more than residual_lags + 1 samples.
   std::optional<ResidualAnalysis> residuals;
 };
@@ -74,7 +74,15 @@ RecordFit FitRecord(io::DataTable table, const std::string& name, const FitReque
 long EstimationRows(long rows, double split);
 
 // The means a fit subtracted, by column name (empty without detrending).
-std::vector<std::pair<std::string, double>> DetrendMeans(const RecordFit& fit);
+inline const std::vector<std::pair<std::string, double>>& DetrendMeans(const RecordFit& fit) {
+  return fit.detrend_means;
+}
+
+// Validates the fit on a separate record instead of its own validation part (`ident fit --validate`): the
+// record's columns minus the fit's detrending means, scored from its first row as a segment of its own,
+// with the residual analysis as FitTable makes it. `name` names the record (FitResult::validation_data).
+void ValidateOn(RecordFit& fit, io::DataTable record, const std::string& name, const ModelSpec& model,
+                int residual_lags = 20);
 
 // The JSON object of `ident fit --json`: data, estimator, kind, passes, structure, parameter_names, theta,
 // theta_std, noise_std, fit_percent, rms, simulation_diverged_at, samples_estimation, samples_validation,

@@ -159,3 +159,32 @@ TEST(Predict, AnUnstableModelIsReportedWithTheRowWhereItsSimulationDiverged) {
 
 }  // namespace
 }  // namespace ident::testing
+
+namespace ident::testing {
+namespace {
+
+TEST(Validate, ASeparateRecordIsScoredAsPredictScoresIt) {
+  const std::string arx = " --output y --input u --na 2 --nb 2 --nk 1";
+  const std::string model = TempDir() + "/tanks.json";
+  const nlohmann::json f =
+      Json("fit cascaded_tanks_estimation" + arx + " --validate cascaded_tanks_validation --save " + model + " --json");
+  EXPECT_EQ(f["split"], 1.0);  // all of the estimation record estimates
+  EXPECT_EQ(f["samples_estimation"], 1024);
+  EXPECT_EQ(f["samples_validation"], 1024);
+  EXPECT_NE(f["validation_data"].get<std::string>().find("cascaded_tanks_validation"), std::string::npos);
+  EXPECT_TRUE(f["residual_analysis"].is_object());
+  const nlohmann::json p = Json("predict " + model + " cascaded_tanks_validation --json");
+  EXPECT_EQ(p["fit_percent"], f["fit_percent"]);
+  EXPECT_EQ(p["rms"], f["rms"]);
+  // Without --validate the same fit validates on its own rows, with other figures.
+  const nlohmann::json own = Json("fit cascaded_tanks_estimation" + arx + " --split 1 --json");
+  EXPECT_EQ(own["theta"], f["theta"]);
+  EXPECT_TRUE(own["validation_data"].is_null());
+  EXPECT_NE(own["fit_percent"], f["fit_percent"]);
+  const CliResult bad = RunCli("fit cascaded_tanks_estimation" + arx + " --validate stackloss");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("no column"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace ident::testing
