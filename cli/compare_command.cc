@@ -4,7 +4,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -124,6 +126,19 @@ void ProgressBar(int done, int total) {
   std::fflush(stderr);
 }
 
+// Without a terminal (a log, a pipe): once the comparison has run 2 s, one line per 10 % of the runs.
+std::function<void(int, int)> ProgressLines() {
+  const auto start = std::chrono::steady_clock::now();
+  return [start, reported = 0](int done, int total) mutable {
+    const int tenth = total > 0 ? 10 * done / total : 10;
+    if (tenth <= reported) return;
+    reported = tenth;
+    if (std::chrono::steady_clock::now() - start < std::chrono::seconds(2)) return;
+    fmt::print(stderr, "ident compare: {} % ({} of {} runs)\n", 10 * tenth, done, total);
+    std::fflush(stderr);
+  };
+}
+
 void RunCompare(CompareCommandOptions& o) {
   const std::string path = ResolveDataPath(o.data);
   const std::optional<DatasetInfo> dataset = FindDataset(o.data);
@@ -153,7 +168,7 @@ void RunCompare(CompareCommandOptions& o) {
   request.passes = o.passes;
   request.split = split;
   request.detrend = detrend;
-  if (isatty(STDERR_FILENO)) request.progress = ProgressBar;
+  request.progress = isatty(STDERR_FILENO) ? std::function<void(int, int)>(ProgressBar) : ProgressLines();
   const workflow::CompareResult result = workflow::CompareRecord(io::ReadCsv(path), path, request);
   const std::string name = dataset ? dataset->name : path;
   if (plot) {

@@ -7,7 +7,7 @@
 // seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the
 // untouched (uncorrupted) validation rows — with split = 1 the clean estimation rows themselves: fit % one-step and
 // simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and time per update (the recorded update sequence replayed on a fresh
-// estimator, timed as one block; the fastest of the first 5 trials, the one least disturbed by other processes).
+// estimator in 7 timed blocks of at least 1 ms; the median of the blocks, then the median over the first 5 trials).
 //
 // Example:
 //   OutlierSpec spec = OutlierSpec::Parse("0.05:20:1");
@@ -71,7 +71,7 @@ struct EstimatorScore {
   Spread one_step, simulation, theta_distance;
   std::vector<double> one_step_per_trial;
   bool has_simulation = false;
-  double ns_per_update = 0;  // fastest timed replay (first 5 trials)
+  double ns_per_update = 0;  // median over the first 5 trials of each one's median timed replay
   double cleaned = 0;        // mean number of outputs cleaned in the regressors
   int failed_trials = 0;     // trials whose estimate failed or was unusable (left out of the spreads)
   std::string failure;       // the first such trial's reason, "" if none
