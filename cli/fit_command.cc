@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "cli/commands.h"
+#include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
 #include "cli/fit_plot.h"
 #include "cli/gnuplot.h"
@@ -243,7 +244,7 @@ void AddFitCommand(CLI::App& app) {
   auto o = std::make_shared<FitCommandOptions>();
   CLI::App* fit = app.add_subcommand("fit", "Fit a model to recorded data with a recursive estimator");
   fit->add_option("DATA", o->data, "CSV file with a header, or a bundled dataset's name (e.g. dryer)")->required();
-  o->structure.AddTo(*fit);
+  o->structure.AddTo(*fit, /*require_output=*/false);
   o->estimator.AddTo(*fit);
   fit->add_option("--split", o->split, "Fraction of rows used for estimation; 1 = estimate and validate on all")
       ->capture_default_str();
@@ -268,6 +269,13 @@ void AddFitCommand(CLI::App& app) {
   fit->add_flag("--json", o->json, "Print one JSON object instead of the report");
   auto* split_option = fit->get_option("--split");
   fit->callback([o, split_option] {
+    // Without structure options a bundled record takes its suggested structure and split, as in compare.
+    const std::optional<DatasetInfo> dataset = FindDataset(o->data);
+    if (dataset && !o->structure.Given()) {
+      o->structure = o->structure.WithDefaultsFrom(dataset->structure);
+      if (split_option->count() == 0) o->split = dataset->split;
+    }
+    if (o->structure.output.empty()) throw CLI::RequiredError("--output");
     if (o->detrend.empty()) o->detrend = o->structure.intercept ? "none" : "mean";
     if (!o->validate.empty() && split_option->count() == 0) o->split = 1;  // all of DATA estimates
     RunFit(*o);

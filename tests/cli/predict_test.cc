@@ -37,7 +37,8 @@ TEST(Predict, ReproducesTheFitsValidationFiguresExactly) {
     const workflow::SavedModel m = workflow::SavedModel::Read(model);
     const std::string rows =
         std::to_string(m.validation.first + 1) + ":" + std::to_string(m.validation.first + m.validation.count);
-    const nlohmann::json p = Json("predict " + model + " " + fit.substr(0, fit.find(' ')) + " --rows " + rows + " --json");
+    const nlohmann::json p =
+        Json("predict " + model + " " + fit.substr(0, fit.find(' ')) + " --rows " + rows + " --json");
     EXPECT_EQ(p["fit_percent"], f["fit_percent"]) << fit;  // bit for bit
     EXPECT_EQ(p["rms"], f["rms"]) << fit;
     for (std::size_t i = 0; i < f["theta"].size(); ++i) EXPECT_EQ(m.theta(static_cast<Eigen::Index>(i)), f["theta"][i]);
@@ -62,7 +63,9 @@ TEST(Predict, KStepPredictionsFollowTheArxRecursionInPhysicalUnits) {
   auto y = [&](int t) { return data.values(t, 2) - my; };
   auto u = [&](int t) { return data.values(t, 1) - mu; };
   const Eigen::VectorXd& th = m.theta;
-  auto predict = [&](int t, double y1, double y2) { return -th(0) * y1 - th(1) * y2 + th(2) * u(t - 3) + th(3) * u(t - 4); };
+  auto predict = [&](int t, double y1, double y2) {
+    return -th(0) * y1 - th(1) * y2 + th(2) * u(t - 3) + th(3) * u(t - 4);
+  };
   for (int i = 4; i < out.num_rows(); ++i) {  // t0 = 4 rows of the segment have no regressor
     const int t = 600 + i;
     const double one = predict(t, y(t - 1), y(t - 2));
@@ -184,6 +187,23 @@ TEST(Validate, ASeparateRecordIsScoredAsPredictScoresIt) {
   const CliResult bad = RunCli("fit cascaded_tanks_estimation" + arx + " --validate stackloss");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.err.find("no column"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace ident::testing
+
+namespace ident::testing {
+namespace {
+
+TEST(FitDefaults, ABundledRecordWithoutStructureOptionsTakesCompareSuggestion) {
+  EXPECT_EQ(Json("fit dryer --json"), Json("fit dryer --output y --input u --na 2 --nb 2 --nk 3 --json"));
+  const nlohmann::json s = Json("fit stackloss --json");
+  EXPECT_EQ(s["structure"], "static(air_flow,water_temp,acid_conc)+intercept");
+  EXPECT_EQ(s["split"], 1.0);
+  EXPECT_EQ(s["detrend"], "none");
+  nlohmann::json c = Json("compare stackloss --estimators rls --outliers none --json");
+  EXPECT_EQ(c["structure"], s["structure"]);
+  EXPECT_EQ(RunCli("fit dryer --input u").exit_code, 2);  // a structure option given: --output is needed
 }
 
 }  // namespace
