@@ -14,6 +14,7 @@
 #include "cli/estimator_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/workflow/json_number.h"
 #include "ident/workflow/order_selection.h"
 #include "ident/workflow/predictions.h"
 #include "ident/workflow/saved_model.h"
@@ -26,10 +27,6 @@ struct PredictOptions {
   int horizon = 1;
   bool simulate = false, json = false, missing = false;
 };
-
-nlohmann::ordered_json FiniteOrNull(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
-}
 
 // Fit % and RMS of `y_hat` against `y` over the finite pairs (workflow::Score's definition).
 std::pair<double, double> FitOf(const std::vector<double>& y, const std::vector<double>& y_hat) {
@@ -94,15 +91,15 @@ void RunPredict(const PredictOptions& o) {
     j["rows"] = {segment.first + 1, segment.first + segment.count};
     j["samples"] = scores.scored;
     j["horizon"] = o.horizon;
-    j["fit_percent"] = {{"one_step", FiniteOrNull(scores.one_step)},
-                        {"simulation", scores.simulation ? FiniteOrNull(*scores.simulation) : nullptr}};
-    j["rms"] = {{"one_step", FiniteOrNull(scores.rms_one_step)},
-                {"simulation", scores.rms_simulation ? FiniteOrNull(*scores.rms_simulation) : nullptr}};
+    j["fit_percent"] = {{"one_step", workflow::FiniteOrNull(scores.one_step)},
+                        {"simulation", scores.simulation ? workflow::FiniteOrNull(*scores.simulation) : nullptr}};
+    j["rms"] = {{"one_step", workflow::FiniteOrNull(scores.rms_one_step)},
+                {"simulation", scores.rms_simulation ? workflow::FiniteOrNull(*scores.rms_simulation) : nullptr}};
     j["simulation_diverged_at"] =
         scores.simulation_diverged_at ? nlohmann::ordered_json(*scores.simulation_diverged_at) : nullptr;
     if (!k_step.empty()) {
       const auto [fit, rms] = FitOf(p.measured, k_step);
-      j["k_step"] = {{"fit_percent", FiniteOrNull(fit)}, {"rms", FiniteOrNull(rms)}};
+      j["k_step"] = {{"fit_percent", workflow::FiniteOrNull(fit)}, {"rms", workflow::FiniteOrNull(rms)}};
     } else {
       j["k_step"] = nullptr;
     }

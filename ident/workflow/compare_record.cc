@@ -6,17 +6,14 @@
 
 #include "common/error.h"
 #include "ident/workflow/fit_record.h"
+#include "ident/workflow/json_number.h"
 
 namespace ident::workflow {
 namespace {
 
-nlohmann::ordered_json Number(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json();
-}
-
 nlohmann::ordered_json SpreadJson(const Spread& s) {
-  return {{"mean", Number(s.mean)},     {"std", Number(s.std)}, {"min", Number(s.min)},
-          {"median", Number(s.median)}, {"p90", Number(s.p90)}, {"max", Number(s.max)}};
+  return {{"mean", FiniteOrNull(s.mean)},     {"std", FiniteOrNull(s.std)}, {"min", FiniteOrNull(s.min)},
+          {"median", FiniteOrNull(s.median)}, {"p90", FiniteOrNull(s.p90)}, {"max", FiniteOrNull(s.max)}};
 }
 
 std::vector<double> ToStd(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
@@ -42,7 +39,7 @@ nlohmann::ordered_json CompareJson(const CompareResult& r, const std::string& pa
                     {"theta", ToStd(r.theta_ls)},
                     {"fit_percent",
                      {{"one_step", r.reference.one_step},
-                      {"simulation", r.reference.simulation ? Number(*r.reference.simulation) : nullptr}}}};
+                      {"simulation", r.reference.simulation ? FiniteOrNull(*r.reference.simulation) : nullptr}}}};
   auto& list = j["estimators"] = nlohmann::ordered_json::array();
   for (const EstimatorScore& s : r.scores) {
     nlohmann::ordered_json e;
@@ -50,14 +47,14 @@ nlohmann::ordered_json CompareJson(const CompareResult& r, const std::string& pa
     e["kind"] = s.kind;
     e["passes"] = s.passes;
     e["theta"] = ToStd(s.theta);
-    e["fit_percent"] = {{"one_step", Number(s.one_step.mean)},
-                        {"simulation", s.has_simulation ? Number(s.simulation.mean) : nullptr}};
-    e["theta_distance"] = Number(s.theta_distance.mean);
+    e["fit_percent"] = {{"one_step", FiniteOrNull(s.one_step.mean)},
+                        {"simulation", s.has_simulation ? FiniteOrNull(s.simulation.mean) : nullptr}};
+    e["theta_distance"] = FiniteOrNull(s.theta_distance.mean);
     e["ns_per_update"] = s.ns_per_update;
     e["spread"] = {{"fit_one_step", SpreadJson(s.one_step)},
                    {"fit_simulation", s.has_simulation ? SpreadJson(s.simulation) : nullptr},
                    {"theta_distance", SpreadJson(s.theta_distance)}};
-    e["cleaned_per_trial"] = Number(s.cleaned);
+    e["cleaned_per_trial"] = FiniteOrNull(s.cleaned);
     e["failed_trials"] = s.failed_trials;
     e["failure"] = s.failure.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(s.failure);
     list.push_back(std::move(e));

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "ident/workflow/json_number.h"
 
 namespace ident::workflow {
 namespace {
@@ -23,7 +24,6 @@ nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events
 
 nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::string& data, double split,
                                                const std::string& detrend) {
-  auto number = [](double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(); };
   nlohmann::ordered_json j;
   j["data"] = data;
   j["estimator"] = r.estimator;
@@ -33,8 +33,8 @@ nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::st
   j["parameter_names"] = r.parameter_names;
   j["theta"] = std::vector<double>(r.theta.data(), r.theta.data() + r.theta.size());
   auto& std_dev = j["theta_std"] = nlohmann::ordered_json::array();
-  for (double v : r.theta_std) std_dev.push_back(number(v));
-  j["noise_std"] = number(r.noise_std);
+  for (double v : r.theta_std) std_dev.push_back(FiniteOrNull(v));
+  j["noise_std"] = FiniteOrNull(r.noise_std);
   j["fit_percent"] = {{"one_step", r.validation.one_step},
                       {"simulation", r.validation.simulation ? nlohmann::ordered_json(*r.validation.simulation)
                                                              : nlohmann::ordered_json()}};

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "ident/workflow/json_number.h"
 
 namespace ident::workflow {
 namespace {
@@ -15,11 +16,9 @@ namespace {
 using Json = nlohmann::json;
 using OrderedJson = nlohmann::ordered_json;
 
-OrderedJson ModelNumber(double v) { return std::isfinite(v) ? OrderedJson(v) : OrderedJson(); }
-
 OrderedJson Vector(const Eigen::VectorXd& v) {
   OrderedJson a = OrderedJson::array();
-  for (double x : v) a.push_back(ModelNumber(x));
+  for (double x : v) a.push_back(FiniteOrNull(x));
   return a;
 }
 
@@ -93,7 +92,7 @@ OrderedJson SavedModel::ToJson() const {
   for (Eigen::Index r = 0; r < covariance.rows(); ++r) cov.push_back(Vector(covariance.row(r).transpose()));
   j["covariance"] = cov;
   j["theta_std"] = Vector(theta_std);
-  j["noise_std"] = ModelNumber(noise_std);
+  j["noise_std"] = FiniteOrNull(noise_std);
   j["detrend"] = detrend;
   OrderedJson means = OrderedJson::object();
   for (const auto& [name, mean] : detrend_means) means[name] = mean;
@@ -103,11 +102,11 @@ OrderedJson SavedModel::ToJson() const {
   j["split"] = split;
   j["validation_rows"] = {validation.first + 1, validation.first + validation.count};
   j["fit_percent"] = {
-      {"one_step", ModelNumber(validation_scores.one_step)},
-      {"simulation", validation_scores.simulation ? ModelNumber(*validation_scores.simulation) : nullptr}};
+      {"one_step", FiniteOrNull(validation_scores.one_step)},
+      {"simulation", validation_scores.simulation ? FiniteOrNull(*validation_scores.simulation) : nullptr}};
   j["rms"] = {
-      {"one_step", ModelNumber(validation_scores.rms_one_step)},
-      {"simulation", validation_scores.rms_simulation ? ModelNumber(*validation_scores.rms_simulation) : nullptr}};
+      {"one_step", FiniteOrNull(validation_scores.rms_one_step)},
+      {"simulation", validation_scores.rms_simulation ? FiniteOrNull(*validation_scores.rms_simulation) : nullptr}};
   return j;
 }
 
