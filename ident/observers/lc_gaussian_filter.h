@@ -83,6 +83,14 @@ class BasicLcGaussianFilter {
   // covariance is symmetrised.
   StepReport Assign(const Eigen::Ref<const Eigen::VectorXd>& mean,
                     const Eigen::Ref<const Eigen::MatrixXd>& cov) noexcept;
+  // P ← factor·P, factor ≥ 1: the time update of a random-walk state x(k+1) = x(k) + w with Cov w =
+  // (factor − 1)P — exponential forgetting with λ = 1/factor. kRejectedInvalid (state untouched) for a
+  // factor below 1 or not finite. O(n²), no allocation.
+  StepReport ScaleCovariance(double factor) noexcept {
+    if (!(factor >= 1 && std::isfinite(factor))) return {StepStatus::kRejectedInvalid};
+    P_ *= factor;
+    return {StepStatus::kUpdated};
+  }
   // Predict + Correct with the stored model and measurement (the whole step or nothing);
   // kRejectedInvalid without a stored model.
   StepReport Update(const StateSpaceItem& item) noexcept;

@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "ident/regression/batch_regression.h"
+#include "ident/regression/lc_regression.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 
@@ -92,6 +93,25 @@ std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, in
   return std::make_unique<RegressionEstimatorModel<BatchRegressionEstimator>>(name, rho, options);
 }
 
+// The log-concave Gaussian filter as a regression estimator (ident/regression/lc_regression.h): "lc:<noise>".
+std::unique_ptr<AnyRegressionEstimator> MakeLc(const EstimatorSettings& s, int rho) {
+  IDENT_REQUIRE(!s.noise.empty(),
+                "estimator 'lc' needs a noise law: lc:laplace, lc:huber[:k], lc:logistic, lc:gengauss:p or lc:gaussian");
+  const std::string name = "lc:" + s.noise;
+  IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator '{}' (a Huber corner goes in the name: lc:huber:1.5)",
+                s.dof.value_or(0), name);
+  IDENT_REQUIRE(!s.delta, "delta = {} does not apply to estimator '{}'", s.delta.value_or(1), name);
+  IDENT_REQUIRE(!s.exact, "exact does not apply to estimator '{}'", name);
+  IDENT_REQUIRE(!s.lock_in.any(), "the lock-in options apply to cauchy and student, not to '{}'", name);
+  IDENT_REQUIRE(!s.prior, "a prior (nu0/V0) does not apply to estimator '{}' (it starts from a robust window fit)",
+                name);
+  IDENT_REQUIRE(!s.forgetting.stabilised, "stabilised forgetting does not apply to estimator '{}'", name);
+  LcRegressionOptions options;
+  options.noise = models::LogConcaveNoise::Parse(s.noise);
+  options.forgetting = s.forgetting.factor;
+  return std::make_unique<RegressionEstimatorModel<LcRegression>>(name, rho, std::move(options));
+}
+
 struct Entry {
   std::string name;
   Factory factory;
@@ -109,6 +129,7 @@ std::vector<Entry>& Registry() {
       {"cauchy-ml",
        [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); },
        {}},
+      {"lc", MakeLc, {}},
   };
   return registry;
 }
@@ -126,6 +147,14 @@ EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings ba
   const auto colon = spec.find(':');
   base.name = std::string(spec.substr(0, colon));
   IDENT_REQUIRE(!base.name.empty(), "estimator '{}' has no name", spec);
+  if (base.name == "lc") {  // "lc:<noise>", the noise law with its own parameter ("lc:huber:1.345")
+    IDENT_REQUIRE(colon != std::string_view::npos && colon + 1 < spec.size(),
+                  "estimator '{}' needs a noise law: lc:laplace, lc:huber[:k], lc:logistic, lc:gengauss:p or "
+                  "lc:gaussian",
+                  spec);
+    base.noise = std::string(spec.substr(colon + 1));
+    return base;
+  }
   if (colon != std::string_view::npos) {
     std::string_view arg = spec.substr(colon + 1);
     if (arg.starts_with("k=")) arg.remove_prefix(2);

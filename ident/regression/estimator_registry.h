@@ -6,6 +6,9 @@
 //                             (exact = true: the plain StudentRegression recursion, no safeguards)
 //   "huber"                   batch Huber M-estimation (IRLS, MAD scale; ident/regression/batch_regression.h)
 //   "cauchy-ml"               batch Cauchy maximum likelihood in Θ and scale, global optimum from many starts
+//   "lc:<noise>"              the log-concave Gaussian filter for y = z'θ + e, e of a log-concave density
+//                             (ident/regression/lc_regression.h): lc:laplace, lc:huber[:k] (k = 1.345),
+//                             lc:logistic, lc:gengauss:p (1 ≤ p ≤ 2), lc:gaussian (= RLS)
 //   (further names are registered in estimator_registry.cc as estimators are added)
 //
 // Example:
@@ -43,13 +46,15 @@ struct EstimatorSettings {
   ForgettingOptions forgetting;
   std::optional<RegressionPrior> prior;  // explicit (ν(0), V(0)); otherwise the estimator's default
   std::optional<double> dof;             // Student-t degrees of freedom k
+  std::string noise;                     // "lc": the noise law ("laplace", "huber:1.345", …)
   std::optional<int> delta;              // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos; unset: 1)
   bool exact = false;                    // switch off every safeguard beyond the spec's recursion
   LockInSettings lock_in;                // refused (if any() is set) for "rls" and together with `exact`
 };
 
 // Parses "name" or "name:value" / "name:k=value" (e.g. "student:3", "student:k=3") into
-// settings.name and settings.dof. Throws InvalidArgument for a malformed spec.
+// settings.name and settings.dof, and "lc:<noise>" (e.g. "lc:huber:1.345") into name "lc" and settings.noise.
+// Throws InvalidArgument for a malformed spec.
 EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base = {});
 
 // Builds the estimator; throws InvalidArgument naming the option for an unknown name or bad option.

@@ -132,7 +132,10 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
       return std::nullopt;
   }
   bool judges_outliers() const override {
-    return requires { e_.lock_in(); };
+    if constexpr (requires { e_.judges_outliers(); })
+      return e_.judges_outliers();
+    else
+      return requires { e_.lock_in(); };
   }
   bool in_startup() const override {
     if constexpr (requires { e_.in_startup(); })

@@ -1,0 +1,167 @@
+#include "ident/regression/lc_regression.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Cholesky>
+
+#include "common/error.h"
+#include "ident/regression/batch_regression.h"
+#include "ident/regression/regression_prior.h"
+
+namespace ident {
+namespace {
+
+constexpr double kLcInfinity = std::numeric_limits<double>::infinity();
+// Robbins–Monro gain for log q, ≈ 1/(q·f_|ê|(q)) at the median for the families of models/noise_density.h.
+constexpr double kScaleGain = 2.5;
+
+LcRegressionOptions CheckedLcOptions(int rho, LcRegressionOptions o) {
+  IDENT_REQUIRE(rho >= 1, "lc regression: num_parameters = {}; need >= 1", rho);
+  IDENT_REQUIRE(o.scale == 0 || (std::isfinite(o.scale) && o.scale > 0), "lc regression: scale = {}; need > 0 (or 0: estimated)",
+                o.scale);
+  IDENT_REQUIRE(o.startup_window == 0 || o.startup_window >= rho + 1,
+                "lc regression: startup window = {}; need 0 (automatic) or at least ρ + 1 = {}", o.startup_window, rho + 1);
+  IDENT_REQUIRE(std::isfinite(o.forgetting) && o.forgetting > 0 && o.forgetting <= 1,
+                "lc regression: forgetting = {}; need 0 < λ <= 1", o.forgetting);
+  IDENT_REQUIRE(o.prior_mean.has_value() == o.prior_covariance.has_value(),
+                "lc regression: an explicit prior needs both its mean and its covariance");
+  if (o.prior_mean) {
+    IDENT_REQUIRE(o.scale > 0, "lc regression: an explicit prior needs an explicit scale");
+    IDENT_REQUIRE(o.prior_mean->size() == rho && o.prior_mean->allFinite(),
+                  "lc regression: prior mean has {} entries; need {} finite", o.prior_mean->size(), rho);
+  }
+  return o;
+}
+
+}  // namespace
+
+LcRegression::LcRegression(int num_parameters, LcRegressionOptions options)
+    : options_(CheckedLcOptions(num_parameters, std::move(options))),
+      rho_(num_parameters),
+      window_(options_.startup_window > 0 ? options_.startup_window : std::max(20, 4 * num_parameters)),
+      noise_sd_(options_.noise.standard_deviation()),
+      filter_(options_.prior_mean ? *options_.prior_mean : Eigen::VectorXd::Zero(num_parameters),
+              options_.prior_covariance ? *options_.prior_covariance
+                                        : Eigen::MatrixXd::Identity(num_parameters, num_parameters)),
+      zero_(Eigen::VectorXd::Zero(num_parameters)),
+      pz_(num_parameters),
+      kept_(num_parameters + 1, 5L * window_) {
+  Reset();
+}
+
+void LcRegression::Reset() {
+  kept_count_ = 0;
+  count_ = 0;
+  scale_steps_ = 0;
+  sigma_ = options_.scale;
+  log_q_ = sigma_ > 0 ? std::log(sigma_ * options_.noise.median_abs()) : 0;
+  started_ = options_.prior_mean.has_value();
+  if (started_) filter_.Assign(*options_.prior_mean, *options_.prior_covariance);
+}
+
+Eigen::MatrixXd LcRegression::covariance() const {
+  if (started_) return filter_.covariance();
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(rho_, rho_);
+  out.diagonal().setConstant(kLcInfinity);
+  return out;
+}
+
+StepReport LcRegression::Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) noexcept {
+  if (z.size() != rho_ || !std::isfinite(y) || !z.allFinite()) return {StepStatus::kRejectedInvalid};
+  if (started_) {
+    StepReport report = Step(y, z);
+    if (report.updated()) ++count_, report.nu = static_cast<double>(count_), report.weight /= report.nu;
+    return report;
+  }
+  // Start-up: keep the sample (the oldest is dropped once 5W are kept and none of their windows started).
+  if (kept_count_ == kept_.cols()) {
+    kept_.leftCols(kept_.cols() - 1) = kept_.rightCols(kept_.cols() - 1).eval();
+    --kept_count_;
+  }
+  kept_(0, kept_count_) = y;
+  kept_.col(kept_count_).tail(rho_) = z;
+  ++kept_count_;
+  ++count_;
+  StepReport report{StepStatus::kUpdated};
+  report.prediction_error = y;
+  report.nu = static_cast<double>(count_);
+  if (count_ % window_ == 0) Start();
+  return report;
+}
+
+bool LcRegression::FinishStartup() noexcept {
+  if (started_ || kept_count_ < rho_ + 1) return false;
+  return Start();
+}
+
+bool LcRegression::Start() noexcept {
+  try {
+    const long n = std::min<long>(kept_count_, 5L * window_);
+    const auto Y = kept_.block(0, kept_count_ - n, 1, n).transpose();
+    const auto Z = kept_.block(1, kept_count_ - n, rho_, n).transpose();
+    const Eigen::MatrixXd ZtZ = Z.transpose() * Z;
+    Eigen::LDLT<Eigen::MatrixXd> ldlt(ZtZ / static_cast<double>(n));
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().maxCoeff()))
+      return false;
+    const BatchRegressionResult fit = CauchyMlRegression(Z, Y);
+    if (!fit.theta.allFinite()) return false;
+    if (options_.scale == 0) {
+      const Eigen::VectorXd residuals = Y - Z * fit.theta;
+      // MadScale = 1.4826·MAD; MAD/median|u| is σ of f.
+      double mad = MadScale(residuals) / 1.482602218505602;
+      if (!(mad > 0)) mad = RobustScale(residuals) / 1.482602218505602;
+      if (!(mad > 0 && std::isfinite(mad))) return false;
+      sigma_ = mad / options_.noise.median_abs();
+      log_q_ = std::log(mad);
+    }
+    const double noise_var = noise_std() * noise_std();
+    const Eigen::MatrixXd P0 = noise_var * ldlt.solve(Eigen::MatrixXd::Identity(rho_, rho_));
+    if (!P0.allFinite() || filter_.Assign(fit.theta, P0).status != StepStatus::kUpdated) return false;
+    started_ = true;
+    // Replay the kept samples (the oldest first) through the filter.
+    count_ = 0;
+    for (long i = kept_count_ - n; i < kept_count_; ++i) {
+      const StepReport r = Step(kept_(0, i), kept_.col(i).tail(rho_));
+      if (r.updated()) ++count_;
+    }
+    kept_count_ = 0;
+    return true;
+  } catch (...) {
+    return false;
+  }
+}
+
+StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>& z) noexcept {
+  if (options_.forgetting < 1) filter_.ScaleCovariance(1 / options_.forgetting);
+  const double mu = z.dot(filter_.mean());
+  pz_.noalias() = filter_.covariance() * z;
+  const double v = z.dot(pz_);
+  const double e = y - mu;
+  if (!(v > 0 && std::isfinite(v))) {
+    // z carries no information on θ (z = 0): nothing to learn, the sample counts.
+    StepReport report{StepStatus::kUpdated};
+    report.prediction_error = e;
+    report.weight = options_.noise.Weight(e / sigma_);
+    return report;
+  }
+  const double a = e / sigma_, vt = v / (sigma_ * sigma_);
+  const models::TiltedMoments r = options_.noise.ResidualMoments(a, vt);
+  if (!r.ok) return {StepStatus::kNumericalFailure};
+  // s = y − σ r: mean μ + σ(a − E r), variance σ² Var r, log Z − log σ.
+  const models::TiltedMoments s{r.log_normalizer - std::log(sigma_), mu + sigma_ * (a - r.mean),
+                                sigma_ * sigma_ * r.variance, true};
+  StepReport report = filter_.ApplyTilt(z, s);
+  if (!report.updated()) return report;
+  report.prediction_error = e;
+  report.weight = options_.noise.Weight(a);
+  if (options_.scale == 0 && vt < 1) {
+    ++scale_steps_;
+    log_q_ += kScaleGain / static_cast<double>(scale_steps_ + window_) * (std::abs(e) > std::exp(log_q_) ? 0.5 : -0.5);
+    sigma_ = std::exp(log_q_) / options_.noise.median_abs();
+  }
+  return report;
+}
+
+}  // namespace ident
