@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include <Eigen/Cholesky>
 
@@ -16,6 +17,8 @@ namespace {
 constexpr double kLcInfinity = std::numeric_limits<double>::infinity();
 // Robbins–Monro gain for log q, ≈ 1/(q·f_|ê|(q)) at the median for the families of models/noise_density.h.
 constexpr double kScaleGain = 2.5;
+// A relative weight below this is a gross error (the workflow's output cleaning threshold).
+constexpr double kGrossWeight = 0.2;
 
 LcRegressionOptions CheckedLcOptions(int rho, LcRegressionOptions o) {
   IDENT_REQUIRE(rho >= 1, "lc regression: num_parameters = {}; need >= 1", rho);
@@ -47,6 +50,8 @@ LcRegression::LcRegression(int num_parameters, LcRegressionOptions options)
                                         : Eigen::MatrixXd::Identity(num_parameters, num_parameters)),
       zero_(Eigen::VectorXd::Zero(num_parameters)),
       pz_(num_parameters),
+      centre_(Eigen::VectorXd::Zero(num_parameters)),
+      spread_(Eigen::VectorXd::Zero(num_parameters)),
       kept_(num_parameters + 1, 5L * window_) {
   Reset();
 }
@@ -57,12 +62,13 @@ void LcRegression::Reset() {
   scale_steps_ = 0;
   sigma_ = options_.scale;
   log_q_ = sigma_ > 0 ? std::log(sigma_ * options_.noise.median_abs()) : 0;
+  have_window_ = false;
   started_ = options_.prior_mean.has_value();
-  if (started_) filter_.Assign(*options_.prior_mean, *options_.prior_covariance);
+  if (started_) filter_.Assign(*options_.prior_mean, *options_.prior_covariance / (sigma_ * sigma_));
 }
 
 Eigen::MatrixXd LcRegression::covariance() const {
-  if (started_) return filter_.covariance();
+  if (started_) return sigma_ * sigma_ * filter_.covariance();
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(rho_, rho_);
   out.diagonal().setConstant(kLcInfinity);
   return out;
@@ -99,12 +105,28 @@ bool LcRegression::FinishStartup() noexcept {
 bool LcRegression::Start() noexcept {
   try {
     const long n = std::min<long>(kept_count_, 5L * window_);
-    const auto Y = kept_.block(0, kept_count_ - n, 1, n).transpose();
-    const auto Z = kept_.block(1, kept_count_ - n, rho_, n).transpose();
+    const Eigen::VectorXd Yall = kept_.block(0, kept_count_ - n, 1, n).transpose();
+    const Eigen::MatrixXd Zall = kept_.block(1, kept_count_ - n, rho_, n).transpose();
+    // Each regressor's median and robust scale in the window; rows with a coordinate beyond kLeverage
+    // scales are left out of the fit and of the prior's information (they would carry it alone).
+    for (int j = 0; j < rho_; ++j) {
+      const Eigen::VectorXd column = Zall.col(j);
+      Eigen::VectorXd sorted = column;
+      std::nth_element(sorted.data(), sorted.data() + n / 2, sorted.data() + n);
+      centre_(j) = sorted(n / 2);
+      spread_(j) = MadScale(column);
+    }
+    have_window_ = true;
+    std::vector<Eigen::Index> inliers;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!Outlying(Zall.row(i).transpose())) inliers.push_back(i);
+    if (static_cast<long>(inliers.size()) < rho_ + 1) return have_window_ = false;
+    const Eigen::VectorXd Y = Yall(inliers);
+    const Eigen::MatrixXd Z = Zall(inliers, Eigen::all);
     const Eigen::MatrixXd ZtZ = Z.transpose() * Z;
-    Eigen::LDLT<Eigen::MatrixXd> ldlt(ZtZ / static_cast<double>(n));
+    Eigen::LDLT<Eigen::MatrixXd> ldlt(ZtZ / static_cast<double>(Z.rows()));
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().maxCoeff()))
-      return false;
+      return have_window_ = false;
     const BatchRegressionResult fit = CauchyMlRegression(Z, Y);
     if (!fit.theta.allFinite()) return false;
     if (options_.scale == 0) {
@@ -116,8 +138,9 @@ bool LcRegression::Start() noexcept {
       sigma_ = mad / options_.noise.median_abs();
       log_q_ = std::log(mad);
     }
-    const double noise_var = noise_std() * noise_std();
-    const Eigen::MatrixXd P0 = noise_var * ldlt.solve(Eigen::MatrixXd::Identity(rho_, rho_));
+    // P̃(0) = P(0)/σ² = sd_f²·(Z'Z/n)⁻¹: one average sample's least-squares information.
+    const double sd = options_.noise.standard_deviation();
+    const Eigen::MatrixXd P0 = sd * sd * ldlt.solve(Eigen::MatrixXd::Identity(rho_, rho_));
     if (!P0.allFinite() || filter_.Assign(fit.theta, P0).status != StepStatus::kUpdated) return false;
     started_ = true;
     // Replay the kept samples (the oldest first) through the filter.
@@ -133,25 +156,45 @@ bool LcRegression::Start() noexcept {
   }
 }
 
+bool LcRegression::Outlying(const Eigen::Ref<const Eigen::VectorXd>& z) const noexcept {
+  if (!have_window_) return false;
+  for (int j = 0; j < rho_; ++j) {
+    const double d = std::abs(z(j) - centre_(j));
+    if (spread_(j) > 0 ? d > kLeverage * spread_(j) : d > 0) return true;
+  }
+  return false;
+}
+
 StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>& z) noexcept {
   if (options_.forgetting < 1) filter_.ScaleCovariance(1 / options_.forgetting);
   const double mu = z.dot(filter_.mean());
   pz_.noalias() = filter_.covariance() * z;
-  const double v = z.dot(pz_);
+  const double vt = z.dot(pz_);  // ṽ = z'P̃z = Var(z'θ)/σ²
   const double e = y - mu;
-  if (!(v > 0 && std::isfinite(v))) {
+  if (!(vt > 0 && std::isfinite(vt))) {
     // z carries no information on θ (z = 0): nothing to learn, the sample counts.
     StepReport report{StepStatus::kUpdated};
     report.prediction_error = e;
     report.weight = options_.noise.Weight(e / sigma_);
     return report;
   }
-  const double a = e / sigma_, vt = v / (sigma_ * sigma_);
+  const double a = e / sigma_;
+  // Leverage guard: a grossly mispredicted sample whose regressor is outlying — a coordinate beyond
+  // kLeverage robust scales of the start window, or beyond √(25 + ρ) Mahalanobis radii of the information
+  // so far (ṽ·n/sd_f² = z'(Z'Z/n)⁻¹z) — is read as an error in the regressor (an ARX output outlier
+  // carried into later regressors), which the model y = z'θ + σu does not describe: it is not used.
+  const double sd = options_.noise.standard_deviation();
+  if (options_.leverage_guard && options_.noise.Weight(a) < kGrossWeight &&
+      (Outlying(z) || vt * static_cast<double>(count_ + 1) / (sd * sd) > 25.0 + rho_)) {
+    StepReport report{StepStatus::kUpdated};
+    report.prediction_error = e;
+    report.weight = 0;
+    return report;
+  }
   const models::TiltedMoments r = options_.noise.ResidualMoments(a, vt);
   if (!r.ok) return {StepStatus::kNumericalFailure};
-  // s = y − σ r: mean μ + σ(a − E r), variance σ² Var r, log Z − log σ.
-  const models::TiltedMoments s{r.log_normalizer - std::log(sigma_), mu + sigma_ * (a - r.mean),
-                                sigma_ * sigma_ * r.variance, true};
+  // s = y − σr: mean μ + σ(a − E r); the filter holds P̃, so the variance goes in units of σ² (Var r).
+  const models::TiltedMoments s{r.log_normalizer - std::log(sigma_), mu + sigma_ * (a - r.mean), r.variance, true};
   StepReport report = filter_.ApplyTilt(z, s);
   if (!report.updated()) return report;
   report.prediction_error = e;

@@ -8,7 +8,9 @@
 //   Step:    s = z'θ ~ N(μ, v), μ = z'm, v = z'Pz; the moments of the tilted density f((y − s)/σ)·N(s; μ, v)
 //            (LogConcaveNoise::ResidualMoments in units of σ) give the exact Gaussian-projected update
 //              m ← m + P z (μ_s − μ)/v,   P ← P − P z z'P (v − v_s)/v²        (LcGaussianFilter::ApplyTilt)
-//            O(ρ²) per step plus the one-dimensional moments; no allocation after the start.
+//            O(ρ²) per step plus the one-dimensional moments; no allocation after the start. The filter
+//            holds P̃ = P/σ² (the covariance in units of the current noise scale), so a change of the
+//            estimated σ rescales all past information alike, as RLS's s²(Z'Z)⁻¹ does.
 //   Gaussian f: this is the Kalman filter of the regression model, i.e. recursive least squares with the
 //            prior information σ²P(0)⁻¹ (tested to 1e-12 against RLS). Other f: assumed-density filtering,
 //            exact for one step; its mean tracks the posterior mean and, as t grows, the MAP/ML estimate
@@ -20,6 +22,10 @@
 //            and the window is replayed. A window whose Z'Z is singular waits for the next W samples (up to
 //            5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
 //            (mean and covariance, with a scale) skips the start.
+//   Leverage: a grossly mispredicted sample (relative weight below 0.2) whose regressor is outlying — a
+//            coordinate beyond five robust scales of the start window, or z'(Z'Z/n)⁻¹z > 25 + ρ — is an
+//            error in the regressor (an ARX output outlier carried into later regressors), which the model
+//            does not describe, and is not used (weight 0). The start leaves such rows out of its fit.
 //   Scale:   after the start, σ follows the median of |ê| (ê = y − μ, the prediction error) by the
 //            Robbins–Monro recursion log q ← log q + (2.5/n)(1{|ê| > q} − 1/2) on steps where the parameter
 //            uncertainty is below the noise (v < σ²): a bounded step per sample, so an outlier of any size
@@ -52,12 +58,16 @@ struct LcRegressionOptions {
   double scale = 0;         // σ of u; 0 = estimated (start-up window, then Robbins–Monro)
   int startup_window = 0;   // W; 0 = max(20, 4ρ)
   double forgetting = 1;    // λ in (0, 1]
+  bool leverage_guard = true;  // leave out grossly mispredicted samples with outlying regressors (below)
   std::optional<Eigen::VectorXd> prior_mean;        // explicit prior N(m0, P0): both, and a scale
   std::optional<Eigen::MatrixXd> prior_covariance;
 };
 
 class LcRegression {
  public:
+  // Robust scales beyond which a regressor coordinate is outlying (the start window and the leverage guard).
+  static constexpr double kLeverage = 5;
+
   // Throws InvalidArgument naming the option if `options` is invalid.
   LcRegression(int num_parameters, LcRegressionOptions options);
 
@@ -68,7 +78,7 @@ class LcRegression {
 
   int num_parameters() const { return rho_; }
   const Eigen::VectorXd& parameters() const { return started_ ? filter_.mean() : zero_; }
-  // The filter's covariance P of θ (+inf on the diagonal before the start).
+  // The filter's covariance P = σ²P̃ of θ (+inf on the diagonal before the start).
   Eigen::MatrixXd covariance() const;
   double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const { return z.dot(parameters()); }
   double nu() const { return static_cast<double>(count_); }
@@ -87,6 +97,8 @@ class LcRegression {
   StepReport Step(double y, const Eigen::Ref<const Eigen::VectorXd>& z) noexcept;
   // Starts from the kept samples; false if they cannot determine θ.
   bool Start() noexcept;
+  // Some coordinate of z beyond kLeverage robust scales of the start window (or off a constant column).
+  bool Outlying(const Eigen::Ref<const Eigen::VectorXd>& z) const noexcept;
 
   LcRegressionOptions options_;
   int rho_;
@@ -95,6 +107,8 @@ class LcRegression {
   LcGaussianFilter filter_;
   Eigen::VectorXd zero_;
   Eigen::VectorXd pz_;     // P z (workspace)
+  Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the start window
+  bool have_window_ = false;         // centre_, spread_ are set (a start from data, not an explicit prior)
   Eigen::MatrixXd kept_;  // (ρ+1) x 5W: y, z of the start-up samples
   long kept_count_ = 0;
   bool started_ = false;

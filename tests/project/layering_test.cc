@@ -4,7 +4,8 @@
 //   models/, approx/    common/ and themselves
 //   ident/linalg/       common/
 //   ident/<concept>/    common/, models/, approx/, ident/linalg/ as listed below, and itself
-// No folder of ident/ includes another except linalg/, and workflow/, which builds on regression/, smoothing/ and io/.
+// No folder of ident/ includes another except linalg/, regression/, which runs the log-concave Gaussian filter of
+// observers/ as a regression estimator, and workflow/, which builds on regression/, smoothing/ and io/.
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -35,7 +36,7 @@ const std::map<std::string, std::set<std::string>>& Allowed() {
       {"models", {"common", "models"}},
       {"approx", {"common", "approx"}},
       {"ident/linalg", {"common", "ident/linalg"}},
-      {"ident/regression", {"common", "models", "approx", "ident/linalg", "ident/regression"}},
+      {"ident/regression", {"common", "models", "approx", "ident/linalg", "ident/observers", "ident/regression"}},
       {"ident/observers", {"common", "models", "approx", "ident/linalg", "ident/observers"}},
       {"ident/smoothing", {"common", "models", "ident/linalg", "ident/smoothing"}},
       {"ident/density", {"common", "models", "ident/density"}},

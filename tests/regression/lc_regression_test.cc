@@ -50,6 +50,7 @@ LcRegressionOptions Known(const std::string& noise, double sigma, const Eigen::V
   o.scale = sigma;
   o.prior_mean = m0;
   o.prior_covariance = P0;
+  o.leverage_guard = false;  // the plain filter
   return o;
 }
 
