@@ -17,6 +17,8 @@ namespace {
 constexpr double kLcInfinity = std::numeric_limits<double>::infinity();
 // Robbins–Monro gain for log q, ≈ 1/(q·f_|ê|(q)) at the median for the families of models/noise_density.h.
 constexpr double kScaleGain = 2.5;
+// The start waits while a row of its window has a leverage above this.
+constexpr double kMaxStartLeverage = 0.8;
 // A relative weight below this is a gross error (the workflow's output cleaning threshold).
 constexpr double kGrossWeight = 0.2;
 
@@ -127,6 +129,11 @@ bool LcRegression::Start() noexcept {
     Eigen::LDLT<Eigen::MatrixXd> ldlt(ZtZ / static_cast<double>(Z.rows()));
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().maxCoeff()))
       return have_window_ = false;
+    // One row alone deciding a direction (leverage z'(Z'Z)⁻¹z above 0.8) would set it to that row's value,
+    // outlier or not: wait for more samples.
+    const Eigen::MatrixXd H = ldlt.solve(Z.transpose()) / static_cast<double>(Z.rows());
+    for (Eigen::Index i = 0; i < Z.rows(); ++i)
+      if (Z.row(i).dot(H.col(i)) > kMaxStartLeverage) return have_window_ = false;
     const BatchRegressionResult fit = CauchyMlRegression(Z, Y);
     if (!fit.theta.allFinite()) return false;
     if (options_.scale == 0) {

@@ -19,8 +19,8 @@
 //            maximum likelihood from elemental subsets, ident/regression/batch_regression.h) gives the centre
 //            θ0 and the scale σ = MAD(residuals)/median|u| (the MAD consistency of f), the prior is
 //            N(θ0, σ_e²(Z'Z/W)⁻¹) — the information of one average sample, σ_e the noise standard deviation —
-//            and the window is replayed. A window whose Z'Z is singular waits for the next W samples (up to
-//            5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
+//            and the window is replayed. A window whose Z'Z is singular, or where one row alone decides a
+//            direction (leverage above 0.8), waits for the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
 //            (mean and covariance, with a scale) skips the start.
 //   Leverage: a grossly mispredicted sample (relative weight below 0.2) whose regressor is outlying — a
 //            coordinate beyond five robust scales of the start window, or z'(Z'Z/n)⁻¹z > 25 + ρ — is an
