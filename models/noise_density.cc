@@ -277,64 +277,76 @@ TiltedMoments LogConcaveNoise::ResidualMoments(double a, double v) const noexcep
       return Mix(pieces, n);
     }
     case Family::kLogistic:
-      return LogisticMoments(a, v);
     case Family::kGeneralizedGaussian:
-      try {
-        return QuadratureResidualMoments(a, v);
-      } catch (...) {
-        return {};
-      }
+      return RuleMoments(a, v);
   }
   return {};
 }
 
-TiltedMoments LogConcaveNoise::LogisticMoments(double a, double v) const noexcept {
-  // log h(r) = −ρ(r) − (r − a)²/(2v); h' = 0 at the mode, in [min(0, a), max(0, a)] since ρ'(0) = 0 and
-  // ρ' has the sign of r. Safeguarded Newton: ρ' = tanh(r/2), ρ'' = (1 − tanh²(r/2))/2 ∈ (0, 1/4].
-  double lo = std::min(0.0, a), hi = std::max(0.0, a), r = std::clamp(a / (1 + 0.25 * v), lo, hi);
-  for (int i = 0; i < 100; ++i) {
-    const double t = std::tanh(0.5 * r);
-    const double g = -t - (r - a) / v;  // decreasing in r
-    if (g > 0) lo = r; else hi = r;
-    const double step = g / (0.5 * (1 - t * t) + 1 / v);
-    double next = r + step;
-    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    if (std::abs(next - r) <= 1e-14 * (1 + std::abs(r))) {
-      r = next;
-      break;
+TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
+  // log h(r) = −ρ(r) − (r − a)²/(2v); h' = 0 at the mode, in [min(0, a), max(0, a)] since ψ(0) = 0 and ψ
+  // has the sign of r. Safeguarded Newton on the decreasing −ψ(r) − (r − a)/v.
+  const bool logistic = family_ == Family::kLogistic;
+  // ρ'' (logistic: (1 − tanh²(r/2))/2 ≤ 1/4; gengauss: p(p − 1)|r|^(p−2), evaluated at |r| ≥ 1/2 so
+  // that the kink of |r|^p at 0 does not shrink the width to nothing).
+  auto curvature = [&](double r) {
+    if (logistic) {
+      const double t = std::tanh(0.5 * r);
+      return 0.5 * (1 - t * t);
     }
+    return shape_ * (shape_ - 1) * std::pow(std::max(std::abs(r), 0.5), shape_ - 2);
+  };
+  double lo = std::min(0.0, a), hi = std::max(0.0, a), r = std::clamp(a / (1 + 0.25 * v), lo, hi);
+  for (int i = 0; i < 200; ++i) {
+    const double g = -Score(r) - (r - a) / v;  // decreasing in r
+    if (g > 0) lo = r; else hi = r;
+    double next = r + g / (curvature(r) + 1 / v);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    const bool done = std::abs(next - r) <= 1e-14 * (1 + std::abs(r)) || hi - lo <= 1e-15 * (1 + std::abs(r));
     r = next;
+    if (done) break;
   }
-  const double t = std::tanh(0.5 * r);
-  const double width = 1 / std::sqrt(0.5 * (1 - t * t) + 1 / v);
+  const double width = 1 / std::sqrt(curvature(r) + 1 / v);
   const double log_peak = -Rho(family_, shape_, r) - 0.5 * (r - a) * (r - a) / v;
-  // log h is concave with curvature ≤ −1/v and decays at least like e^{−|r − mode|/2}·… beyond the
-  // mode's width; ±16 widths in 12 panels of 10 Gauss–Legendre points leave below 1e−13 of the mass.
+  // log h is concave with curvature ≤ −1/v and, for these families, tails no lighter than e^{−|r|}'s
+  // beyond the width; ±16 widths in 12 panels of 10 Gauss–Legendre points leave below 1e−13 of the
+  // mass. gengauss: a panel boundary at r = 0, where |r|^p is not smooth.
   using Gauss = boost::math::quadrature::gauss<double, 10>;
   const auto& x = Gauss::abscissa();
   const auto& w = Gauss::weights();
   constexpr int kPanels = 12;
   const double half = 16 * width, panel = 2 * half / kPanels;
+  std::array<double, kPanels + 12> cuts{};
+  int n = 0;
+  for (int p = 0; p <= kPanels; ++p) cuts[n++] = r - half + p * panel;
+  if (!logistic && cuts[0] < 0 && cuts[kPanels] > 0) {
+    // |r|^p at 0: a boundary there and panels graded geometrically towards it (exponential convergence
+    // for the r^p singularity instead of GL's algebraic one).
+    cuts[n++] = 0;
+    for (double g = 0.25; g > 1e-3; g *= 0.25)
+      for (double c : {-g * panel, g * panel})
+        if (c > cuts[0] && c < cuts[kPanels]) cuts[n++] = c;
+    std::sort(cuts.begin(), cuts.begin() + n);
+  }
   double z = 0, m1 = 0, m2 = 0;
-  auto add = [&](double rr, double weight) {
-    const double d = rr - r;
-    const double h = weight * std::exp(-Rho(family_, shape_, rr) - 0.5 * (rr - a) * (rr - a) / v - log_peak);
-    z += h;
-    m1 += h * d;
-    m2 += h * d * d;
-  };
-  for (int p = 0; p < kPanels; ++p) {
-    const double centre = r - half + (p + 0.5) * panel, scale = 0.5 * panel;
+  for (int p = 0; p + 1 < n; ++p) {
+    const double centre = 0.5 * (cuts[p] + cuts[p + 1]), scale = 0.5 * (cuts[p + 1] - cuts[p]);
     for (std::size_t i = 0; i < x.size(); ++i) {
-      add(centre + scale * x[i], scale * w[i]);
-      if (x[i] != 0) add(centre - scale * x[i], scale * w[i]);
+      for (int side : {1, -1}) {
+        if (side < 0 && x[i] == 0) continue;
+        const double rr = centre + side * scale * x[i], d = rr - r;
+        const double h = scale * w[i] * std::exp(-Rho(family_, shape_, rr) - 0.5 * (rr - a) * (rr - a) / v - log_peak);
+        z += h;
+        m1 += h * d;
+        m2 += h * d * d;
+      }
     }
   }
   if (!(z > 0) || !std::isfinite(z)) return {};
   const double mean_d = m1 / z;
   const double var = std::max(0.0, m2 / z - mean_d * mean_d);
-  // Z = ∫ f(r)·N(r; a, v) dr = e^{log_peak}·z/√(2πv) (log_norm = 0 for the logistic).
-  return {log_peak + std::log(z) - 0.5 * std::log(2 * std::numbers::pi * v), r + mean_d, var, true};
+  // Z = ∫ f(r)·N(r; a, v) dr = e^{log_peak − log_norm}·z/√(2πv).
+  return {log_peak - log_norm_ + std::log(z) - 0.5 * std::log(2 * std::numbers::pi * v), r + mean_d, var, true};
 }
 
 TiltedMoments LogConcaveNoise::QuadratureResidualMoments(double a, double v) const {

@@ -15,11 +15,10 @@
 //   gaussian         closed form (a product of Gaussians)
 //   laplace, huber   closed form: a mixture of two or three truncated normals (models/measurement.h
 //                    TruncatedNormalMoments), combined in log space and centred
-//   logistic         composite 10-point Gauss–Legendre on 12 panels over ±16 widths around the mode of the
-//                    (log-concave, unimodal) tilted density, the mode found by safeguarded Newton
-//   gengauss         adaptive Gauss–Kronrod quadrature (ProjectedMeasurement::QuadratureTilt), the kink of
-//                    |u|^p at 0 a panel boundary; ~20× the cost of the closed forms
-// No allocation in the closed forms and the logistic rule; the quadrature allocates inside Boost.
+//   logistic,        composite 10-point Gauss–Legendre on 12 panels over ±16 widths around the mode of the
+//   gengauss         (log-concave, unimodal) tilted density, the mode found by safeguarded Newton; gengauss
+//                    with a panel boundary at 0, where |u|^p is not smooth
+// No allocation.
 //
 // Weight(u) is the sample's relative weight in M-estimation, ψ(u)/u against a typical residual:
 // 1 for |u| ≤ median|u|, then min(1, [ψ(u)/u]/[ψ(m)/m]) (m = median|u|). The Gaussian weighs every sample
@@ -68,7 +67,8 @@ class LogConcaveNoise {
   TiltedMoments QuadratureResidualMoments(double a, double v) const;
 
  private:
-  TiltedMoments LogisticMoments(double a, double v) const noexcept;
+  // logistic and gengauss: Gauss–Legendre panels around the mode of the tilted density.
+  TiltedMoments RuleMoments(double a, double v) const noexcept;
 
   Family family_;
   double shape_ = 0;

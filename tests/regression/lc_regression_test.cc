@@ -120,7 +120,7 @@ GridMoments GridPosterior(const models::LogConcaveNoise& f, double sigma, const 
 // projects on a Gaussian at every step, keeps its mean within 0.4 posterior standard deviations of the
 // exact mean and its variance within 35 %.
 TEST(LcRegression, MatchesTheExactGridPosterior) {
-  for (const char* noise : {"laplace", "huber:1.345", "logistic"}) {
+  for (const char* noise : {"laplace", "huber:1.345", "logistic", "gengauss:1.5"}) {
     for (int rho : {1, 2}) {
       SCOPED_TRACE(std::string(noise) + " rho=" + std::to_string(rho));
       const Eigen::VectorXd theta = Eigen::VectorXd::LinSpaced(rho, 1.0, -0.5);
@@ -230,7 +230,7 @@ TEST(LcRegression, LargerOutliersAreNoHarder) {
 
 TEST(LcRegression, StepsAllocateNothingAfterTheStart) {
   const StaticData d = Simulate(Eigen::Vector4d(1, 2, 3, 4), 200, "laplace", 0.1, 3);
-  for (const char* noise : {"laplace", "huber", "logistic", "gaussian"}) {
+  for (const char* noise : {"laplace", "huber", "logistic", "gengauss:1.5", "gaussian"}) {
     SCOPED_TRACE(noise);
     auto est = MakeRegressionEstimator(ParseEstimatorSpec(std::string("lc:") + noise), 4);
     Eigen::VectorXd z(4);
