@@ -118,7 +118,7 @@ GridMoments GridPosterior(const models::LogConcaveNoise& f, double sigma, const 
 
 // One step is exact (the tilted moments are the posterior's); after 30 the assumed-density filter, which
 // projects on a Gaussian at every step, keeps its mean within 0.6 posterior standard deviations of the
-// exact mean (0.3–0.5 seen for the kinked laplace and gengauss likelihoods) and its variance within 35 %.
+// exact mean (the kinked laplace and gengauss likelihoods come closest to it) and its variance within 35 %.
 TEST(LcRegression, MatchesTheExactGridPosterior) {
   for (const char* noise : {"laplace", "huber:1.345", "logistic", "gengauss:1.5"}) {
     for (int rho : {1, 2}) {
