@@ -137,7 +137,13 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
     else if (l.start_update > 0)
       fmt::print("  robust start after update {} from its last {} samples\n", l.start_update, l.start_window);
     for (const RestartEvent& e : l.events)
-      fmt::print("    restart at update {}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
+      if (e.end_of_data)
+        fmt::print("    restart at the end of the data (update {}): a restart from the robust fit of all {} samples "
+                   "kept, replayed and refined by further passes, has the higher likelihood and replaces the "
+                   "estimate\n",
+                   e.update, e.replayed);
+      else
+        fmt::print("    restart at update {}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
                  e.update, e.replayed,
                  e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
                  100 * e.low_weight_before, 100 * e.low_weight_after,

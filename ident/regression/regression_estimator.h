@@ -54,6 +54,8 @@ struct RestartEvent {
   double low_weight_after = 0;   // the same over the last window of the replay
   bool resolved = true;          // false: still more than half low after the replay (heavy tails, not
                                  // a lock-in); the next restart then waits twice as long
+  bool end_of_data = false;      // made when the data ended: the restart's estimate had the higher likelihood
+                                 // (SafeStudentRegression::FinishStartup)
 };
 
 // The state of a robust estimator's lock-in safeguard (ident/regression/lock_in_monitor.h, docs/explanation/karny-hangos-estimator.md):

@@ -174,10 +174,60 @@ void SafeStudentRegression::Replay() noexcept {
 }
 
 bool SafeStudentRegression::FinishStartup() noexcept {
-  if (!in_startup() || stored_ <= num_parameters()) return false;
-  Restart(stored_, /*lock_in=*/false, /*strict=*/false);
-  start_at_end_ = started_;
-  return started_;
+  if (options_.base.exact || stored_ <= num_parameters()) return false;
+  if (in_startup()) {
+    Restart(stored_, /*lock_in=*/false, /*strict=*/false);
+    start_at_end_ = started_;
+    return started_;
+  }
+  return CompeteWithRobustRestart();
+}
+
+double SafeStudentRegression::ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta) const {
+  // Student-t_k negative log-likelihood of the kept samples at Θ with the scale at its maximum-likelihood
+  // value (the EM fixed point s² = mean(w r²), w = (k+1)/(k + r²/s²)); constants dropped.
+  const int rho = num_parameters();
+  const double k = options_.base.dof;
+  Eigen::ArrayXd r2(stored_);
+  for (long i = 0; i < stored_; ++i) {
+    const auto sample = history_.col(Column(i));
+    r2(i) = std::pow(sample(0) - theta.dot(sample.tail(rho)), 2);
+  }
+  double s2 = std::pow(RobustScale(r2.sqrt().matrix()), 2);
+  if (!(s2 > 0)) s2 = std::max(r2.mean(), 1e-300);
+  for (int iteration = 0; iteration < 500; ++iteration) {
+    const double next = (r2 * (k + 1) / (k + r2 / s2)).mean();
+    const bool done = std::abs(next - s2) <= 1e-12 * s2;
+    s2 = next;
+    if (done || !(s2 > 0)) break;
+  }
+  if (!(s2 > 0 && std::isfinite(s2))) return std::numeric_limits<double>::infinity();
+  return 0.5 * (k + 1) * (1 + r2 / (k * s2)).log().sum() + 0.5 * static_cast<double>(stored_) * std::log(s2);
+}
+
+bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
+  if (!options_.restart_on_lock_in || stored_ != updates_ || stored_ > kMaxCompetingSamples) return false;
+  try {
+    // The kept samples, oldest first (BeginPass clears the history; the candidate is fed them again).
+    Eigen::MatrixXd samples(num_parameters() + 1, stored_);
+    for (long i = 0; i < stored_; ++i) samples.col(i) = history_.col(Column(i));
+    SafeStudentRegression candidate = *this;
+    const std::size_t index = events_.size();
+    candidate.Restart(stored_, /*lock_in=*/true);
+    if (candidate.events_.size() <= index) return false;
+    // The restart's replay weighs each sample once against the estimate of its time, as the first pass did;
+    // further passes from its estimate (BeginPass) let it settle, as --passes does.
+    for (int pass = 1; pass < kCompetingPasses && candidate.BeginPass(); ++pass)
+      for (long i = 0; i < samples.cols(); ++i) candidate.Update(samples(0, i), samples.col(i).tail(num_parameters()));
+    const double current = ProfileNegativeLogLikelihood(parameters());
+    const double other = candidate.ProfileNegativeLogLikelihood(candidate.parameters());
+    if (!(other < current - kCompetingMargin)) return false;
+    *this = std::move(candidate);
+    events_[index].end_of_data = true;
+    return true;
+  } catch (...) {
+    return false;
+  }
 }
 
 void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool strict) noexcept {

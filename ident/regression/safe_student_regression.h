@@ -139,7 +139,19 @@ class SafeStudentRegression {
   // the start's checks): starts from the robust fit of every kept sample, with only a rank-deficient
   // window refused, and replays them. True if it started; false (state unchanged) otherwise or when not
   // in the start-up. The command line calls it after the last estimation row.
+  //
+  // After the start-up it weighs the recursion's estimate against a competing hypothesis: a restart from
+  // the robust fit of every kept sample (as for a lock-in), a replay of them all and kCompetingPasses − 1
+  // further passes (BeginPass) over them. The one with the higher
+  // Student-t_k likelihood of the kept samples (scale profiled out, by more than kCompetingMargin) is kept; an
+  // adopted restart is recorded (RestartEvent::end_of_data). Up to kMaxCompetingSamples kept samples (the
+  // robust fit costs O(nρ²) per start it tries); none of this with `base.exact` or without restarts.
   bool FinishStartup() noexcept;
+  // Negative log-likelihood margin a restart must win by at the end of the data.
+  static constexpr double kCompetingMargin = 1.0;
+  static constexpr long kMaxCompetingSamples = 100'000;
+  // Passes over the kept samples the competing restart makes (its replay, then BeginPass and a pass).
+  static constexpr int kCompetingPasses = 3;
 
   // Back to the state of a freshly built estimator with the same options: the provisional prior (the
   // explicit one if given), an empty history and a clear monitor.
@@ -175,6 +187,9 @@ class SafeStudentRegression {
   void Restart(long recent, bool lock_in, bool strict = true) noexcept;
   // Replays every kept sample into est_ (the last M weights refill the monitor).
   void Replay() noexcept;
+  // Student-t_k NLL of the kept samples at Θ, scale at its ML value (constants dropped).
+  double ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta) const;
+  bool CompeteWithRobustRestart() noexcept;
 
   SafeStudentOptions options_;
   std::optional<StudentRegression> est_;

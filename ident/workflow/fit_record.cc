@@ -18,7 +18,8 @@ nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events
                     {"dropped", e.dropped},
                     {"low_weight_before", e.low_weight_before},
                     {"low_weight_after", e.low_weight_after},
-                    {"resolved", e.resolved}});
+                    {"resolved", e.resolved},
+                    {"end_of_data", e.end_of_data}});
   return list;
 }
 
