@@ -177,7 +177,7 @@ class Solver {
                               (constant_weight_scale_ * matrix_scale_ * (x_scale + z_scale) + v_scale);
       // The relative KKT residual: the complementarity s'q (the iterate's duality gap up to the residuals)
       // relative to the objective's size, since the unit σ need not be the residuals' size (a double
-      // integrator's data steps are its velocity; 1e-6 per constraint stands in for an objective of zero);
+      // integrator's data steps are its velocity; 1e-12 per constraint stands in for an objective of zero);
       // R3 relative to the data; R4 relative to the dual values it sums (R4 sums products of H_t, F_t with
       // p + B'u), or its round-off floor.
       // R3 = B r - b - M u - (q_hi - q_lo) has a floor of eps times its largest term (multipliers of a

@@ -39,20 +39,46 @@ double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dua
   Eigen::MatrixXd rho(n, N);
   double rho_max = residual(&rho);
   if (!(rho_max > 0) || !dual.process_weight.allFinite() || !dual.measurement_weight.allFinite()) return rho_max;
-  // N = sum J'WJ: D_t = W_t + F_t'W_{t+1}F_t + H_t'Wg_t H_t, E_t = -W_t F_{t-1}.
+  // N = sum J'WJ: D_t = W_t + F_t'W_{t+1}F_t + H_t'Wg_t H_t, E_t = -W_t F_{t-1} (plain loops on the small
+  // blocks, as the solver's AddNewtonBlocks).
   Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, n * N), E = Eigen::MatrixXd::Zero(n, n * N);
-  Eigen::MatrixXd WF(n, n), WH(nz, n);
+  std::vector<double> WF(static_cast<std::size_t>(n) * n), WH(static_cast<std::size_t>(nz) * n);
   for (int t = 0; t <= T; ++t) {
-    Eigen::Map<const Eigen::MatrixXd> W(dual.process_weight.col(t).data(), n, n);
-    Eigen::Map<const Eigen::MatrixXd> Wg(dual.measurement_weight.col(t).data(), nz, nz);
-    D.middleCols(t * n, n) += W;
+    const double* W = dual.process_weight.col(t).data();
+    const double* Wg = dual.measurement_weight.col(t).data();
+    double* Dt = D.data() + static_cast<Eigen::Index>(t) * n * n;
+    for (int i = 0; i < n * n; ++i) Dt[i] += W[i];
     if (t > 0) {
-      WF.noalias() = W * p.Ft(t - 1);
-      E.middleCols(t * n, n) -= WF;
-      D.middleCols((t - 1) * n, n).noalias() += p.Ft(t - 1).transpose() * WF;
+      const double* F = p.Ft(t - 1).data();
+      double* Et = E.data() + static_cast<Eigen::Index>(t) * n * n;
+      double* Dp = Dt - n * n;
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a) {
+          double wf = 0;
+          for (int c = 0; c < n; ++c) wf += W[a + c * n] * F[c + b * n];
+          WF[a + b * n] = wf;
+          Et[a + b * n] -= wf;
+        }
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a) {
+          double f = 0;
+          for (int c = 0; c < n; ++c) f += F[c + a * n] * WF[c + b * n];
+          Dp[a + b * n] += f;
+        }
     }
-    WH.noalias() = Wg * p.Ht(t);
-    D.middleCols(t * n, n).noalias() += p.Ht(t).transpose() * WH;
+    const double* H = p.Ht(t).data();
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < nz; ++a) {
+        double wh = 0;
+        for (int c = 0; c < nz; ++c) wh += Wg[a + c * nz] * H[c + b * nz];
+        WH[a + b * nz] = wh;
+      }
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a) {
+        double h = 0;
+        for (int c = 0; c < nz; ++c) h += H[c + a * nz] * WH[c + b * nz];
+        Dt[a + b * n] += h;
+      }
   }
   BlockTridiagonalCholesky chol(n, N);
   if (!chol.Factorize(D, E)) return rho_max;

@@ -12,13 +12,13 @@
 namespace ident::internal {
 
 // The KKT residual both paths stop on: the largest of the complementarity per constraint mu (in the unit
-// σ), the total complementarity relative to the objective's size (1e-6 per constraint standing in for an
+// σ), the total complementarity relative to the objective's size (1e-12 per constraint standing in for an
 // objective of zero), and the relative R3, R4.
 inline double RelativeKktResidual(double total_complementarity, double objective_scale, double num_constraints,
                                   double relative_r3, double relative_r4) {
   if (!(num_constraints > 0)) return std::max(relative_r3, relative_r4);
   const double mu = total_complementarity / num_constraints;
-  const double relative = total_complementarity / std::max(objective_scale, 1e-6 * num_constraints);
+  const double relative = total_complementarity / std::max(objective_scale, 1e-12 * num_constraints);
   return std::max({mu, relative, relative_r3, relative_r4});
 }
 
@@ -29,7 +29,7 @@ inline constexpr double kStallProgress = 0.9;
 inline constexpr double kFloorFactor = 64;
 // The same for the residuals r = z - Hx of R3, relative to the states' size: tighter, since the gap of a
 // penalty with a kink grows with |r| at its kinks.
-inline constexpr double kResidualFloorFactor = 8;
+inline constexpr double kResidualFloorFactor = 1;
 
 // The unit in which both paths iterate: the median of |z_{t+1} - z_t| over all measurement coordinates
 // (the typical step of the data, which neither the magnitude of the states nor a shift of the origin
