@@ -94,7 +94,9 @@ struct MapSmootherResult {
   MapSmootherStatus status = MapSmootherStatus::kNumericalFailure;
   std::string message;
   int iterations = 0;
-  double kkt_residual = 0;          // max(mu, |R3|/(1+|z|), |R4|/scale) at the returned iterate
+  // At the returned iterate: the largest of the complementarity per constraint, the total complementarity
+  // over the objective's size, and |R3|, |R4| over their scales or round-off floors (the stopping test).
+  double kkt_residual = 0;
   Eigen::MatrixXd x;                // n x (T+1) MAP states
   Eigen::MatrixXd w;                // n x (T+1) process noise w_t = x_t - F_{t-1} x_{t-1}, w_0 = x_0
   Eigen::MatrixXd u;                // nz x (T+1) dual controls of (D)
