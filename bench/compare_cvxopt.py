@@ -1,25 +1,34 @@
 #!/usr/bin/python3
-"""MAP smoother vs cvxopt (Debian python3-cvxopt) on the same problems, T = 10^2, 10^3, 10^4.
+"""MAP smoother vs cvxopt (Debian python3-cvxopt) on the same problems, T = 10^3 ... 10^6.
 
-Usage: bench/compare_cvxopt.py [path/to/ident] [repeats]   (default build/bin/ident, 3; run from the repository root)
+Usage: bench/compare_cvxopt.py [path/to/ident] [repeats] [--sizes 1000,10000,...] [--cvxopt-max T] [--json FILE]
+(default build/bin/ident, 3 repeats, sizes 10^3 ... 10^6, cvxopt up to T = 10^4; run from the repository root)
 
-Model (as bench/map_smoother_benchmark.cc): x_{t+1} = [[0.99, 0.1], [0, 0.95]] x_t + w, z_t = x_{t,1} + v_t,
-f_0 = 1/2|x_0|^2, f_t = 1/2 w'(0.01 I)^-1 w, g = l1 or Huber(kappa = 1). cvxopt solves the same MAP problem
-as a sparse QP:
+Part 1, ident vs cvxopt. Model (as bench/map_smoother_benchmark.cc): x_{t+1} = [[0.99, 0.1], [0, 0.95]] x_t + w,
+z_t = x_{t,1} + v_t, f_0 = 1/2|x_0|^2, f_t = 1/2 w'(0.01 I)^-1 w, g = l1 or Huber(kappa = 1). cvxopt solves the
+same MAP problem as a sparse QP:
   l1:    min 1/2 x'Px + 1's           s.t.  -s <= z - Hx <= s
   Huber: min 1/2 x'Px + 1/2|a|^2 + 1's  s.t.  -s <= z - Hx - a <= s     (huber(r) = min_a a^2/2 + |r - a|)
 with P = A' Qbar^-1 A. Prints both objective values, their relative difference, the solve times (ident: the
 "solve_seconds" of `ident smooth --json`, without file I/O; cvxopt: the solvers.qp call) and the ratio,
 both as wall time and as CPU time (process_time / std::clock; steadier on a loaded machine). Each solver runs
 `repeats` times, alternating, and the smallest time of each is kept (the shared machine's load varies by 2x
-between runs of the same solve).
-"""
-import json, os, random, subprocess, sys, tempfile, time
+between runs of the same solve). cvxopt runs only up to --cvxopt-max (its time grows faster than T).
 
+Part 2, scale: a double integrator x_{t+1} = [[1, 1], [0, 1]] x_t + w (unit process noise), z_t = x_{t,1} + v_t
+with Laplace v, whose positions reach ~T^1.5 (6e8 at T = 10^6), smoothed with l1, Huber and Gaussian
+measurement penalties at every size. For each: iterations, solve time, the certified relative gap
+(relative_gap_bound); for l1 and Huber up to --cvxopt-max cvxopt's objective and time (one run); for the
+Gaussian model the closed-form optimum by a banded Cholesky solve of the normal equations
+(scipy.linalg.solveh_banded) as an independent check that primal - optimum <= gap + bound.
+The time per step at the largest size relative to 10^5 shows whether the solve is linear in T.
+"""
+import argparse, json, os, random, subprocess, sys, tempfile, time
+
+import numpy as np
+from scipy.linalg import solveh_banded
 from cvxopt import matrix, spmatrix, solvers
 
-IDENT = sys.argv[1] if len(sys.argv) > 1 else "build/bin/ident"
-REPEATS = int(sys.argv[2]) if len(sys.argv) > 2 else 3
 F = [[0.99, 0.1], [0.0, 0.95]]
 
 
@@ -37,23 +46,35 @@ def make_data(T, seed=42):
     return z
 
 
-def run_ident(z, penalty, tmp):
-    model = {"F": F, "H": [[1, 0]], "initial": {"penalty": "quadratic", "covariance": 1},
-             "process": {"penalty": "quadratic", "covariance": 0.01}, "measurement": penalty}
+def make_double_integrator(T, seed=1):
+    rng = np.random.default_rng(seed)
+    x = np.cumsum(np.cumsum(rng.standard_normal(T + 1)))
+    return x + rng.laplace(size=T + 1)
+
+
+def run_ident(ident, model, z, tmp):
     mpath, dpath = os.path.join(tmp, "model.json"), os.path.join(tmp, "data.csv")
     with open(mpath, "w") as f:
         json.dump(model, f)
     with open(dpath, "w") as f:
         f.write("z\n" + "\n".join("%.17g" % v for v in z) + "\n")
-    out = subprocess.run([IDENT, "smooth", "--model", mpath, dpath, "--json"], check=True, capture_output=True, text=True)
+    out = subprocess.run([ident, "smooth", "--model", mpath, dpath, "--json"], capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr.strip())
     j = json.loads(out.stdout)
-    return j["primal"], j["solve_seconds"], j["solve_cpu_seconds"], j["iterations"]
+    j.pop("x"), j.pop("u"), j.pop("y")
+    return j
 
 
-def run_cvxopt(z, huber):
+def stable_model(penalty):
+    return {"F": F, "H": [[1, 0]], "initial": {"penalty": "quadratic", "covariance": 1},
+            "process": {"penalty": "quadratic", "covariance": 0.01}, "measurement": penalty}
+
+
+def run_cvxopt(z, huber, F=F, weight=100.0):
     N = len(z)
     nx = 2 * N
-    # P = sum_t J_t' W_t J_t: t = 0: W = I on x_0; t >= 1: W = 100 I on x_t - F x_{t-1}.
+    # P = sum_t J_t' W_t J_t: t = 0: W = I on x_0; t >= 1: W = weight I on x_t - F x_{t-1}.
     entries = {}
 
     def add(i, j, v):
@@ -66,10 +87,10 @@ def run_cvxopt(z, huber):
         a, b = 2 * (t - 1), 2 * t
         for i in range(2):
             for j in range(2):
-                add(a + i, a + j, 100.0 * sum(F[k][i] * F[k][j] for k in range(2)))
-                add(a + i, b + j, -100.0 * F[j][i])
-                add(b + i, a + j, -100.0 * F[i][j])
-            add(b + i, b + i, 100.0)
+                add(a + i, a + j, weight * sum(F[k][i] * F[k][j] for k in range(2)))
+                add(a + i, b + j, -weight * F[j][i])
+                add(b + i, a + j, -weight * F[i][j])
+            add(b + i, b + i, weight)
     nv = nx + N + (N if huber else 0)  # x, s, (a)
     if huber:
         for t in range(N):
@@ -98,24 +119,138 @@ def run_cvxopt(z, huber):
     return sol["primal objective"], seconds, cpu, sol["status"]
 
 
+def gaussian_optimum(z):
+    """min 1/2|x_0|^2 + sum 1/2|x_t - F x_{t-1}|^2 + sum 1/2 (z_t - x_{t,1})^2, F = [[1, 1], [0, 1]], by a banded
+    Cholesky solve of the normal equations in the unknowns (x_{0,1}, x_{0,2}, x_{1,1}, ...), one step of
+    iterative refinement with the residual in long double, and the objective at that x in long double (an
+    upper bound on the optimum whatever the solve's accuracy: dual <= it is weak duality)."""
+    N = len(z)
+    Fd = np.array([[1.0, 1.0], [0.0, 1.0]])
+    D = np.zeros((N, 2, 2))
+    D[:] = np.eye(2)
+    D[:-1] += Fd.T @ Fd
+    D[:, 0, 0] += 1.0
+    n = 2 * N
+    ab = np.zeros((4, n))  # upper banded form, bandwidth 3: ab[3 + i - j, j] = A[i, j] for i <= j
+    for i in range(2):
+        for j in range(i, 2):
+            ab[3 + i - j, j::2] = D[:, i, j]
+    for i in range(2):  # A[2(t-1) + i, 2t + j] = (-F)[j, i], t >= 1
+        for j in range(2):
+            ab[3 + i - 2 - j, 2 + j::2] = -Fd[j, i]
+    b = np.zeros(n)
+    b[0::2] = z
+    L = np.longdouble
+
+    def gradient(x):  # A x - b in long double, from the objective's terms
+        xl = x.astype(L).reshape(N, 2)
+        w = xl.copy()
+        w[1:] -= xl[:-1] @ Fd.T.astype(L)
+        g = w.copy()
+        g[:-1] -= w[1:] @ Fd.astype(L)
+        g[:, 0] -= np.asarray(z, dtype=L) - xl[:, 0]
+        return g.reshape(-1), w, xl
+
+    x = solveh_banded(ab, b)
+    g, _, _ = gradient(x)
+    x = x - solveh_banded(ab, g.astype(float))
+    _, w, xl = gradient(x)
+    r = np.asarray(z, dtype=L) - xl[:, 0]
+    return float(L(0.5) * (np.sum(w * w) + np.sum(r * r)))
+
+
 def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("ident", nargs="?", default="build/bin/ident")
+    p.add_argument("repeats", nargs="?", type=int, default=3)
+    p.add_argument("--sizes", default="1000,10000,100000,1000000")
+    p.add_argument("--cvxopt-max", type=int, default=10000)
+    p.add_argument("--json", help="write the figures to this file")
+    a = p.parse_args()
+    sizes = [int(s) for s in a.sizes.split(",")]
+    figures = {"versus_cvxopt": [], "scale": []}
     print("%-6s %7s %20s %20s %10s %10s %10s %8s %10s %10s %8s" % (
         "noise", "T", "ident primal", "cvxopt primal", "rel diff", "ident [s]", "cvxopt [s]", "ratio",
         "ident cpu", "cvxopt cpu", "ratio"))
     with tempfile.TemporaryDirectory() as tmp:
-        for T in (100, 1000, 10000):
+        for T in sizes:
             z = make_data(T)
             for name, penalty in (("l1", {"penalty": "l1"}), ("huber", {"penalty": "huber", "kappa": 1})):
                 t_ours = c_ours = t_theirs = c_theirs = float("inf")
-                for _ in range(REPEATS):
-                    ours, t, c, iters = run_ident(z, penalty, tmp)
-                    t_ours, c_ours = min(t_ours, t), min(c_ours, c)
-                    theirs, t, c, status = run_cvxopt(z, name == "huber")
-                    t_theirs, c_theirs = min(t_theirs, t), min(c_theirs, c)
-                print("%-6s %7d %20.12f %20.12f %10.2e %10.5f %10.5f %7.1fx %10.5f %10.5f %7.1fx  (cvxopt %s, ident %d it)" % (
-                    name, T, ours, theirs, abs(ours - theirs) / abs(theirs), t_ours, t_theirs, t_theirs / t_ours,
-                    c_ours, c_theirs, c_theirs / max(c_ours, 1e-6), status, iters))
+                theirs, status = None, "not run"
+                for _ in range(a.repeats):
+                    j = run_ident(a.ident, stable_model(penalty), z, tmp)
+                    t_ours, c_ours = min(t_ours, j["solve_seconds"]), min(c_ours, j["solve_cpu_seconds"])
+                    if T <= a.cvxopt_max:
+                        theirs, t, c, status = run_cvxopt(z, name == "huber")
+                        t_theirs, c_theirs = min(t_theirs, t), min(c_theirs, c)
+                ours = j["primal"]
+                row = {"noise": name, "T": T, "ident_primal": ours, "ident_seconds": t_ours, "ident_cpu_seconds": c_ours,
+                       "ident_iterations": j["iterations"], "ident_relative_gap_bound": j["relative_gap_bound"]}
+                if theirs is not None:
+                    row.update({"cvxopt_primal": theirs, "relative_difference": abs(ours - theirs) / abs(theirs),
+                                "cvxopt_seconds": t_theirs, "cvxopt_cpu_seconds": c_theirs, "cvxopt_status": status,
+                                "speedup_wall": t_theirs / t_ours, "speedup_cpu": c_theirs / max(c_ours, 1e-6)})
+                    print("%-6s %7d %20.12f %20.12f %10.2e %10.5f %10.5f %7.1fx %10.5f %10.5f %7.1fx  (cvxopt %s, ident %d it)" % (
+                        name, T, ours, theirs, row["relative_difference"], t_ours, t_theirs, row["speedup_wall"],
+                        c_ours, c_theirs, row["speedup_cpu"], status, j["iterations"]))
+                else:
+                    print("%-6s %7d %20.12f %20s %10s %10.5f %10s %8s %10.5f  (ident %d it, gap <= %.1e)" % (
+                        name, T, ours, "-", "-", t_ours, "-", "-", c_ours, j["iterations"], j["relative_gap_bound"]))
+                figures["versus_cvxopt"].append(row)
                 sys.stdout.flush()
+        print("\ndouble integrator (positions up to ~T^1.5): certified relative gap, time, Gaussian closed form")
+        print("%-6s %8s %5s %10s %10s %12s %16s %10s" % ("noise", "T", "it", "solve [s]", "us/step", "gap bound",
+                                                       "reference", "holds/x"))
+        for T in sizes:
+            z = make_double_integrator(T)
+            for name, penalty in (("l1", {"penalty": "l1"}), ("huber", {"penalty": "huber", "kappa": 1}),
+                                  ("gauss", {"penalty": "quadratic", "covariance": 1})):
+                model = {"F": [[1, 1], [0, 1]], "H": [[1, 0]], "initial": {"penalty": "quadratic", "covariance": 1},
+                         "process": {"penalty": "quadratic", "covariance": 1}, "measurement": penalty}
+                best = None
+                for _ in range(a.repeats):
+                    j = run_ident(a.ident, model, z, tmp)
+                    if best is None or j["solve_seconds"] < best["solve_seconds"]:
+                        best = j
+                row = {"noise": name, "T": T, "iterations": best["iterations"], "solve_seconds": best["solve_seconds"],
+                       "solve_cpu_seconds": best["solve_cpu_seconds"], "primal": best["primal"], "gap": best["gap"],
+                       "gap_error_bound": best["gap_error_bound"], "relative_gap_bound": best["relative_gap_bound"]}
+                check, holds = "", ""
+                if name != "gauss" and T <= a.cvxopt_max:  # the same objective by cvxopt, once
+                    theirs, t, c, status = run_cvxopt(list(z), name == "huber", F=[[1.0, 1.0], [0.0, 1.0]], weight=1.0)
+                    row.update({"cvxopt_primal": theirs, "cvxopt_status": status, "cvxopt_seconds": t,
+                                "cvxopt_cpu_seconds": c,
+                                "relative_difference": abs(best["primal"] - theirs) / abs(theirs),
+                                "speedup_wall": t / best["solve_seconds"],
+                                "speedup_cpu": c / max(best["solve_cpu_seconds"], 1e-6)})
+                    check = "cvxopt %.1e" % row["relative_difference"]
+                    holds = "%.0fx" % row["speedup_wall"]
+                if name == "gauss":
+                    optimum = gaussian_optimum(z)
+                    excess = best["primal"] - optimum
+                    # dual - bound <= P(x_ref) (weak duality) and primal - P(x_ref) within the certified gap
+                    # up to the rounding of the two objectives (1e-15 relative)
+                    slack = 1e-15 * abs(optimum)
+                    row.update({"closed_form_optimum": optimum,
+                                "closed_form_relative_excess": excess / abs(optimum),
+                                "bound_holds": bool(best["primal"] - best["gap"] - best["gap_error_bound"] <= optimum + slack
+                                                    and excess <= best["gap"] + best["gap_error_bound"] + slack)})
+                    check, holds = "%.2e" % (excess / abs(optimum)), str(row["bound_holds"])
+                print("%-6s %8d %5d %10.4f %10.3f %12.2e %16s %10s" % (
+                    name, T, best["iterations"], best["solve_seconds"], 1e6 * best["solve_seconds"] / (T + 1),
+                    best["relative_gap_bound"], check, holds))
+                figures["scale"].append(row)
+                sys.stdout.flush()
+    by = {(r["noise"], r["T"]): r for r in figures["scale"]}
+    if 100000 in sizes and 1000000 in sizes:
+        for key, field in (("time_ratio_1e6_to_1e5", "solve_seconds"), ("cpu_time_ratio_1e6_to_1e5", "solve_cpu_seconds")):
+            figures[key] = {name: round(by[(name, 1000000)][field] / by[(name, 100000)][field], 2)
+                            for name in ("l1", "huber", "gauss")}
+            print("%s at T = 10^6 / at T = 10^5:" % field, figures[key])
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(figures, f, indent=1)
 
 
 if __name__ == "__main__":

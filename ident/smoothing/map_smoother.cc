@@ -31,6 +31,8 @@ const char* ToString(MapSmootherStatus status) {
       return "infeasible";
     case MapSmootherStatus::kNumericalFailure:
       return "numerical_failure";
+    case MapSmootherStatus::kStalled:
+      return "stalled";
   }
   return "?";
 }
@@ -38,6 +40,7 @@ const char* ToString(MapSmootherStatus status) {
 std::string MapSmootherOptions::Validate() const {
   if (max_iterations < 1) return fmt::format("max_iterations = {}; need >= 1", max_iterations);
   if (!(tolerance > 0 && tolerance < 1)) return fmt::format("tolerance = {}; need 0 < tolerance < 1", tolerance);
+  if (!(gap_tolerance > 0)) return fmt::format("gap_tolerance = {}; need > 0", gap_tolerance);
   if (!(step_fraction > 0 && step_fraction < 1))
     return fmt::format("step_fraction = {}; need 0 < step_fraction < 1", step_fraction);
   return "";

@@ -65,8 +65,13 @@ struct MapSmootherProblem {
 void ValidateMapSmootherProblem(const MapSmootherProblem& problem);
 
 struct MapSmootherOptions {
-  int max_iterations = 100;      // interior-point (Newton) iterations
-  double tolerance = 1e-10;      // on complementarity and the scaled KKT residuals
+  int max_iterations = 100;  // interior-point (Newton) iterations
+  // On the complementarity and the KKT residuals, each relative to the magnitudes it is computed from;
+  // a residual at its round-off floor (set by the size of the states) counts as met.
+  double tolerance = 1e-10;
+  // A converged iterate whose certified relative duality gap (relative_gap_bound) exceeds this is reported
+  // as kStalled: the KKT conditions hold to rounding, but the certificate shows an accuracy of only that gap.
+  double gap_tolerance = 1e-6;
   double step_fraction = 0.995;  // fraction-to-boundary factor for s, q > 0
   // Use the fused fast path (ident/smoothing/internal/map_smoother_fast_path.h) when the problem has its structure:
   // bound-free (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties,
@@ -76,10 +81,12 @@ struct MapSmootherOptions {
 };
 
 enum class MapSmootherStatus {
-  kConverged,         // KKT conditions met to `tolerance`
+  kConverged,         // KKT conditions met to `tolerance`, certified relative gap <= gap_tolerance
   kMaxIterations,     // iterate returned as is; objectives/gap still evaluated
   kInfeasible,        // multipliers diverged: (P) has no feasible point (e.g. residual outside a support)
   kNumericalFailure,  // the Newton matrix lost positive definiteness
+  kStalled,           // no progress at a residual above `tolerance`, or a certified gap above gap_tolerance:
+                      // the iterate, its objectives and its certified gap are returned (message says how far)
 };
 const char* ToString(MapSmootherStatus status);
 
@@ -87,7 +94,9 @@ struct MapSmootherResult {
   MapSmootherStatus status = MapSmootherStatus::kNumericalFailure;
   std::string message;
   int iterations = 0;
-  double kkt_residual = 0;          // max(mu, |R3|/(1+|z|), |R4|/scale) at the returned iterate
+  // At the returned iterate: the largest of the complementarity per constraint, the total complementarity
+  // over the objective's size, and |R3|, |R4| over their scales or round-off floors (the stopping test).
+  double kkt_residual = 0;
   Eigen::MatrixXd x;                // n x (T+1) MAP states
   Eigen::MatrixXd w;                // n x (T+1) process noise w_t = x_t - F_{t-1} x_{t-1}, w_0 = x_0
   Eigen::MatrixXd u;                // nz x (T+1) dual controls of (D)
@@ -96,6 +105,13 @@ struct MapSmootherResult {
   double dual = 0;                  // (D) at (u, y)
   double gap = 0;                   // primal - dual (>= 0 up to rounding)
   double relative_gap = 0;          // gap / max(1, |primal|)
+  // The duality certificate: the gap is summed as per-term Fenchel-Young gaps f(w)+f*(y)-y'w and
+  // g(r)+g*(u)-u'r at the exactly dual-feasible (u, y(u)) (y in double-double), so that its round-off does
+  // not grow with T; gap_error_bound bounds that round-off (a first-order running error bound).
+  // primal - optimum <= gap + gap_error_bound. relative_gap_bound = (max(gap, 0) + gap_error_bound) /
+  // max(1, |primal|); +inf when y(u) leaves dom f* (no finite certificate).
+  double gap_error_bound = 0;
+  double relative_gap_bound = 0;
   double dual_infeasibility = 0;    // max distance of u_t, y_t outside dom g_t*, dom f_t* before projection
   Eigen::MatrixXd x_from_dual;      // states rebuilt from y: w_t in d f_t*(y_t), then the dynamics
   double max_abs_x_difference = 0;  // max |x - x_from_dual|

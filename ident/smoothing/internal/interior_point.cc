@@ -10,6 +10,8 @@
 
 #include <Eigen/Cholesky>
 
+#include <fmt/format.h>
+
 #include "common/error.h"
 #include "ident/linalg/block_tridiagonal.h"
 #include "ident/linalg/work_arena.h"
@@ -127,6 +129,8 @@ class Solver {
     }
     for (const auto& F : p.F) matrix_scale_ = std::max(matrix_scale_, 1 + F.cwiseAbs().maxCoeff());
     for (const auto& H : p.H) matrix_scale_ = std::max(matrix_scale_, 1 + H.cwiseAbs().maxCoeff());
+    for (auto& [_, prep] : prepared_)
+      if (prep->constant) constant_weight_scale_ = std::max(constant_weight_scale_, prep->W.cwiseAbs().maxCoeff());
     const int m = std::max(n_, nz_);
     r_.resize(m);
     v_.resize(m);
@@ -156,22 +160,61 @@ class Solver {
     // mu_scale: the complementarity at the start (at least 1). Multipliers × slacks carry the units of the
     // residuals (a domain bound 1000 away starts them 1000-fold), and so does the precision limit below.
     double mu = 0, mu_scale = 1;
+    std::vector<double> history;  // KKT residual per iteration (stall test)
+    history.reserve(static_cast<std::size_t>(o_.max_iterations) + 1);
     for (;; ++iter) {
       const double v_scale = Residuals();
       mu = num_constraints_ ? Complementarity(0) / num_constraints_ : 0.0;
       if (iter == 0) mu_scale = std::max(1.0, mu);
       const double r3max = r3_.size() ? r3_.cwiseAbs().maxCoeff() : 0.0;
       const double r4max = R4_.cwiseAbs().maxCoeff();
-      // KKT residual relative to its scale (R4 sums products of H_t, F_t with p + B'u).
-      const double kkt = std::max({mu, r3max / z_scale, r4max / (v_scale * matrix_scale_)});
+      // R4's round-off floor: the dual values c0 + W r of the quadratic terms are computed from residuals
+      // r = x_t - F x_{t-1}, z_t - H x_t whose rounding is eps times the states' size, which for long
+      // records (a double integrator: |x| ~ T^1.5) exceeds tolerance × the dual values. A residual at that
+      // floor counts as met (the certificate of FinishMapSmootherResult measures the accuracy reached).
+      const double x_scale = x_.cwiseAbs().maxCoeff();
+      const double r4_floor = kFloorFactor * std::numeric_limits<double>::epsilon() * matrix_scale_ *
+                              (constant_weight_scale_ * matrix_scale_ * (x_scale + z_scale) + v_scale);
+      // The relative KKT residual: the complementarity s'q (the iterate's duality gap up to the residuals)
+      // relative to the objective's size, since the unit σ need not be the residuals' size (a double
+      // integrator's data steps are its velocity; 1e-12 per constraint stands in for an objective of zero);
+      // R3 relative to the data; R4 relative to the dual values it sums (R4 sums products of H_t, F_t with
+      // p + B'u), or its round-off floor.
+      // R3 = B r - b - M u - (q_hi - q_lo) has a floor of eps times its largest term (multipliers of a
+      // domain bound far from the residuals start large, BalanceOneSidedMultipliers).
+      double qmax = 0;
+      for (int c : bounded_) qmax = std::max({qmax, qlo_(c), qhi_(c)});
+      const double r3_floor =
+          kResidualFloorFactor * std::numeric_limits<double>::epsilon() * (z_scale * matrix_scale_ + bound_scale + qmax);
+      const double kkt = RelativeKktResidual(mu * num_constraints_, objective_scale_, num_constraints_,
+                                             r3max / std::max(1 + qmax, r3_floor / o_.tolerance),
+                                             r4max / std::max(v_scale * matrix_scale_, r4_floor / o_.tolerance));
       res.kkt_residual = kkt;
+      history.push_back(kkt);
       if (kkt <= o_.tolerance) {
         res.status = MapSmootherStatus::kConverged;
         break;
       }
       if (iter >= o_.max_iterations) break;
+      if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
+        res.status = MapSmootherStatus::kStalled;
+        res.message = fmt::format(
+            "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
+            "round-off floor is {:.1e} for states of size {:.1e})",
+            iter, kkt, kStallWindow, r4_floor / (v_scale * matrix_scale_), sigma_ * x_scale);
+        break;
+      }
       if (u_.size() && u_.cwiseAbs().maxCoeff() > 1e10 * bound_scale * z_scale) {
+        Eigen::Index c = 0;
+        const double umax = u_.cwiseAbs().maxCoeff(&c);
+        int t = -1;
+        for (const Term& term : active_)
+          if (term.offset <= c && c < term.offset + term.prep->k) t = term.t;
         res.status = MapSmootherStatus::kInfeasible;
+        res.message = fmt::format(
+            "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
+            "the data): no state sequence keeps every residual inside its penalty's domain",
+            sigma_ * umax, t, umax / (bound_scale * z_scale));
         break;
       }
       AssembleNewtonMatrix();
@@ -201,7 +244,6 @@ class Solver {
       Step(std::min(1.0, o_.step_fraction * MaxStep()));
     }
     res.iterations = iter;
-    SetMapSmootherMessage(&res);
     Finish(&res, z_scale, mu);
     return res;
   }
@@ -266,6 +308,7 @@ class Solver {
   // R3 = B r - b - M u - (q_hi - q_lo) per term, R4 = sum J'(p + B'u); returns the scale of p + B'u.
   double Residuals() {
     R4_.setZero();
+    objective_scale_ = 0;
     double v_scale = 1;
     double* r = r_.data();
     double* v = v_.data();
@@ -283,7 +326,10 @@ class Solver {
           for (int i = 0; i < m; ++i) v[i] = prep.c0(i);
           AddMatVec(W, m, m, r, v, 1.0);
         }
-        for (int i = 0; i < m; ++i) v_scale = std::max(v_scale, std::abs(v[i]));
+        for (int i = 0; i < m; ++i) {
+          v_scale = std::max(v_scale, std::abs(v[i]));
+          objective_scale_ += std::abs(v[i] * r[i]);
+        }
         AddJt(term, v, 1.0, R4_.data());
         continue;
       }
@@ -298,7 +344,11 @@ class Solver {
         for (int i = 0; i < k; ++i) r3[i] = -f.b(i);
         AddMatVec(f.B.data(), k, m, r, r3, 1.0);
       }
-      for (int i = 0; i < m; ++i) v_scale = std::max(v_scale, std::abs(v[i]));
+      for (int i = 0; i < m; ++i) {
+        v_scale = std::max(v_scale, std::abs(v[i]));
+        objective_scale_ += std::abs(f.p(i) * r[i]);
+      }
+      for (int i = 0; i < k; ++i) objective_scale_ += std::abs(u[i] * r3[i]);  // u'(B r - b)
       AddJt(term, v, 1.0, R4_.data());
       if (f.diagonal_M) {
         const double* M = f.M.data();
@@ -559,27 +609,67 @@ class Solver {
     }
   }
 
-  // The states and dual controls u_t = p + B'u of the iterate, back in the data's unit; the rest is
-  // common to both paths.
+  // W = B'K^-1 B of a term at the current iterate (m x m, column-major), K = M + diag(q_hi/s_hi + q_lo/s_lo).
+  void TermWeight(const Term& term, double* W) {
+    Prepared& prep = *term.prep;
+    const PlqForm& f = *prep.plq;
+    const int m = prep.m, k = prep.k;
+    if (prep.constant) {
+      for (int i = 0; i < m * m; ++i) W[i] = prep.W.data()[i];
+      return;
+    }
+    for (int i = 0; i < m * m; ++i) W[i] = 0;
+    if (f.diagonal_M) {
+      for (int i = 0; i < k; ++i) {
+        const double inv = 1.0 / (BarrierCurvature(term.offset + i) + f.M(i, i));
+        for (int b = 0; b < m; ++b)
+          for (int a = 0; a < m; ++a) W[a + b * m] += f.B(i, a) * f.B(i, b) * inv;
+      }
+    } else {
+      for (int i = 0; i < k; ++i) kd_(term.offset + i) = BarrierCurvature(term.offset + i);
+      FactorK(term);
+      prep.KinvB = prep.llt.solve(f.B);
+      Eigen::Map<Eigen::MatrixXd>(W, m, m).noalias() = f.B.transpose() * prep.KinvB;
+    }
+  }
+
+  // The dual value p + B'u of a term at the current iterate (constant terms: c0 + W r).
+  void TermDual(const Term& term, double* out) {
+    const Prepared& prep = *term.prep;
+    const int m = prep.m;
+    if (prep.constant) {
+      double* r = r_.data();
+      Residual(term, x_.data(), true, r);
+      for (int i = 0; i < m; ++i) out[i] = prep.c0(i);
+      AddMatVec(prep.W.data(), m, m, r, out, 1.0);
+      return;
+    }
+    for (int i = 0; i < m; ++i) out[i] = prep.plq->p(i);
+    AddMatTVec(prep.plq->B.data(), prep.k, m, u_.data() + term.offset, out, 1.0);
+  }
+
+  // The states, dual values and Newton weights of the iterate, back in the data's unit (dual values scale
+  // with σ, the weights not); the rest is common to both paths.
   void Finish(MapSmootherResult* res, double z_scale, double mu) {
     res->x = sigma_ * x_;
     res->u.resize(nz_, T_ + 1);
+    MapSmootherDualIterate dual;
+    dual.process_dual.resize(n_, T_ + 1);
+    dual.process_weight.resize(n_ * n_, T_ + 1);
+    dual.measurement_weight.resize(nz_ * nz_, T_ + 1);
     for (const Term& term : terms_) {
-      if (term.process) continue;
-      const PlqForm& f = *term.prep->plq;
-      double* ut = res->u.col(term.t).data();  // u_t = p + B'u in d g_t
-      if (term.prep->constant) {               // u = K^-1 (B r - b): p + B'u = c0 + W r
-        double* r = r_.data();
-        Residual(term, x_.data(), true, r);
-        for (int i = 0; i < nz_; ++i) ut[i] = term.prep->c0(i);
-        AddMatVec(term.prep->W.data(), nz_, nz_, r, ut, 1.0);
-        continue;
+      const int t = term.t;
+      if (term.process) {
+        TermDual(term, dual.process_dual.col(t).data());
+        TermWeight(term, dual.process_weight.col(t).data());
+      } else {
+        TermDual(term, res->u.col(t).data());  // u_t = p + B'u in d g_t
+        TermWeight(term, dual.measurement_weight.col(t).data());
       }
-      for (int i = 0; i < nz_; ++i) ut[i] = f.p(i);
-      AddMatTVec(f.B.data(), term.prep->k, nz_, u_.data() + term.offset, ut, 1.0);
     }
     res->u *= sigma_;
-    FinishMapSmootherResult(p_, sigma_ * z_scale, mu, res);
+    dual.process_dual *= sigma_;
+    FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, res);
   }
 
   const MapSmootherProblem& p_;
@@ -594,6 +684,8 @@ class Solver {
   std::unique_ptr<WorkArena> arena_;
   int num_constraints_ = 0;
   double matrix_scale_ = 1;
+  double constant_weight_scale_ = 0;
+  double objective_scale_ = 0;  // sum over terms of |v'r| (dual value times residual): the objective's size  // max |W| of the bound-free terms (R4's round-off floor)
   // Per PLQ coordinate: u, slacks and multipliers of lo <= u <= hi, residual R3, R3 - e of the current
   // direction, Newton direction, affine cross terms ds.*dq, and K's diagonal (its reciprocal for
   // diagonal M).

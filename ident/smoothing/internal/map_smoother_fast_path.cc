@@ -9,6 +9,8 @@
 
 #include <Eigen/Cholesky>
 
+#include <fmt/format.h>
+
 #include "common/error.h"
 #include "ident/linalg/work_arena.h"
 #include "ident/smoothing/internal/map_smoother_result.h"
@@ -132,6 +134,7 @@ class FastSolver {
     }
     for (const auto& F : p.F) matrix_scale_ = std::max(matrix_scale_, 1 + F.cwiseAbs().maxCoeff());
     for (const auto& H : p.H) matrix_scale_ = std::max(matrix_scale_, 1 + H.cwiseAbs().maxCoeff());
+    for (const ProcessPenalty& f : process_) weight_scale_ = std::max(weight_scale_, f.W.cwiseAbs().maxCoeff());
   }
 
   MapSmootherResult Run() {
@@ -141,19 +144,45 @@ class FastSolver {
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
     double mu = 0, alpha = 0, mu_scale = 1;  // mu_scale: the general path's
+    std::vector<double> history;               // KKT residual per iteration (stall test)
+    history.reserve(static_cast<std::size_t>(o_.max_iterations) + 1);
     for (;; ++iter) {
       const Residuals r = StepAndResiduals(alpha);
       mu = r.complementarity / num_constraints;
       if (iter == 0) mu_scale = std::max(1.0, mu);
-      const double kkt = std::max({mu, r.r3max / z_scale, r.r4max / (r.v_scale * matrix_scale_)});
+      // R4's round-off floor and the relative KKT residual: the general path's.
+      const double r4_floor = kFloorFactor * std::numeric_limits<double>::epsilon() * matrix_scale_ *
+                              (weight_scale_ * matrix_scale_ * (r.xmax + z_scale) + r.v_scale);
+      const double kkt =
+          RelativeKktResidual(r.complementarity, r.objective_scale, num_constraints,
+                              r.r3max / std::max(1 + r.qmax, kResidualFloorFactor * std::numeric_limits<double>::epsilon() *
+                                                              (z_scale * matrix_scale_ + bound_scale_ + r.qmax) /
+                                                              o_.tolerance),
+                              r.r4max / std::max(r.v_scale * matrix_scale_, r4_floor / o_.tolerance));
       res.kkt_residual = kkt;
+      history.push_back(kkt);
       if (kkt <= o_.tolerance) {
         res.status = MapSmootherStatus::kConverged;
         break;
       }
       if (iter >= o_.max_iterations) break;
+      if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
+        res.status = MapSmootherStatus::kStalled;
+        res.message = fmt::format(
+            "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
+            "round-off floor is {:.1e} for states of size {:.1e})",
+            iter, kkt, kStallWindow, r4_floor / (r.v_scale * matrix_scale_), sigma_ * r.xmax);
+        break;
+      }
       if (r.umax > 1e10 * bound_scale_ * z_scale) {
+        int t = 0;
+        for (int s = 0; s <= T_; ++s)
+          if (std::abs(steps_[s].u) > std::abs(steps_[t].u)) t = s;
         res.status = MapSmootherStatus::kInfeasible;
+        res.message = fmt::format(
+            "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
+            "the data): no state sequence keeps every residual inside its penalty's domain",
+            sigma_ * r.umax, t, r.umax / (bound_scale_ * z_scale));
         break;
       }
       if (!FactorAndForward()) {  // as the general path: accept a breakdown at the precision limit
@@ -172,11 +201,33 @@ class FastSolver {
       alpha = std::min(1.0, o_.step_fraction * corrected.max_step);
     }
     res.iterations = iter;
-    SetMapSmootherMessage(&res);
     res.x = sigma_ * Eigen::Map<const Eigen::MatrixXd>(x_, kN, T_ + 1);  // back in the data's unit
     res.u.resize(1, T_ + 1);
-    for (int t = 0; t <= T_; ++t) res.u(0, t) = sigma_ * steps_[t].u;  // p + B'u = u (identity B, p = 0)
-    FinishMapSmootherResult(p_, sigma_ * z_scale, mu, &res);
+    // The dual values and Newton weights of the iterate for the certificate's dual polish: the process
+    // duals c0 + W r and their W, the measurement's K^-1 = 1 / (m + q_lo/s_lo + q_hi/s_hi).
+    MapSmootherDualIterate dual;
+    dual.process_dual.resize(kN, T_ + 1);
+    dual.process_weight.resize(kN * kN, T_ + 1);
+    dual.measurement_weight.resize(1, T_ + 1);
+    for (int t = 0; t <= T_; ++t) {
+      const StepConstants<kN>& c = Constants(t);
+      const StepState<kN>& s = steps_[t];
+      res.u(0, t) = sigma_ * s.u;  // p + B'u = u (identity B, p = 0)
+      const double* xt = x_ + t * kN;
+      double w[kN];
+      for (int i = 0; i < kN; ++i) w[i] = xt[i];
+      if (t > 0)
+        for (int j = 0; j < kN; ++j)
+          for (int i = 0; i < kN; ++i) w[i] -= c.F[i + j * kN] * xt[j - kN];
+      for (int i = 0; i < kN; ++i) {
+        double v = c.c0[i];
+        for (int j = 0; j < kN; ++j) v += c.W[i + j * kN] * w[j];
+        dual.process_dual(i, t) = sigma_ * v;
+      }
+      for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, t) = c.W[i];
+      dual.measurement_weight(0, t) = 1.0 / (c.m + s.qlo / s.slo + s.qhi / s.shi);
+    }
+    FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, &res);
     return res;
   }
 
@@ -187,7 +238,7 @@ class FastSolver {
     Eigen::VectorXd c0;
   };
   struct Residuals {
-    double complementarity = 0, r3max = 0, r4max = 0, v_scale = 1, umax = 0;
+    double complementarity = 0, r3max = 0, r4max = 0, v_scale = 1, umax = 0, xmax = 0, objective_scale = 0, qmax = 0;
   };
   struct Backward {
     double max_step = std::numeric_limits<double>::infinity();
@@ -261,6 +312,8 @@ class FastSolver {
         for (int i = 0; i < kN; ++i) v[i] += c.W[i + j * kN] * r[j];
       double hx = 0;
       for (int i = 0; i < kN; ++i) {
+        out.objective_scale += std::abs(v[i] * r[i]);
+        out.xmax = std::max(out.xmax, std::abs(xt[i]));
         out.v_scale = std::max(out.v_scale, std::abs(v[i]));
         s.R4[i] = v[i] - c.H[i] * s.u;
         hx += c.H[i] * xt[i];
@@ -279,7 +332,9 @@ class FastSolver {
       out.umax = std::max(out.umax, au);
       s.r3 = z_[t] - hx - c.m * s.u - (s.qhi - s.qlo);
       out.r3max = std::max(out.r3max, std::abs(s.r3));
+      out.objective_scale += std::abs(s.u * (z_[t] - hx));
       out.complementarity += s.slo * s.qlo + s.shi * s.qhi;
+      out.qmax = std::max({out.qmax, s.qlo, s.qhi});
     }
     for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(steps_[T_].R4[i]));
     return out;
@@ -436,6 +491,7 @@ class FastSolver {
   const double sigma_;       // the data unit (MapSmootherDataUnit)
   const Eigen::VectorXd z_;  // the measurements in that unit
   double bound_scale_ = 1, matrix_scale_ = 1;
+  double weight_scale_ = 0;  // max |W| of the process penalties (R4's round-off floor)
 };
 
 }  // namespace

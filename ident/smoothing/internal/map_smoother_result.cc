@@ -8,6 +8,8 @@
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "ident/linalg/block_tridiagonal.h"
+#include "ident/smoothing/internal/compensated_arithmetic.h"
 #include "ident/smoothing/internal/small_kernels.h"
 
 namespace ident::internal {
@@ -15,20 +17,129 @@ namespace {
 
 using models::Penalty;
 
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+// The dual polish of FinishMapSmootherResult (map_smoother_result.h): rho = A'v - H'u, N xi = -rho,
+// v += W_f A xi, u -= W_g H xi, twice; a round that does not lower max |rho| is undone. Returns max |rho|.
+template <int kN>
+double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dual, Eigen::MatrixXd* v_out,
+                  Eigen::MatrixXd* u_out) {
+  const int T = p.T(), N = T + 1, n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
+  Eigen::MatrixXd& v = *v_out;
+  Eigen::MatrixXd& u = *u_out;
+  auto residual = [&](Eigen::MatrixXd* rho) {  // rho_t = v_t - F_t'v_{t+1} - H_t'u_t
+    for (int t = 0; t <= T; ++t) {
+      double* rt = rho->col(t).data();
+      for (int i = 0; i < n; ++i) rt[i] = v(i, t);
+      if (t < T) AddMatTVec<kN, kN>(p.Ft(t).data(), n, n, v.col(t + 1).data(), rt, -1.0);
+      AddMatTVec<0, kN>(p.Ht(t).data(), nz, n, u.col(t).data(), rt, -1.0);
+    }
+    return rho->cwiseAbs().maxCoeff();
+  };
+  Eigen::MatrixXd rho(n, N);
+  double rho_max = residual(&rho);
+  if (!(rho_max > 0) || !dual.process_weight.allFinite() || !dual.measurement_weight.allFinite()) return rho_max;
+  // N = sum J'WJ: D_t = W_t + F_t'W_{t+1}F_t + H_t'Wg_t H_t, E_t = -W_t F_{t-1} (plain loops on the small
+  // blocks, as the solver's AddNewtonBlocks).
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, n * N), E = Eigen::MatrixXd::Zero(n, n * N);
+  std::vector<double> WF(static_cast<std::size_t>(n) * n), WH(static_cast<std::size_t>(nz) * n);
+  for (int t = 0; t <= T; ++t) {
+    const double* W = dual.process_weight.col(t).data();
+    const double* Wg = dual.measurement_weight.col(t).data();
+    double* Dt = D.data() + static_cast<Eigen::Index>(t) * n * n;
+    for (int i = 0; i < n * n; ++i) Dt[i] += W[i];
+    if (t > 0) {
+      const double* F = p.Ft(t - 1).data();
+      double* Et = E.data() + static_cast<Eigen::Index>(t) * n * n;
+      double* Dp = Dt - n * n;
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a) {
+          double wf = 0;
+          for (int c = 0; c < n; ++c) wf += W[a + c * n] * F[c + b * n];
+          WF[a + b * n] = wf;
+          Et[a + b * n] -= wf;
+        }
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a) {
+          double f = 0;
+          for (int c = 0; c < n; ++c) f += F[c + a * n] * WF[c + b * n];
+          Dp[a + b * n] += f;
+        }
+    }
+    const double* H = p.Ht(t).data();
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < nz; ++a) {
+        double wh = 0;
+        for (int c = 0; c < nz; ++c) wh += Wg[a + c * nz] * H[c + b * nz];
+        WH[a + b * nz] = wh;
+      }
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a) {
+        double h = 0;
+        for (int c = 0; c < nz; ++c) h += H[c + a * nz] * WH[c + b * nz];
+        Dt[a + b * n] += h;
+      }
+  }
+  BlockTridiagonalCholesky chol(n, N);
+  if (!chol.Factorize(D, E)) return rho_max;
+  Eigen::MatrixXd xi(n, N), v_prev, u_prev;
+  for (int round = 0; round < 2; ++round) {
+    v_prev = v;
+    u_prev = u;
+    xi = -rho;
+    chol.Solve(xi);
+    std::vector<double> step(n), gstep(nz);
+    double* a = step.data();
+    for (int t = 0; t <= T; ++t) {
+      for (int i = 0; i < n; ++i) a[i] = xi(i, t);  // (A xi)_t = xi_t - F_{t-1} xi_{t-1}
+      if (t > 0) AddMatVec<kN, kN>(p.Ft(t - 1).data(), n, n, xi.col(t - 1).data(), a, -1.0);
+      AddMatVec<kN, kN>(dual.process_weight.col(t).data(), n, n, a, v.col(t).data(), 1.0);
+      for (int j = 0; j < nz; ++j) gstep[j] = 0;
+      AddMatVec<0, kN>(p.Ht(t).data(), nz, n, xi.col(t).data(), gstep.data(), 1.0);  // H xi
+      AddMatVec(dual.measurement_weight.col(t).data(), nz, nz, gstep.data(), u.col(t).data(), -1.0);
+    }
+    const double next = residual(&rho);
+    if (!(next < rho_max)) {
+      v = v_prev;
+      u = u_prev;
+      return rho_max;
+    }
+    rho_max = next;
+  }
+  return rho_max;
+}
+
 // Everything of the result after the iteration, from res->x and res->u (see
 // ident/smoothing/internal/map_smoother_fast_path.h).
 template <int kN>
-void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {
+void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const MapSmootherDualIterate* dual,
+                  MapSmootherResult* res) {
   const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
+  // w_t = x_t - F_{t-1} x_{t-1} and r_t = z_t - H_t x_t by compensated dot products: their round-off is
+  // relative to w and r, not to the (possibly far larger) states.
   res->w.resize(n, T + 1);
-  for (int t = 0; t <= T; ++t) {  // w_t = x_t - F_{t-1} x_{t-1}
-    double* wt = res->w.col(t).data();
-    const double* xt = res->x.col(t).data();
-    for (int i = 0; i < n; ++i) wt[i] = xt[i];
-    if (t > 0) AddMatVec<kN, kN>(p.Ft(t - 1).data(), n, n, xt - n, wt, -1.0);
+  Eigen::MatrixXd r(nz, T + 1);
+  for (int t = 0; t <= T; ++t) {
+    for (int i = 0; i < n; ++i) {
+      DoubleDouble d;
+      d.Add(res->x(i, t));
+      if (t > 0)
+        for (int j = 0; j < n; ++j) d.AddProduct(-p.Ft(t - 1)(i, j), res->x(j, t - 1));
+      res->w(i, t) = d.value();
+    }
+    for (int i = 0; i < nz; ++i) {
+      DoubleDouble d;
+      d.Add(p.z(i, t));
+      for (int j = 0; j < n; ++j) d.AddProduct(-p.Ht(t)(i, j), res->x(j, t));
+      r(i, t) = d.value();
+    }
   }
-  // Dual point: u from the multipliers, y from u by the dynamics of (D) (exact A'y = H'u). Rounding can
-  // leave u_t, y_t a hair outside a box dom f*, dom g*: the distance is reported and the point projected.
+  if (dual != nullptr) {
+    Eigen::MatrixXd v = dual->process_dual;
+    PolishDual<kN>(p, *dual, &v, &res->u);
+  }
+  // Dual point: u projected into dom g* (rounding can leave it a hair outside a box), y = y(u) by the
+  // dynamics of (D) in double-double (exact A'y = H'u up to O(eps^2)).
   auto project = [&](const Penalty& pen, double* v, int size) {
     double violation = 0;
     for (int i = 0; i < size; ++i) {
@@ -37,31 +148,90 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmo
       v[i] = c;
     }
     res->dual_infeasibility = std::max(res->dual_infeasibility, violation);
+    return violation;
   };
   for (int t = 0; t <= T; ++t) project(p.gt(t), res->u.col(t).data(), nz);
   res->y.resize(n, T + 1);
+  Eigen::MatrixXd y_lo(n, T + 1);
+  // The local residual of the double-double recursion is at most 4 (n + nz) eps^2 times the magnitudes
+  // summed; its effect on the gap is sum |x_t| |rho_t| (below).
+  double error_bound = 0;
+  std::vector<DoubleDouble> next(n), cur(n);
   for (int t = T; t >= 0; --t) {  // y_T = H_T'u_T, y_t = F_t'y_{t+1} + H_t'u_t   [BCW Thm 2.5, A'y = H'u]
-    double* yt = res->y.col(t).data();
-    for (int i = 0; i < n; ++i) yt[i] = 0;
-    if (t < T) AddMatTVec<kN, kN>(p.Ft(t).data(), n, n, yt + n, yt, 1.0);
-    AddMatTVec<0, kN>(p.Ht(t).data(), nz, n, res->u.col(t).data(), yt, 1.0);
+    for (int i = 0; i < n; ++i) {
+      DoubleDouble d;
+      double magnitude = 0;
+      if (t < T)
+        for (int k = 0; k < n; ++k) {
+          d.AddProduct(p.Ft(t)(k, i), next[k]);
+          magnitude += std::abs(p.Ft(t)(k, i) * next[k].hi);
+        }
+      for (int j = 0; j < nz; ++j) {
+        d.AddProduct(p.Ht(t)(j, i), res->u(j, t));
+        magnitude += std::abs(p.Ht(t)(j, i) * res->u(j, t));
+      }
+      d.Normalize();
+      cur[i] = d;
+      res->y(i, t) = d.hi;
+      y_lo(i, t) = d.lo;
+      error_bound += std::abs(res->x(i, t)) * 4 * (n + nz) * kEps * kEps * magnitude;
+    }
+    std::swap(next, cur);
   }
-  for (int t = 0; t <= T; ++t) project(p.ft(t), res->y.col(t).data(), n);
-  double dual = 0, primal = 0;
-  const double domain_tolerance = 1e-8 * z_scale;
-  Eigen::VectorXd residual(nz);
-  double* r = residual.data();
+  // y(u) outside dom f_t* (a bounded process conjugate) is projected: the moved amount enters the bound
+  // as sum |x_t| |dy_t| (the size of x - x* taken as at most that of x); beyond 1e-8 relative, no finite
+  // certificate.
+  bool certified = true;
   for (int t = 0; t <= T; ++t) {
-    dual += p.z.col(t).dot(res->u.col(t)) - p.gt(t).Conjugate(res->u.col(t)) - p.ft(t).Conjugate(res->y.col(t));
-    for (int i = 0; i < nz; ++i) r[i] = p.z(i, t);  // z_t - H_t x_t
-    AddMatVec<0, kN>(p.Ht(t).data(), nz, n, res->x.col(t).data(), r, -1.0);
-    primal += p.ft(t).Value(res->w.col(t), domain_tolerance) +
-              p.gt(t).Value(Eigen::Map<const Eigen::VectorXd>(r, nz), domain_tolerance);
+    const double before = res->y.col(t).cwiseAbs().maxCoeff();
+    const double moved = project(p.ft(t), res->y.col(t).data(), n);
+    if (moved > 0) {
+      y_lo.col(t).setZero();
+      error_bound += res->x.col(t).cwiseAbs().sum() * moved;
+      if (moved > 1e-8 * (1 + before)) certified = false;
+    }
   }
-  res->dual = dual;
-  res->primal = primal;
-  res->gap = res->primal - res->dual;
+  // Objectives and the gap as compensated sums of per-term values; S sums the magnitudes each term is
+  // computed from, for the running error bound gamma S (Higham, sec. 3.3).
+  CompensatedSum primal, gap;
+  double magnitudes = 0;
+  const double domain_tolerance = 1e-8 * z_scale;
+  for (int t = 0; t <= T; ++t) {
+    const double fw = p.ft(t).Value(res->w.col(t), domain_tolerance);
+    const double fs = p.ft(t).Conjugate(res->y.col(t));
+    const double gr = p.gt(t).Value(r.col(t), domain_tolerance);
+    const double gs = p.gt(t).Conjugate(res->u.col(t));
+    DoubleDouble yw, ur;
+    double yw_abs = 0, ur_abs = 0;
+    for (int i = 0; i < n; ++i) {
+      yw.AddProduct(res->y(i, t), res->w(i, t));
+      yw.lo += y_lo(i, t) * res->w(i, t);
+      yw_abs += std::abs(res->y(i, t) * res->w(i, t));
+    }
+    for (int j = 0; j < nz; ++j) {
+      ur.AddProduct(res->u(j, t), r(j, t));
+      ur_abs += std::abs(res->u(j, t) * r(j, t));
+    }
+    primal.Add(fw);
+    primal.Add(gr);
+    gap.Add(fw + fs - yw.value());  // f(w) + f*(y) - y'w >= 0   [Fenchel-Young]
+    gap.Add(gr + gs - ur.value());  // g(r) + g*(u) - u'r >= 0
+    magnitudes += std::abs(fw) + std::abs(fs) + yw_abs + std::abs(gr) + std::abs(gs) + ur_abs;
+  }
+  res->primal = primal.value();
+  res->gap = gap.value();
+  res->dual = res->primal - res->gap;
+  if (!std::isfinite(res->dual)) {  // an infeasible x: D(u) evaluated directly
+    CompensatedSum dual_sum;
+    for (int t = 0; t <= T; ++t)
+      dual_sum.Add(p.z.col(t).dot(res->u.col(t)) - p.gt(t).Conjugate(res->u.col(t)) - p.ft(t).Conjugate(res->y.col(t)));
+    res->dual = dual_sum.value();
+  }
   res->relative_gap = res->gap / std::max(1.0, std::abs(res->primal));
+  res->gap_error_bound = 16 * (n + nz + 2) * kEps * magnitudes + error_bound + 4 * kEps * std::abs(res->gap);
+  res->relative_gap_bound = certified && std::isfinite(res->gap) && std::isfinite(res->gap_error_bound)
+                                ? (std::max(res->gap, 0.0) + res->gap_error_bound) / std::max(1.0, std::abs(res->primal))
+                                : std::numeric_limits<double>::infinity();
   // Reconstruction w_t in d f_t*(y_t), then x_0 = w_0, x_{t+1} = F_t x_t + w_{t+1}  [BCW sec. 3].
   res->x_from_dual.resize(n, T + 1);
   res->nonunique_steps.clear();
@@ -127,7 +297,8 @@ double MapSmootherDataUnit(const MapSmootherProblem& problem) {
   return bound > 0 ? bound : 1.0;
 }
 
-void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double mu, MapSmootherResult* res) {
+void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptions& options, double z_scale,
+                             double mu, const MapSmootherDualIterate* dual, MapSmootherResult* res) {
   if (!res->x.allFinite() || !res->u.allFinite()) {  // overflow or NaN in the iteration: nothing to evaluate
     const double nan = std::numeric_limits<double>::quiet_NaN();
     res->status = MapSmootherStatus::kNumericalFailure;
@@ -136,6 +307,7 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double
         "in scale: rescale the data or the model)",
         res->iterations);
     res->primal = res->dual = res->gap = res->relative_gap = res->dual_infeasibility = nan;
+    res->gap_error_bound = res->relative_gap_bound = nan;
     res->max_abs_x_difference = nan;
     res->w.setConstant(res->x.rows(), res->x.cols(), nan);
     res->y.setConstant(res->x.rows(), res->x.cols(), nan);
@@ -146,19 +318,19 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double
   }
   switch (p.state_dim()) {
     case 1:
-      FinishResult<1>(p, z_scale, mu, res);
+      FinishResult<1>(p, z_scale, mu, dual, res);
       break;
     case 2:
-      FinishResult<2>(p, z_scale, mu, res);
+      FinishResult<2>(p, z_scale, mu, dual, res);
       break;
     case 3:
-      FinishResult<3>(p, z_scale, mu, res);
+      FinishResult<3>(p, z_scale, mu, dual, res);
       break;
     case 4:
-      FinishResult<4>(p, z_scale, mu, res);
+      FinishResult<4>(p, z_scale, mu, dual, res);
       break;
     default:
-      FinishResult<0>(p, z_scale, mu, res);
+      FinishResult<0>(p, z_scale, mu, dual, res);
   }
   // A converged iterate whose objectives overflow (e.g. the dual states y_t = F_t'y_{t+1} + H_t'u_t under
   // dynamics of 1e86) certifies nothing: reported as a numerical failure, never as converged.
@@ -168,23 +340,38 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, double z_scale, double
         "the objectives are not finite at the last iterate (primal {}, dual {}; values too large or too far apart "
         "in scale: rescale the data or the model)",
         res->primal, res->dual);
+    return;
   }
-}
-
-void SetMapSmootherMessage(MapSmootherResult* res) {
+  const std::string certificate =
+      std::isfinite(res->relative_gap_bound)
+          ? fmt::format("certified relative duality gap <= {:.1e}", res->relative_gap_bound)
+          : std::string("no finite duality certificate: y(u) leaves dom f*");
+  if (res->status == MapSmootherStatus::kConverged && !(res->relative_gap_bound <= options.gap_tolerance)) {
+    res->status = MapSmootherStatus::kStalled;
+    res->message = fmt::format("stalled after {} iterations: the KKT conditions hold (residual {:.1e}), but the {} "
+                               "exceeds gap_tolerance {:.1e}",
+                               res->iterations, res->kkt_residual, certificate, options.gap_tolerance);
+    return;
+  }
+  const std::string detail = res->message;  // what the iteration said about a stall or divergence
   switch (res->status) {
     case MapSmootherStatus::kConverged:
-      res->message =
-          fmt::format("converged in {} iterations (KKT residual {:.1e})", res->iterations, res->kkt_residual);
+      res->message = fmt::format("converged in {} iterations (KKT residual {:.1e}; {})", res->iterations,
+                                 res->kkt_residual, certificate);
       break;
     case MapSmootherStatus::kMaxIterations:
-      res->message = fmt::format("did not converge in {} iterations (the problem may be infeasible)", res->iterations);
+      res->message = fmt::format("did not converge in {} iterations: KKT residual {:.1e} above tolerance {:.1e} ({})",
+                                 res->iterations, res->kkt_residual, options.tolerance, certificate);
+      break;
+    case MapSmootherStatus::kStalled:
+      res->message = fmt::format("{}; {}", detail, certificate);
       break;
     case MapSmootherStatus::kInfeasible:
-      res->message = "the multipliers diverge: no state sequence keeps every residual inside its penalty's domain";
+      res->message = detail;
       break;
     case MapSmootherStatus::kNumericalFailure:
-      res->message = "the Newton matrix is not positive definite";
+      res->message = fmt::format("the Newton matrix is not positive definite after {} iterations (KKT residual {:.1e})",
+                                 res->iterations, res->kkt_residual);
       break;
   }
 }
