@@ -21,6 +21,11 @@ void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
       ->each([this, na_option](const std::string&) {
         if (na_option->count() == 0) na = 0;
       });
+  app.add_option("--recursion", recursion,
+                 "ARMAX/OE/BJ: rplr (pseudo-linear regression) or rpem (prediction-error method, ARMAX and OE: "
+                 "gradient filtered by 1/C or 1/F)")
+      ->check(CLI::IsMember({"rplr", "rpem"}))
+      ->capture_default_str();
   auto* regressors_option =
       app.add_option("--regressors", regressors, "Static regression on these columns (comma-separated)")
           ->delimiter(',')

@@ -8,7 +8,7 @@
 namespace ident::models {
 
 PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structure,
-                                             const OutputCleaningOptions& cleaning)
+                                             const OutputCleaningOptions& cleaning, Recursion recursion)
     : structure_(structure),
       arx_(structure.arx(), [&] {
         OutputCleaningOptions c = cleaning;
@@ -20,14 +20,23 @@ PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structur
       past_e_(Eigen::VectorXd::Zero(structure.nc())),
       past_v_(Eigen::VectorXd::Zero(structure.nd())),
       past_w_(Eigen::VectorXd::Zero(structure.nf())),
-      work_(Eigen::VectorXd::Zero(std::max(structure.nc(), structure.nf()))) {}
+      work_(Eigen::VectorXd::Zero(std::max(structure.nc(), structure.nf()))),
+      recursion_(recursion),
+      psi_(Eigen::VectorXd::Zero(structure.num_parameters())) {
+  if (recursion_ == Recursion::kPredictionError) {
+    IDENT_REQUIRE(structure.nf() == 0 || structure.nc() + structure.nd() == 0,
+                  "{}: the recursive prediction-error method is for ARMAX and OE models", structure.ToString());
+    past_psi_.setZero(structure.num_parameters(), structure.nf() > 0 ? structure.nf() : structure.nc());
+  }
+}
 
 void PseudoLinearRegressor::Reset() {
   arx_.Reset();
   past_e_.setZero();
   past_v_.setZero();
   past_w_.setZero();
-  formed_ = false;
+  past_psi_.setZero();
+  formed_ = gradient_ = false;
   samples_ = 0;
 }
 
@@ -42,8 +51,21 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   for (int k = 0; k < structure_.nc(); ++k) phi_(structure_.c_offset() + k) = past_e_(k);
   for (int k = 0; k < structure_.nd(); ++k) phi_(structure_.d_offset() + k) = -past_v_(k);
   for (int k = 0; k < structure_.nf(); ++k) phi_(structure_.f_offset() + k) = -past_w_(k);
-  z = phi_;
+  gradient_ = recursion_ == Recursion::kPredictionError && known_ && !fixed_;
+  if (!gradient_) {
+    z = phi_;
+    return true;
+  }
+  // ψ(t) = φ(t) − Σ_k g_k ψ(t−k), G = C (ARMAX) or F (OE) of the tracked estimate.
+  const int offset = structure_.nf() > 0 ? structure_.f_offset() : structure_.c_offset();
+  psi_ = phi_;
+  for (Eigen::Index k = 0; k < past_psi_.cols(); ++k) psi_.noalias() -= theta_(offset + k) * past_psi_.col(k);
+  z = psi_;
   return true;
+}
+
+double PseudoLinearRegressor::LinearisedOutput(double y) const {
+  return gradient_ ? y + theta_.dot(psi_ - phi_) : y;
 }
 
 void PseudoLinearRegressor::SetEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta) {
@@ -56,7 +78,9 @@ void PseudoLinearRegressor::SetEstimate(const Eigen::Ref<const Eigen::VectorXd>&
 
 bool PseudoLinearRegressor::TrackEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta, bool measured_noise_free) {
   if (fixed_) return false;
-  measured_w_ = measured_noise_free;
+  // The first estimates after ClearEstimate rest on a few samples: w = y for kWarmUp·ρ of them.
+  measured_w_ = measured_noise_free || tracked_ < static_cast<long>(kWarmUp) * theta_.size();
+  ++tracked_;
   IDENT_REQUIRE(theta.size() == theta_.size(), "the estimate has {} entries; {} has {} parameters", theta.size(),
                 structure_.ToString(), theta_.size());
   const bool stable =
@@ -96,7 +120,16 @@ void PseudoLinearRegressor::Store(double y) {
   Shift(past_e_, e);
   Shift(past_v_, v);
   Shift(past_w_, w);
-  formed_ = false;
+  if (past_psi_.cols() > 0) {
+    // ψ(t) enters the filter; φ(t) stands in for it while no estimate is tracked (G = 1), 0 before t0.
+    for (Eigen::Index k = past_psi_.cols() - 1; k > 0; --k) past_psi_.col(k) = past_psi_.col(k - 1);
+    if (!formed_)
+      past_psi_.col(0).setZero();
+    else
+      past_psi_.col(0) = gradient_ ? psi_ : phi_;
+    if (!past_psi_.col(0).allFinite()) past_psi_.col(0).setZero();
+  }
+  formed_ = gradient_ = false;
 }
 
 void PseudoLinearRegressor::PushOutput(double y) {

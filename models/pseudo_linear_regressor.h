@@ -20,6 +20,14 @@
 // (the ARX regressor): the regressors' mean squares of a data-scaled prior are then the ARX ones.
 // Rows before t0 (no regressor) store w = y, ε = v = 0.
 //
+// Recursive prediction-error method (RPEM; Ljung & Söderström 1983, §3.7, the Gauss–Newton RPEM of
+// eq. (3.130); Ljung §11.4): with `Recursion::kPredictionError` (ARMAX and OE), while an estimate is
+// tracked, Next() writes the predictor's gradient ψ(t) = φ(t)/C(q) (ARMAX) or φ(t)/F(q) (OE), filtered with
+// the tracked (stable) estimate, instead of φ(t), and the estimator regresses the linearised output
+// ỹ(t) = y(t) − θ'φ(t) + θ'ψ(t) (LinearisedOutput) on it: its update θ(t) = θ(t−1) + P(t)ψ(t)ε(t),
+// ε = y − θ(t−1)'φ, is then the RPEM step with the estimator's own weight (RLS, Cauchy, Student-t).
+// A fixed model (SetEstimate) predicts with φ as in RPLR.
+//
 // Outlier cleaning of y as in models/arx.h (PushCheckedOutput): the cleaned value is used for y and the
 // residuals derived from it. No allocation after construction.
 #pragma once
@@ -32,9 +40,16 @@
 
 namespace ident::models {
 
+enum class Recursion { kPseudoLinear, kPredictionError };
+
 class PseudoLinearRegressor {
  public:
-  explicit PseudoLinearRegressor(const PolynomialStructure& structure, const OutputCleaningOptions& cleaning = {});
+  // Warm-up: the first kWarmUp·ρ tracked estimates keep w = y (an ARX start, the usual initialisation of
+  // an OE fit): the noise-free outputs of estimates from a few samples would start the recursion far off.
+  static constexpr int kWarmUp = 10;
+  // Throws InvalidArgument for kPredictionError on a Box–Jenkins structure.
+  explicit PseudoLinearRegressor(const PolynomialStructure& structure, const OutputCleaningOptions& cleaning = {},
+                                 Recursion recursion = Recursion::kPseudoLinear);
 
   // Clears the histories (segment start); keeps the estimate.
   void Reset();
@@ -47,7 +62,12 @@ class PseudoLinearRegressor {
   // is stored as the noise-free output w (as in ARX) until an estimate without it comes.
   bool TrackEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta, bool measured_noise_free = false);
   // Back to no estimate (the ARX regressor: w = y, ε = v = 0), as after construction.
-  void ClearEstimate() { known_ = measured_w_ = fixed_ = false; }
+  void ClearEstimate() {
+    known_ = measured_w_ = fixed_ = false;
+    tracked_ = 0;
+  }
+  // The output the estimator regresses on Next()'s z: y, or for RPEM while tracking ỹ = y + θ'(ψ − φ).
+  double LinearisedOutput(double y) const;
   void PushOutput(double y);
   double PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged = true);
   void EndCleaningWarmUp() { arx_.EndCleaningWarmUp(); }
@@ -65,12 +85,17 @@ class PseudoLinearRegressor {
   Eigen::VectorXd theta_, phi_;
   Eigen::VectorXd past_e_, past_v_, past_w_;  // past_e_(k) = ε(t−1−k), …
   Eigen::VectorXd work_;                      // the stability test's buffer
+  Recursion recursion_;
+  Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
+  Eigen::MatrixXd past_psi_;                  // column k: ψ(t−1−k), k < nc (ARMAX) or nf (OE)
+  bool gradient_ = false;                     // z = ψ(t) for the current sample
   bool known_ = false;                        // an estimate has been given
   bool measured_w_ = false;                   // w = y (TrackEstimate's measured_noise_free)
   bool fixed_ = false;                        // SetEstimate's θ holds
   bool formed_ = false;                       // φ(t) was formed for the current sample
   long samples_ = 0;
   long projections_ = 0;
+  long tracked_ = 0;  // TrackEstimate calls since ClearEstimate
 };
 
 }  // namespace ident::models

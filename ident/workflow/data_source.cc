@@ -59,8 +59,8 @@ class PolynomialSource final : public DataSource {
  public:
   std::unique_ptr<DataSource> Clone() const override { return std::make_unique<PolynomialSource>(*this); }
   PolynomialSource(int output, std::vector<int> inputs, const models::PolynomialStructure& structure,
-                   const models::OutputCleaningOptions& cleaning)
-      : output_(output), inputs_(std::move(inputs)), regressor_(structure, cleaning), u_(inputs_.size()) {}
+                   const models::OutputCleaningOptions& cleaning, models::Recursion recursion)
+      : output_(output), inputs_(std::move(inputs)), regressor_(structure, cleaning, recursion), u_(inputs_.size()) {}
   int num_parameters() const override { return regressor_.structure().num_parameters(); }
   std::string structure() const override { return regressor_.structure().ToString(); }
   std::vector<std::string> parameter_names() const override { return regressor_.structure().ParameterNames(); }
@@ -89,6 +89,7 @@ class PolynomialSource final : public DataSource {
     regressor_.TrackEstimate(theta, start_up);
   }
   void ClearEstimate() override { regressor_.ClearEstimate(); }
+  double RegressionOutput(double y) const override { return regressor_.LinearisedOutput(y); }
 
  private:
   int output_;
@@ -155,7 +156,8 @@ std::unique_ptr<DataSource> MakePolynomialSource(const std::vector<std::string>&
                                                  const std::vector<std::string>& inputs,
                                                  const models::PolynomialStructure& structure,
                                                  const std::string& source,
-                                                 const models::OutputCleaningOptions& cleaning) {
+                                                 const models::OutputCleaningOptions& cleaning,
+                                                 models::Recursion recursion) {
   IDENT_REQUIRE(static_cast<int>(inputs.size()) == structure.num_inputs(),
                 "{} input column(s) given but the orders describe {} input(s)", inputs.size(), structure.num_inputs());
   std::vector<int> in;
@@ -163,7 +165,8 @@ std::unique_ptr<DataSource> MakePolynomialSource(const std::vector<std::string>&
     IDENT_REQUIRE(name != output, "column '{}' is both the output and an input", name);
     in.push_back(Find(columns, name, source));
   }
-  return std::make_unique<PolynomialSource>(Find(columns, output, source), std::move(in), structure, cleaning);
+  return std::make_unique<PolynomialSource>(Find(columns, output, source), std::move(in), structure, cleaning,
+                                            recursion);
 }
 
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,

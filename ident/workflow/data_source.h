@@ -19,6 +19,7 @@
 #include "ident/io/csv.h"
 #include "models/arx.h"
 #include "models/polynomial_structure.h"
+#include "models/pseudo_linear_regressor.h"
 
 namespace ident::workflow {
 
@@ -60,6 +61,9 @@ class DataSource {
   // `start_up`: θ is a provisional one formed while a robust start-up collects its window: the measured
   // outputs stand in for the noise-free ones.
   virtual void TrackEstimate(const Eigen::Ref<const Eigen::VectorXd>& /*theta*/, bool /*start_up*/) {}
+  // The output the estimator regresses on Regressor()'s z for the measured y: y itself, or the RPEM
+  // source's linearised output (models/pseudo_linear_regressor.h).
+  virtual double RegressionOutput(double y) const { return y; }
   // No estimate: the regressor is the ARX one (measured outputs for the noise-free ones, zero residuals).
   virtual void ClearEstimate() {}
 };
@@ -73,7 +77,8 @@ std::unique_ptr<DataSource> MakePolynomialSource(const std::vector<std::string>&
                                                  const std::vector<std::string>& inputs,
                                                  const models::PolynomialStructure& structure,
                                                  const std::string& source,
-                                                 const models::OutputCleaningOptions& cleaning = {});
+                                                 const models::OutputCleaningOptions& cleaning = {},
+                                                 models::Recursion recursion = models::Recursion::kPseudoLinear);
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,
                                              const models::StaticRegression& regression, const std::string& source);
 

@@ -70,6 +70,8 @@ Options ReadOptions(const py::dict& kw) {
       m.nd = value.cast<int>();
     else if (key == "nf")
       m.nf = value.cast<int>();
+    else if (key == "recursion")
+      m.recursion = value.cast<std::string>();
     else if (key == "regressors")
       m.regressors = value.cast<std::vector<std::string>>();
     else if (key == "intercept")

@@ -178,6 +178,7 @@ TEST(PseudoLinearRegressor, TrackEstimateKeepsTheLastStableOne) {
   unstable << 1.0, -1.5;  // F = 1 − 1.5 q⁻¹: root 1.5
   EXPECT_TRUE(reg.TrackEstimate(unstable));  // the first estimate is taken whatever it is
   EXPECT_TRUE(reg.TrackEstimate(stable));
+  for (int k = 0; k < PseudoLinearRegressor::kWarmUp * 2; ++k) reg.TrackEstimate(stable);  // past the warm-up
   EXPECT_FALSE(reg.TrackEstimate(unstable));
   EXPECT_EQ(reg.projections(), 1);
   // The kept estimate is the stable one: w(t) = u(t−1) + 0.5 w(t−1).
@@ -197,6 +198,42 @@ TEST(PseudoLinearRegressor, TrackEstimateKeepsTheLastStableOne) {
   EXPECT_FALSE(reg.TrackEstimate(stable));  // and held until ClearEstimate
   reg.ClearEstimate();
   EXPECT_TRUE(reg.TrackEstimate(stable));
+}
+
+}  // namespace
+}  // namespace ident::models
+
+namespace ident::models {
+namespace {
+
+// RPEM: while an estimate is tracked, z is the gradient ψ = φ/C (filtered from the φ of the same θ used
+// as a fixed model) and the linearised output is y + θ'(ψ − φ).
+TEST(PseudoLinearRegressor, PredictionErrorGradientIsPhiFilteredByC) {
+  const Record r = SimulateArmax({-1.5, 0.7}, {1.0, 0.5}, {-1.0, 0.2}, 1, 120, 6);
+  const auto armax = PolynomialStructure::Armax(2, {2}, 2, {1});
+  Eigen::VectorXd theta(6);
+  theta << -1.4, 0.6, 0.9, 0.4, -0.8, 0.1;
+  PseudoLinearRegressor fixed(armax), rpem(armax, {}, Recursion::kPredictionError);
+  fixed.SetEstimate(theta);
+  Eigen::VectorXd phi(6), psi(6), u(1);
+  std::vector<Eigen::VectorXd> past(2, Eigen::VectorXd::Zero(6));
+  for (int t = 0; t < 120; ++t) {
+    u(0) = r.u[t];
+    rpem.TrackEstimate(theta);
+    const bool formed = fixed.Next(u, phi);
+    EXPECT_EQ(rpem.Next(u, psi), formed);
+    if (formed) {
+      const Eigen::VectorXd expected = phi - theta(4) * past[0] - theta(5) * past[1];
+      EXPECT_LT((psi - expected).cwiseAbs().maxCoeff(), 1e-9 * (1 + expected.cwiseAbs().maxCoeff())) << "t = " << t;
+      EXPECT_NEAR(rpem.LinearisedOutput(r.y[t]), r.y[t] + theta.dot(expected - phi), 1e-9) << "t = " << t;
+      past[1] = past[0];
+      past[0] = expected;
+    }
+    fixed.PushOutput(r.y[t]);
+    rpem.PushOutput(r.y[t]);
+  }
+  EXPECT_THROW(PseudoLinearRegressor(PolynomialStructure::BoxJenkins(2, 1, 1, 2, 1), {}, Recursion::kPredictionError),
+               InvalidArgument);
 }
 
 }  // namespace

@@ -100,7 +100,7 @@ class Estimation {
         source_.RestoreMeasured();
         z_ = z_measured_;
       }
-      const StepReport report = estimator_.Update(y, z_);
+      const StepReport report = estimator_.Update(source_.RegressionOutput(y), z_);
       if (in_startup_ && !estimator_.in_startup()) {  // the robust start is made: the model judges from now on
         in_startup_ = false;
         source_.EndCleaningWarmUp();
