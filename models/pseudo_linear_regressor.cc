@@ -104,6 +104,7 @@ void PseudoLinearRegressor::Shift(Eigen::VectorXd& history, double value) {
 
 void PseudoLinearRegressor::Store(double y) {
   double e = 0, v = 0, w = y;
+  if (formed_ && !known_) e = v = y;  // no estimate: y stands in, at the data's scale
   if (formed_ && known_) {
     const int n_a = structure_.na(), n_b = structure_.arx().num_parameters() - n_a;
     const int f = structure_.f_offset(), nf = structure_.nf();

@@ -16,8 +16,8 @@
 //
 // Stability projection (Ljung §11.5, the projection into D_M): TrackEstimate keeps the last estimate whose
 // C and F polynomials are stable (every root strictly inside the unit circle), since ε = (D/C) v and
-// w = (B/F) u are computed by filtering with 1/C and 1/F. Before any estimate is given, w = y and ε = v = 0
-// (the ARX regressor): the regressors' mean squares of a data-scaled prior are then the ARX ones.
+// w = (B/F) u are computed by filtering with 1/C and 1/F. Before any estimate is given, the measured y
+// stands in for w, ε and v: the regressors' mean squares (a data-scaled prior) then have the data's scale.
 // Rows before t0 (no regressor) store w = y, ε = v = 0.
 //
 // Recursive prediction-error method (RPEM; Ljung & Söderström 1983, §3.7, the Gauss–Newton RPEM of
@@ -61,7 +61,7 @@ class PseudoLinearRegressor {
   // last one kept stays. Returns true if θ was taken. `measured_noise_free`: the measured (or cleaned) y
   // is stored as the noise-free output w (as in ARX) until an estimate without it comes.
   bool TrackEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta, bool measured_noise_free = false);
-  // Back to no estimate (the ARX regressor: w = y, ε = v = 0), as after construction.
+  // Back to no estimate (y stands in for w, ε and v), as after construction.
   void ClearEstimate() {
     known_ = measured_w_ = fixed_ = false;
     tracked_ = 0;

@@ -64,7 +64,7 @@ class DataSource {
   // The output the estimator regresses on Regressor()'s z for the measured y: y itself, or the RPEM
   // source's linearised output (models/pseudo_linear_regressor.h).
   virtual double RegressionOutput(double y) const { return y; }
-  // No estimate: the regressor is the ARX one (measured outputs for the noise-free ones, zero residuals).
+  // No estimate: the measured outputs stand in for the residuals and noise-free outputs.
   virtual void ClearEstimate() {}
 };
 

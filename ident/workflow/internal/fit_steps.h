@@ -79,8 +79,8 @@ class Estimation {
         in_startup_(estimator.in_startup()),
         uses_estimate_(source.uses_estimate()) {
     source_.Reset();
-    // ARMAX/OE/BJ: the first pass starts from the ARX regressor (the caller clears the estimate), a further
-    // pass from the residuals of the pass before.
+    // ARMAX/OE/BJ: the first pass starts with no estimate (the caller clears it), a further pass from the
+    // residuals of the pass before.
     // While a robust start-up collects its window the estimate stays the prior's, and residuals of the
     // prior (ε = v = y) would make the C and D columns copies of the output's: a least-squares shadow
     // estimate forms them until the start is made, with the measured y for the noise-free output (noise-free
@@ -100,7 +100,8 @@ class Estimation {
         source_.RestoreMeasured();
         z_ = z_measured_;
       }
-      const StepReport report = estimator_.Update(source_.RegressionOutput(y), z_);
+      const double y_regressed = source_.RegressionOutput(y);  // y, or RPEM's linearised output
+      const StepReport report = estimator_.Update(y_regressed, z_);
       if (in_startup_ && !estimator_.in_startup()) {  // the robust start is made: the model judges from now on
         in_startup_ = false;
         source_.EndCleaningWarmUp();
@@ -109,7 +110,7 @@ class Estimation {
       if (uses_estimate_ && !in_startup_) {
         source_.TrackEstimate(estimator_.parameters(), /*start_up=*/false);
       } else if (shadow_) {
-        shadow_->Update(y, z_);
+        shadow_->Update(y_regressed, z_);
         source_.TrackEstimate(shadow_->parameters(), /*start_up=*/true);
       }
       flagged = decision_.Flags(report);
@@ -265,9 +266,8 @@ class Scoring {
         scores.simulation_diverged_at = first_row_ + row + 1;
         break;
       }
-    // An OE/BJ predictor simulates B/F u: with an unstable F its one-step prediction diverges too.
-    const bool predictor_diverged = one_step_source_->uses_estimate() && scores.simulation_diverged_at;
-    IDENT_REQUIRE(one_step_.finite() || predictor_diverged,
+    // An ARMAX/OE/BJ predictor filters by 1/C or 1/F: with an unstable C or F it diverges (no fit %).
+    IDENT_REQUIRE(one_step_.finite() || one_step_source_->uses_estimate(),
                   "{}: the validation fit overflows (values or predictions near 1e308); rescale the data", name);
     scores.scored = static_cast<int>(one_step_.count());
     scores.one_step = one_step_.finite() ? one_step_.Percent() : std::nan("");
