@@ -187,6 +187,21 @@ TEST(PolynomialFit, SavedModelsReproduceTheFitThroughPredict) {
   ExpectCliError("predict " + dir + "/model.json dryer --horizon 2", "K-step prediction is for ARX models");
 }
 
+// An OE model with an unstable F (a root at 3) predicts by simulating: both diverge and neither has a fit %.
+TEST(PolynomialFit, UnstableOutputErrorModelHasNoFitPercent) {
+  const std::string model = TempDir() + "/oe.json";
+  ASSERT_EQ(RunCli("fit dryer --nf 2 --passes 2 --save " + model).exit_code, 0);
+  nlohmann::json j = nlohmann::json::parse(ReadFile(model));
+  ASSERT_EQ(j["parameter_names"][2], "f1");
+  j["theta"][2] = -3.0;  // F = 1 − 3q⁻¹
+  j["theta"][3] = 0.0;
+  const std::string unstable = WriteFile("unstable_oe.json", j.dump());
+  const nlohmann::json p = JsonOf("predict " + unstable + " dryer --json");
+  EXPECT_TRUE(p["fit_percent"]["one_step"].is_null()) << p.dump();
+  EXPECT_TRUE(p["fit_percent"]["simulation"].is_null()) << p.dump();
+  EXPECT_TRUE(p["simulation_diverged_at"].is_number()) << p.dump();
+}
+
 TEST(PolynomialFit, RefusesStructuresThatAreNoneOfArmaxOeBj) {
   ExpectCliError("fit dryer --output y --input u --na 2 --nf 2", "has no A polynomial");
   ExpectCliError("fit dryer --nd 1", "needs nf >= 1");

@@ -240,7 +240,11 @@ class Scoring {
 
   void Row(const Eigen::VectorXd& row) {
     const double y = row(one_step_source_->output_column());
-    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) one_step_.Add(y, theta_.dot(z_));
+    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {
+      const double yhat = theta_.dot(z_);
+      one_step_.Add(y, yhat);
+      one_step_size_ = std::max(one_step_size_, std::isfinite(yhat) ? std::abs(yhat) : HUGE_VAL);
+    }
     one_step_source_->PushOutput(y);
     if (std::isfinite(y)) y_scale_ = std::max(y_scale_, std::abs(y));
     if (simulation_source_->dynamic()) {
@@ -266,12 +270,15 @@ class Scoring {
         scores.simulation_diverged_at = first_row_ + row + 1;
         break;
       }
-    // An ARMAX/OE/BJ predictor filters by 1/C or 1/F: with an unstable C or F it diverges (no fit %).
-    IDENT_REQUIRE(one_step_.finite() || one_step_source_->uses_estimate(),
+    // An ARMAX/OE/BJ predictor filters by 1/C or 1/F: with an unstable C or F it diverges as a simulation
+    // does (the same test), and has no fit %.
+    const bool predictor_diverged =
+        one_step_source_->uses_estimate() && (!one_step_.finite() || one_step_size_ > kDivergence * y_scale_);
+    IDENT_REQUIRE(one_step_.finite() || predictor_diverged,
                   "{}: the validation fit overflows (values or predictions near 1e308); rescale the data", name);
     scores.scored = static_cast<int>(one_step_.count());
-    scores.one_step = one_step_.finite() ? one_step_.Percent() : std::nan("");
-    scores.rms_one_step = one_step_.finite() ? one_step_.Rms() : std::nan("");
+    scores.one_step = predictor_diverged ? std::nan("") : one_step_.Percent();
+    scores.rms_one_step = predictor_diverged ? std::nan("") : one_step_.Rms();
     if (simulation_source_->dynamic() && simulation_.count() >= 2 && simulation_.finite() &&
         !scores.simulation_diverged_at) {
       scores.simulation = simulation_.Percent();
@@ -289,6 +296,7 @@ class Scoring {
   int row_ = 0;
   FitAccumulator one_step_, simulation_;
   double y_scale_ = 0;                         // largest measured |y| so far
+  double one_step_size_ = 0;                   // largest |one-step ŷ|
   std::vector<std::pair<int, double>> highs_;  // (row in the segment, |ŷ|) at each new largest |ŷ|
 };
 
