@@ -69,6 +69,8 @@ void RunPredict(const PredictOptions& o) {
   const workflow::SegmentPredictions p = workflow::PredictSegment(table, segment, *source, m.theta);
   std::vector<double> k_step;
   if (o.horizon > 1) {
+    IDENT_REQUIRE(!m.model.polynomial(), "--horizon {}: K-step prediction is for ARX models; {} takes --horizon 1",
+                  o.horizon, source->structure());
     if (source->dynamic()) {
       std::vector<int> inputs;
       for (const auto& name : m.model.inputs) inputs.push_back(table.ColumnIndex(name));

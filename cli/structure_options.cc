@@ -14,6 +14,18 @@ void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
   auto* nk_option = app.add_option("--nk", nk, "Input delay in samples (one value, or one per input)")
                         ->delimiter(',')
                         ->capture_default_str();
+  app.add_option("--nc", nc, "ARMAX/Box-Jenkins: order of the noise numerator C (0: none)")->capture_default_str();
+  app.add_option("--nd", nd, "Box-Jenkins: order of the noise denominator D (needs --nf)")->capture_default_str();
+  app.add_option("--nf", nf, "OE/Box-Jenkins: order of the input denominator F (one input; without --na, na = 0)")
+      ->capture_default_str()
+      ->each([this, na_option](const std::string&) {
+        if (na_option->count() == 0) na = 0;
+      });
+  app.add_option("--recursion", recursion,
+                 "ARMAX/OE/BJ: rplr (pseudo-linear regression) or rpem (prediction-error method, ARMAX and OE: "
+                 "gradient filtered by 1/C or 1/F)")
+      ->check(CLI::IsMember({"rplr", "rpem"}))
+      ->capture_default_str();
   auto* regressors_option =
       app.add_option("--regressors", regressors, "Static regression on these columns (comma-separated)")
           ->delimiter(',')
@@ -61,7 +73,7 @@ StructureCliOptions StructureCliOptions::WithDefaultsFrom(const StructureCliOpti
   }
   if (!r.regressors.empty()) return r;
   const bool same_inputs = r.inputs.size() == suggestion.inputs.size();
-  if (!given(kNa)) r.na = suggestion.na;
+  if (!given(kNa)) r.na = r.nf > 0 ? 0 : suggestion.na;  // OE/BJ: no A polynomial
   if (!given(kNb) && same_inputs) r.nb = suggestion.nb;
   if (!given(kNk) && same_inputs) r.nk = suggestion.nk;
   return r;

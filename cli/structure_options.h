@@ -1,5 +1,5 @@
-// Command-line options that choose the model structure: ARX/FIR (--output, --input, --na, --nb, --nk)
-// or static regression (--output, --regressors, --intercept). Shared by ident fit and ident compare.
+// Command-line options that choose the model structure: ARX/FIR (--output, --input, --na, --nb, --nk),
+// ARMAX/OE/Box-Jenkins (also --nc, --nd, --nf) or static regression (--output, --regressors, --intercept). Shared by ident fit and ident compare.
 #pragma once
 
 #include <memory>

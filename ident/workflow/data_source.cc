@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include "common/error.h"
+#include "models/pseudo_linear_regressor.h"
 
 namespace ident::workflow {
 namespace {
@@ -51,6 +52,49 @@ class ArxSource final : public DataSource {
   int output_;
   std::vector<int> inputs_;
   models::ArxRegressor regressor_;
+  Eigen::VectorXd u_;
+};
+
+class PolynomialSource final : public DataSource {
+ public:
+  std::unique_ptr<DataSource> Clone() const override { return std::make_unique<PolynomialSource>(*this); }
+  PolynomialSource(int output, std::vector<int> inputs, const models::PolynomialStructure& structure,
+                   const models::OutputCleaningOptions& cleaning, models::Recursion recursion)
+      : output_(output), inputs_(std::move(inputs)), regressor_(structure, cleaning, recursion), u_(inputs_.size()) {}
+  int num_parameters() const override { return regressor_.structure().num_parameters(); }
+  std::string structure() const override { return regressor_.structure().ToString(); }
+  std::vector<std::string> parameter_names() const override { return regressor_.structure().ParameterNames(); }
+  bool dynamic() const override { return true; }
+  int first_regression_index() const override { return regressor_.structure().first_regression_index(); }
+  int output_column() const override { return output_; }
+  std::vector<int> used_columns() const override {
+    std::vector<int> used = inputs_;
+    used.push_back(output_);
+    return used;
+  }
+  void Reset() override { regressor_.Reset(); }
+  bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) override {
+    for (std::size_t i = 0; i < inputs_.size(); ++i) u_(static_cast<Eigen::Index>(i)) = row(inputs_[i]);
+    return regressor_.Next(u_, z);
+  }
+  void PushOutput(double y) override { regressor_.PushOutput(y); }
+  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged) override {
+    return regressor_.PushCheckedOutput(y, y_hat, scale, flagged, judged);
+  }
+  long cleaned() const override { return regressor_.cleaner().cleaned(); }
+  void EndCleaningWarmUp() override { regressor_.EndCleaningWarmUp(); }
+  bool uses_estimate() const override { return true; }
+  void SetEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta) override { regressor_.SetEstimate(theta); }
+  void TrackEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta, bool start_up) override {
+    regressor_.TrackEstimate(theta, start_up);
+  }
+  void ClearEstimate() override { regressor_.ClearEstimate(); }
+  double RegressionOutput(double y) const override { return regressor_.LinearisedOutput(y); }
+
+ private:
+  int output_;
+  std::vector<int> inputs_;
+  models::PseudoLinearRegressor regressor_;
   Eigen::VectorXd u_;
 };
 
@@ -106,6 +150,23 @@ std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& column
     in.push_back(Find(columns, name, source));
   }
   return std::make_unique<ArxSource>(Find(columns, output, source), std::move(in), arx, cleaning);
+}
+
+std::unique_ptr<DataSource> MakePolynomialSource(const std::vector<std::string>& columns, const std::string& output,
+                                                 const std::vector<std::string>& inputs,
+                                                 const models::PolynomialStructure& structure,
+                                                 const std::string& source,
+                                                 const models::OutputCleaningOptions& cleaning,
+                                                 models::Recursion recursion) {
+  IDENT_REQUIRE(static_cast<int>(inputs.size()) == structure.num_inputs(),
+                "{} input column(s) given but the orders describe {} input(s)", inputs.size(), structure.num_inputs());
+  std::vector<int> in;
+  for (const auto& name : inputs) {
+    IDENT_REQUIRE(name != output, "column '{}' is both the output and an input", name);
+    in.push_back(Find(columns, name, source));
+  }
+  return std::make_unique<PolynomialSource>(Find(columns, output, source), std::move(in), structure, cleaning,
+                                            recursion);
 }
 
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,

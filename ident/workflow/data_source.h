@@ -2,6 +2,8 @@
 //
 //   ArxSource      ARX/FIR (MISO) from an output column and input columns: z(t) as in models/arx.h;
 //                  supports simulation (feeding back the model's own output).
+//   PolynomialSource ARMAX/OE/BJ: the pseudo-linear regressor of models/pseudo_linear_regressor.h, which
+//                  also needs the estimate (SetEstimate / TrackEstimate) to form its residuals.
 //   StaticSource   static regression y = θ'x (+ intercept) from named columns.
 //
 // Both walk one segment of rows at a time: Reset() at the segment start, then per row
@@ -16,6 +18,8 @@
 
 #include "ident/io/csv.h"
 #include "models/arx.h"
+#include "models/polynomial_structure.h"
+#include "models/pseudo_linear_regressor.h"
 
 namespace ident::workflow {
 
@@ -48,6 +52,20 @@ class DataSource {
   virtual void RestoreMeasured() {}
   // The estimator has made its robust start: cleaning judges by its predictions from now on.
   virtual void EndCleaningWarmUp() {}
+  // ARMAX/OE/BJ: the regressor holds the model's own past residuals and noise-free outputs, which depend
+  // on θ. True for such a source; its walkers then tell it θ: SetEstimate(θ) once for a fixed model
+  // (prediction, scoring), TrackEstimate(θ(t)) after each update of a recursive estimation (the stability
+  // projection of models/pseudo_linear_regressor.h applies). Other sources ignore both.
+  virtual bool uses_estimate() const { return false; }
+  virtual void SetEstimate(const Eigen::Ref<const Eigen::VectorXd>& /*theta*/) {}
+  // `start_up`: θ is a provisional one formed while a robust start-up collects its window: the measured
+  // outputs stand in for the noise-free ones.
+  virtual void TrackEstimate(const Eigen::Ref<const Eigen::VectorXd>& /*theta*/, bool /*start_up*/) {}
+  // The output the estimator regresses on Regressor()'s z for the measured y: y itself, or the RPEM
+  // source's linearised output (models/pseudo_linear_regressor.h).
+  virtual double RegressionOutput(double y) const { return y; }
+  // No estimate: the measured outputs stand in for the residuals and noise-free outputs.
+  virtual void ClearEstimate() {}
 };
 
 // Throws DataError for an unknown column, InvalidArgument for bad orders.
@@ -55,6 +73,12 @@ std::unique_ptr<DataSource> MakeArxSource(const std::vector<std::string>& column
                                           const std::vector<std::string>& inputs, const models::ArxStructure& arx,
                                           const std::string& source,
                                           const models::OutputCleaningOptions& cleaning = {});
+std::unique_ptr<DataSource> MakePolynomialSource(const std::vector<std::string>& columns, const std::string& output,
+                                                 const std::vector<std::string>& inputs,
+                                                 const models::PolynomialStructure& structure,
+                                                 const std::string& source,
+                                                 const models::OutputCleaningOptions& cleaning = {},
+                                                 models::Recursion recursion = models::Recursion::kPseudoLinear);
 std::unique_ptr<DataSource> MakeStaticSource(const std::vector<std::string>& columns, const std::string& output,
                                              const models::StaticRegression& regression, const std::string& source);
 

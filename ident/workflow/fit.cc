@@ -136,9 +136,10 @@ FitResult Fit(io::DataTable data, DataSource& source, AnyRegressionEstimator& es
 FitResult FitPrepared(const io::DataTable& data, Segment estimation, Segment validation, DataSource& source,
                       AnyRegressionEstimator& estimator, const FitOptions& options) {
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
-  int passes = 1;
-  const auto [updates, rejected] = EstimateRows(data, estimation, source, estimator, options, &passes);
+  int passes = 1, repeated = 0;
+  const auto [updates, rejected] = EstimateRows(data, estimation, source, estimator, options, &passes, &repeated);
   FitResult result = Summarise(source, estimator, estimation, validation);
+  internal::CorrectRepeatedPasses(result, repeated);
   result.passes = passes;
   result.updates = updates;
   result.rejected = rejected;

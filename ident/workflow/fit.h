@@ -45,7 +45,8 @@ struct FitOptions {
   OutlierDecision decision;  // which updates count as outliers for regressor cleaning
   // Passes over the estimation part (AnyRegressionEstimator::BeginPass): each further pass re-runs the
   // recursion from the previous pass's estimate, regressor cleaning included; estimators for which a
-  // further pass cannot change the result (RLS, batch) run once. The trace shows the last pass.
+  // further pass cannot change the result (RLS, batch) run once, except on ARMAX/OE/BJ, where RLS goes on
+  // over the record again (internal::NextPass). The trace shows the last pass.
   int passes = 1;
   // If set: called after every accepted update with the (0-based) row, the step (weight β(t), ν(t), prediction
   // error) and the estimator (e.g. for parameter plots).

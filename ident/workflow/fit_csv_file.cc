@@ -119,13 +119,14 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
   // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass. With
   // options.passes > 1 the passes before the last read the estimation part only.
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
-  int passes = 1;
+  int passes = 1, repeated = 0;
+  source.ClearEstimate();  // ARMAX/OE/BJ: no estimate from an earlier fit on this source
   if (options.passes > 1) {
     FitOptions earlier = options;
     earlier.passes = options.passes - 1;
     earlier.trace = nullptr;
     earlier.on_update = {};
-    RunPasses(estimator, earlier, &passes, [&](const FitOptions& o) {
+    RunPasses(estimator, source, earlier, &passes, &repeated, [&](const FitOptions& o) {
       Estimation estimating(source, estimator, o);
       io::CsvReader reader(path, csv);
       for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
@@ -134,11 +135,13 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
       }
       return estimating.Finish(path);
     });
-    if (passes == options.passes - 1 && estimator.BeginPass()) {
+    if (passes == options.passes - 1 && internal::NextPass(estimator, source, &repeated)) {
       ++passes;
     } else {
       estimator.Reset();
+      source.ClearEstimate();
       passes = 1;
+      repeated = 0;
     }
   }
   Estimation estimating(source, estimator, options);
@@ -150,6 +153,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
     std::tie(result.updates, result.rejected) = estimating.Finish(path);
     const int updates = result.updates, rejected = result.rejected;
     result = Summarise(source, estimator, estimation, validation);
+    internal::CorrectRepeatedPasses(result, repeated);
     result.passes = passes;
     result.updates = updates;
     result.rejected = rejected;

@@ -15,6 +15,7 @@ std::unique_ptr<DataSource> ModelSpec::MakeSource(const std::vector<std::string>
   IDENT_REQUIRE(error.empty(), "--clean-clip/--clean-gross: {}", error);
   if (!regressors.empty()) {
     IDENT_REQUIRE(inputs.empty(), "give --input (ARX/FIR model) or --regressors (static regression), not both");
+    IDENT_REQUIRE(!polynomial(), "--nc/--nd/--nf describe a dynamic model; they do not apply to --regressors");
     models::StaticRegression regression{regressors, intercept};
     return MakeStaticSource(columns, output, regression, source);
   }
@@ -26,6 +27,14 @@ std::unique_ptr<DataSource> ModelSpec::MakeSource(const std::vector<std::string>
                   m);
     return v.size() == m ? v : std::vector<int>(m, v[0]);
   };
+  IDENT_REQUIRE(recursion == "rplr" || recursion == "rpem", "--recursion '{}': need rplr or rpem", recursion);
+  IDENT_REQUIRE(recursion == "rplr" || polynomial(), "--recursion rpem needs an ARMAX (--nc) or OE (--nf) model");
+  if (polynomial()) {
+    const models::PolynomialStructure structure(na, per_input(nb, "nb"), per_input(nk, "nk"), nc, nd, nf);
+    return MakePolynomialSource(columns, output, inputs, structure, source, clean,
+                                recursion == "rpem" ? models::Recursion::kPredictionError
+                                                    : models::Recursion::kPseudoLinear);
+  }
   models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
   return MakeArxSource(columns, output, inputs, arx, source, clean);
 }

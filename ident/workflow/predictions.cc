@@ -12,6 +12,7 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
   Eigen::VectorXd z(source.num_parameters());
   Eigen::VectorXd row(data.values.cols());
   source.Reset();
+  source.SetEstimate(theta);
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
     row = data.values.row(r).transpose();
     const double y = row(source.output_column());

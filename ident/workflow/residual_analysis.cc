@@ -124,6 +124,7 @@ ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, Da
   e.reserve(static_cast<std::size_t>(segment.count));
   for (std::vector<double>& column : u) column.reserve(static_cast<std::size_t>(segment.count));
   source.Reset();
+  source.SetEstimate(theta);
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
     row = data.values.row(r).transpose();
     const double y = row(source.output_column());

@@ -77,12 +77,18 @@ OrderedJson SavedModel::ToJson() const {
     s["regressors"] = model.regressors;
     s["intercept"] = model.intercept;
   } else {
-    s["kind"] = "arx";
+    // "arx", or "armax" / "oe" / "bj" with the orders of C, D and F too.
+    s["kind"] = !model.polynomial() ? "arx" : model.nf == 0 ? "armax" : model.nc + model.nd == 0 ? "oe" : "bj";
     s["output"] = model.output;
     s["inputs"] = model.inputs;
     s["na"] = model.na;
     s["nb"] = model.nb;
     s["nk"] = model.nk;
+    if (model.polynomial()) {
+      s["nc"] = model.nc;
+      s["nd"] = model.nd;
+      s["nf"] = model.nf;
+    }
   }
   j["structure"] = s;
   j["structure_name"] = structure_name;
@@ -124,13 +130,20 @@ SavedModel SavedModel::FromJson(const Json& j, const std::string& source) {
   if (kind == "static") {
     m.model.regressors = Get<std::vector<std::string>>(s, "regressors", source);
     m.model.intercept = Get<bool>(s, "intercept", source);
-  } else if (kind == "arx") {
+  } else if (kind == "arx" || kind == "armax" || kind == "oe" || kind == "bj") {
     m.model.inputs = Get<std::vector<std::string>>(s, "inputs", source);
     m.model.na = Get<int>(s, "na", source);
     m.model.nb = Get<std::vector<int>>(s, "nb", source);
     m.model.nk = Get<std::vector<int>>(s, "nk", source);
+    if (kind != "arx") {
+      m.model.nc = Get<int>(s, "nc", source);
+      m.model.nd = Get<int>(s, "nd", source);
+      m.model.nf = Get<int>(s, "nf", source);
+      if (!m.model.polynomial())
+        throw DataError(fmt::format("{}: structure kind \"{}\" with nc = nd = nf = 0", source, kind));
+    }
   } else {
-    throw DataError(fmt::format("{}: structure kind \"{}\"; need arx or static", source, kind));
+    throw DataError(fmt::format("{}: structure kind \"{}\"; need arx, armax, oe, bj or static", source, kind));
   }
   m.structure_name = Get<std::string>(j, "structure_name", source);
   m.parameter_names = Get<std::vector<std::string>>(j, "parameter_names", source);

@@ -2,7 +2,8 @@
 // it back and predicts or simulates on any record with the same columns, in physical units.
 //
 // model.json (format "ident-model", version 1):
-//   structure        {"kind": "arx", "output", "inputs", "na", "nb", "nk"} or
+//   structure        {"kind": "arx", "output", "inputs", "na", "nb", "nk"},
+//                    {"kind": "armax" | "oe" | "bj", the same and "nc", "nd", "nf"} or
 //                    {"kind": "static", "output", "regressors", "intercept"}
 //   structure_name, parameter_names, theta, covariance (ρ×ρ), theta_std, noise_std
 //   detrend          "mean" or "none"; detrend_means {column: mean subtracted before fitting}

@@ -15,7 +15,8 @@ import pandas as pd
 from ident import _ident
 from ident import datasets as _datasets
 
-_STRUCTURE_KEYS = ("output", "inputs", "na", "nb", "nk", "regressors", "intercept")
+_STRUCTURE_KEYS = ("output", "inputs", "na", "nb", "nk", "regressors", "intercept", "nc", "nd", "nf")
+_POLYNOMIAL_KEYS = ("nc", "nd", "nf")  # ARMAX/OE/Box-Jenkins orders: added to a suggested structure too
 
 
 def _table(data, missing=False):
@@ -56,7 +57,9 @@ def _table(data, missing=False):
 
 def _structure(kwargs, bundled):
     """The model options; a bundled record's suggested structure when none is given."""
+    polynomial = {k: kwargs.pop(k) for k in _POLYNOMIAL_KEYS if kwargs.get(k) is not None}
     given = {k: kwargs.pop(k) for k in _STRUCTURE_KEYS if kwargs.get(k) is not None}
+    na_given = "na" in given
     if not given and bundled is not None:
         s = _datasets.info(bundled)["structure"]
         given = {"output": s["output"]}
@@ -70,6 +73,9 @@ def _structure(kwargs, bundled):
     for key in ("nb", "nk"):
         if key in given and np.isscalar(given[key]):
             given[key] = [int(given[key])]
+    given.update(polynomial)
+    if given.get("nf") and not na_given:
+        given["na"] = 0  # OE/Box-Jenkins: no A polynomial
     if "output" not in given:
         raise ValueError("give output= (the output column) and inputs= (ARX) or regressors= (static regression)")
     return given
@@ -129,11 +135,12 @@ class FitResult:
 
 
 def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rls", *, regressors=None,
-        intercept=None, split=None, passes=1, detrend=None, missing=False, history=False, residual_lags=20,
-        **options):
+        intercept=None, nc=None, nd=None, nf=None, split=None, passes=1, detrend=None, missing=False,
+        history=False, residual_lags=20, **options):
     """Fits a model to a record with one estimator, as ``ident fit`` does.
 
-    Structure: ``output`` with ``inputs``, ``na``, ``nb``, ``nk`` (ARX/FIR) or with ``regressors`` and
+    Structure: ``output`` with ``inputs``, ``na``, ``nb``, ``nk`` (ARX/FIR; with ``nc``: ARMAX, with
+    ``nf``: output-error, with ``nc``, ``nd``, ``nf``: Box-Jenkins) or with ``regressors`` and
     ``intercept`` (static regression); a bundled record without them uses its suggested structure and
     split. ``estimator``: "rls", "cauchy", "student:3", "huber", "cauchy-ml". ``split``: fraction of rows
     that estimate (the rest validate; 1 = all rows do both). Further options as the command line's, in
@@ -145,6 +152,7 @@ def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rl
     columns, values, name, bundled = _table(data, missing)
     kwargs = dict(output=output, inputs=inputs, na=na, nb=nb, nk=nk, regressors=regressors, intercept=intercept)
     given = any(v is not None for v in kwargs.values())
+    kwargs.update(nc=nc, nd=nd, nf=nf)
     model = _structure(kwargs, bundled)
     split = _default_split(split, bundled, given)
     model.update(options)
@@ -173,7 +181,7 @@ class CompareResult(pd.DataFrame):
 
 def compare(data, estimators=("rls", "cauchy", "student:3"), *, outliers="0.05:20:1", trials=1, jobs=1, passes=1,
             split=None, detrend=None, output=None, inputs=None, na=None, nb=None, nk=None, regressors=None,
-            intercept=None, **options):
+            intercept=None, nc=None, nd=None, nf=None, **options):
     """Compares estimators on a record with injected outliers, scored on its clean rows (``ident compare``).
 
     ``outliers``: "RATE:SIZE[:SEED]" or "none"; ``jobs``: threads for the trials (the same table for any
@@ -184,6 +192,7 @@ def compare(data, estimators=("rls", "cauchy", "student:3"), *, outliers="0.05:2
     columns, values, name, bundled = _table(data)
     kwargs = dict(output=output, inputs=inputs, na=na, nb=nb, nk=nk, regressors=regressors, intercept=intercept)
     given = any(v is not None for v in kwargs.values())
+    kwargs.update(nc=nc, nd=nd, nf=nf)
     model = _structure(kwargs, bundled)
     split = _default_split(split, bundled, given)
     model.update(options)

@@ -64,6 +64,14 @@ Options ReadOptions(const py::dict& kw) {
       m.nb = value.cast<std::vector<int>>();
     else if (key == "nk")
       m.nk = value.cast<std::vector<int>>();
+    else if (key == "nc")
+      m.nc = value.cast<int>();
+    else if (key == "nd")
+      m.nd = value.cast<int>();
+    else if (key == "nf")
+      m.nf = value.cast<int>();
+    else if (key == "recursion")
+      m.recursion = value.cast<std::string>();
     else if (key == "regressors")
       m.regressors = value.cast<std::vector<std::string>>();
     else if (key == "intercept")

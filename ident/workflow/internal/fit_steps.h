@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -14,6 +15,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.h"
+#include "ident/regression/rls.h"
 #include "ident/workflow/fit.h"
 
 namespace ident::workflow::internal {
@@ -74,8 +76,16 @@ class Estimation {
         ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())),
         max_abs_(Eigen::VectorXd::Zero(source.num_parameters())),
         judged_(estimator.judges_outliers()),
-        in_startup_(estimator.in_startup()) {
+        in_startup_(estimator.in_startup()),
+        uses_estimate_(source.uses_estimate()) {
     source_.Reset();
+    // ARMAX/OE/BJ: the first pass starts with no estimate (the caller clears it), a further pass from the
+    // residuals of the pass before.
+    // While a robust start-up collects its window the estimate stays the prior's, and residuals of the
+    // prior (ε = v = y) would make the C and D columns copies of the output's: a least-squares shadow
+    // estimate forms them until the start is made, with the measured y for the noise-free output (noise-free
+    // outputs of a few samples' estimates would set the window's column scales and its robust fit).
+    if (uses_estimate_ && in_startup_) shadow_.emplace(source.num_parameters());
   }
 
   // `r` is the 0-based row index in the record (the trace prints r + 1).
@@ -90,10 +100,18 @@ class Estimation {
         source_.RestoreMeasured();
         z_ = z_measured_;
       }
-      const StepReport report = estimator_.Update(y, z_);
+      const double y_regressed = source_.RegressionOutput(y);  // y, or RPEM's linearised output
+      const StepReport report = estimator_.Update(y_regressed, z_);
       if (in_startup_ && !estimator_.in_startup()) {  // the robust start is made: the model judges from now on
         in_startup_ = false;
         source_.EndCleaningWarmUp();
+      }
+      // RPLR: the a-posteriori residual ε(t) = y(t) − θ(t)'z(t) and w(t) enter later regressors.
+      if (uses_estimate_ && !in_startup_) {
+        source_.TrackEstimate(estimator_.parameters(), /*start_up=*/false);
+      } else if (shadow_) {
+        shadow_->Update(y_regressed, z_);
+        source_.TrackEstimate(shadow_->parameters(), /*start_up=*/true);
       }
       flagged = decision_.Flags(report);
       // Every prediction ŷ goes to the cleaner (its gross-error test compares |y − ŷ| with the robust
@@ -178,6 +196,8 @@ class Estimation {
   Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)
   bool judged_;              // the estimator gives outlier verdicts (cleaning applies)
   bool in_startup_;          // the estimator is in its start-up (asked after each update only while true)
+  bool uses_estimate_;       // the source's regressor depends on θ (ARMAX/OE/BJ)
+  std::optional<RecursiveLeastSquares> shadow_;  // θ for the regressors during a robust start-up
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
 };
 
@@ -214,11 +234,17 @@ class Scoring {
         t0_(source.first_regression_index()) {
     one_step_source_->Reset();
     simulation_source_->Reset();
+    one_step_source_->SetEstimate(theta_);
+    simulation_source_->SetEstimate(theta_);
   }
 
   void Row(const Eigen::VectorXd& row) {
     const double y = row(one_step_source_->output_column());
-    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) one_step_.Add(y, theta_.dot(z_));
+    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {
+      const double yhat = theta_.dot(z_);
+      one_step_.Add(y, yhat);
+      one_step_size_ = std::max(one_step_size_, std::isfinite(yhat) ? std::abs(yhat) : HUGE_VAL);
+    }
     one_step_source_->PushOutput(y);
     if (std::isfinite(y)) y_scale_ = std::max(y_scale_, std::abs(y));
     if (simulation_source_->dynamic()) {
@@ -237,18 +263,22 @@ class Scoring {
 
   FitScores Finish(const std::string& name) const {
     IDENT_REQUIRE(one_step_.count() >= 2, "{}: fewer than 2 validation samples can be scored", name);
-    IDENT_REQUIRE(one_step_.finite(),
-                  "{}: the validation fit overflows (values or predictions near 1e308); rescale the data", name);
     FitScores scores;
-    scores.scored = static_cast<int>(one_step_.count());
-    scores.one_step = one_step_.Percent();
-    scores.rms_one_step = one_step_.Rms();
     // Divergence: the first record high of |ŷ| beyond 1000 times the largest measured |y|.
     for (const auto& [row, size] : highs_)
       if (size > kDivergence * y_scale_) {
         scores.simulation_diverged_at = first_row_ + row + 1;
         break;
       }
+    // An ARMAX/OE/BJ predictor filters by 1/C or 1/F: with an unstable C or F it diverges as a simulation
+    // does (the same test), and has no fit %.
+    const bool predictor_diverged =
+        one_step_source_->uses_estimate() && (!one_step_.finite() || one_step_size_ > kDivergence * y_scale_);
+    IDENT_REQUIRE(one_step_.finite() || predictor_diverged,
+                  "{}: the validation fit overflows (values or predictions near 1e308); rescale the data", name);
+    scores.scored = static_cast<int>(one_step_.count());
+    scores.one_step = predictor_diverged ? std::nan("") : one_step_.Percent();
+    scores.rms_one_step = predictor_diverged ? std::nan("") : one_step_.Rms();
     if (simulation_source_->dynamic() && simulation_.count() >= 2 && simulation_.finite() &&
         !scores.simulation_diverged_at) {
       scores.simulation = simulation_.Percent();
@@ -266,16 +296,35 @@ class Scoring {
   int row_ = 0;
   FitAccumulator one_step_, simulation_;
   double y_scale_ = 0;                         // largest measured |y| so far
+  double one_step_size_ = 0;                   // largest |one-step ŷ|
   std::vector<std::pair<int, double>> highs_;  // (row in the segment, |ŷ|) at each new largest |ŷ|
 };
 
+// Prepares a further pass: estimator.BeginPass(); for an estimator that declines (RLS) on an ARMAX/OE/BJ
+// source, the recursion simply goes on over the record again (θ̂ and its information carry on, and the
+// regressors of the new pass come from the better estimate: RELS over the repeated record, Ljung &
+// Söderström 1983, §3.7); *repeated counts such passes (the information then counts each sample once per
+// pass). False if no further pass can change the result.
+inline bool NextPass(AnyRegressionEstimator& estimator, const DataSource& source, int* repeated) {
+  if (estimator.BeginPass()) return true;
+  if (!source.uses_estimate()) return false;
+  if (repeated) ++*repeated;
+  return true;
+}
+
+// The standard errors of an estimate whose recursion ran `repeated` extra passes over the same samples
+// (NextPass): its information counts each sample 1 + repeated times, so the errors are scaled back up.
+inline void CorrectRepeatedPasses(FitResult& result, int repeated) {
+  if (repeated > 0) result.theta_std *= std::sqrt(1.0 + repeated);
+}
+
 // Runs `pass(options)` (one pass over the estimation part, returning its (updates, rejected)) options.passes
-// times, calling estimator.BeginPass() between passes; the trace and on_update see the last pass only. An
+// times, calling NextPass() between passes (`repeated` as there); the trace and on_update see the last pass only. An
 // estimator that declines a further pass runs once (re-run with the trace if it was held back). Stores the
 // number of passes made in *passes_run.
 template <class Pass>
-inline std::pair<int, int> RunPasses(AnyRegressionEstimator& estimator, const FitOptions& options, int* passes_run,
-                                     Pass&& pass) {
+inline std::pair<int, int> RunPasses(AnyRegressionEstimator& estimator, const DataSource& source,
+                                     const FitOptions& options, int* passes_run, int* repeated, Pass&& pass) {
   IDENT_REQUIRE(options.passes >= 1 && options.passes <= 100, "--passes {}; need 1 <= passes <= 100", options.passes);
   FitOptions quiet = options;
   quiet.trace = nullptr;
@@ -283,7 +332,7 @@ inline std::pair<int, int> RunPasses(AnyRegressionEstimator& estimator, const Fi
   int made = 1;
   std::pair<int, int> counts = pass(options.passes == 1 ? options : quiet);
   for (; made < options.passes; ++made) {
-    if (!estimator.BeginPass()) break;
+    if (!NextPass(estimator, source, repeated)) break;
     counts = pass(made + 1 == options.passes ? options : quiet);
   }
   if (made == 1 && options.passes > 1 && (options.trace || options.on_update)) {
@@ -296,8 +345,9 @@ inline std::pair<int, int> RunPasses(AnyRegressionEstimator& estimator, const Fi
 
 inline std::pair<int, int> EstimateRows(const io::DataTable& data, Segment segment, DataSource& source,
                                         AnyRegressionEstimator& estimator, const FitOptions& options,
-                                        int* passes_run = nullptr) {
-  return RunPasses(estimator, options, passes_run, [&](const FitOptions& o) {
+                                        int* passes_run = nullptr, int* repeated = nullptr) {
+  source.ClearEstimate();  // ARMAX/OE/BJ: no estimate from an earlier fit on this source
+  return RunPasses(estimator, source, options, passes_run, repeated, [&](const FitOptions& o) {
     Estimation estimation(source, estimator, o);
     Eigen::VectorXd row(data.values.cols());
     for (int r = segment.first; r < segment.first + segment.count; ++r) {

@@ -1,0 +1,76 @@
+#include "models/polynomial_structure.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "common/error.h"
+
+namespace ident::models {
+namespace {
+
+ArxStructure CheckedArx(int na, std::vector<int> nb, std::vector<int> nk, int nc, int nd, int nf) {
+  IDENT_REQUIRE(nc >= 0, "nc = {}; need nc >= 0", nc);
+  IDENT_REQUIRE(nd >= 0, "nd = {}; need nd >= 0", nd);
+  IDENT_REQUIRE(nf >= 0, "nf = {}; need nf >= 0", nf);
+  IDENT_REQUIRE(nc + nd + nf >= 1, "nc = nd = nf = 0 is an ARX model, not ARMAX/OE/BJ");
+  IDENT_REQUIRE(nf == 0 || na == 0,
+                "na = {} with nf = {}: an output-error or Box-Jenkins model has no A polynomial (give na = 0)", na,
+                nf);
+  IDENT_REQUIRE(nd == 0 || nf >= 1, "nd = {} needs nf >= 1 (Box-Jenkins); ARMAX has C only", nd);
+  IDENT_REQUIRE(nf == 0 || nb.size() == 1, "nf = {} with {} inputs: OE and Box-Jenkins models take one input", nf,
+                nb.size());
+  IDENT_REQUIRE(nf == 0 || nb[0] >= 1, "nf = {} with nb = 0: an output-error model needs nb >= 1", nf);
+  IDENT_REQUIRE(static_cast<long long>(nc) + nd + nf <= ArxStructure::kMaxParameters,
+                "nc + nd + nf = {}; need at most {}", static_cast<long long>(nc) + nd + nf,
+                ArxStructure::kMaxParameters);
+  return ArxStructure(na, std::move(nb), std::move(nk));
+}
+
+}  // namespace
+
+PolynomialStructure::PolynomialStructure(int na, std::vector<int> nb, std::vector<int> nk, int nc, int nd, int nf)
+    : arx_(CheckedArx(na, std::move(nb), std::move(nk), nc, nd, nf)), nc_(nc), nd_(nd), nf_(nf) {
+  IDENT_REQUIRE(static_cast<long long>(arx_.num_parameters()) + nc + nd + nf <= ArxStructure::kMaxParameters,
+                "the model has {} parameters; need at most {}",
+                static_cast<long long>(arx_.num_parameters()) + nc + nd + nf, ArxStructure::kMaxParameters);
+  t0_ = std::max({arx_.first_regression_index(), nc_, nd_, nf_});
+}
+
+std::string PolynomialStructure::ToString() const {
+  const auto& nb = arx_.nb();
+  const auto& nk = arx_.nk();
+  const std::string b = nb.size() == 1 ? fmt::format("{}", nb[0]) : fmt::format("[{}]", fmt::join(nb, ","));
+  const std::string k = nk.size() == 1 ? fmt::format("{}", nk[0]) : fmt::format("[{}]", fmt::join(nk, ","));
+  if (nf_ == 0) return fmt::format("ARMAX({},{},{},{})", na(), b, nc_, k);
+  if (nc_ == 0 && nd_ == 0) return fmt::format("OE({},{},{})", b, nf_, k);
+  return fmt::format("BJ({},{},{},{},{})", b, nc_, nd_, nf_, k);
+}
+
+std::vector<std::string> PolynomialStructure::ParameterNames() const {
+  std::vector<std::string> names = arx_.ParameterNames();
+  for (int k = 1; k <= nc_; ++k) names.push_back(fmt::format("c{}", k));
+  for (int k = 1; k <= nd_; ++k) names.push_back(fmt::format("d{}", k));
+  for (int k = 1; k <= nf_; ++k) names.push_back(fmt::format("f{}", k));
+  return names;
+}
+
+bool MonicStable(const double* p, int n, double* work) {
+  // a^(n) = p; step down a^(i−1)_j = (a^(i)_j − k_i a^(i)_{i−j}) / (1 − k_i²), k_i = a^(i)_i.
+  for (int j = 0; j < n; ++j) work[j] = p[j];  // work[j] = a_{j+1}
+  for (int i = n; i >= 1; --i) {
+    const double k = work[i - 1];
+    if (!(std::abs(k) < 1)) return false;
+    const double scale = 1 / (1 - k * k);
+    for (int j = 1; j <= i / 2; ++j) {
+      const double lo = work[j - 1], hi = work[i - j - 1];
+      work[j - 1] = (lo - k * hi) * scale;
+      work[i - j - 1] = (hi - k * lo) * scale;
+    }
+  }
+  return true;
+}
+
+}  // namespace ident::models
