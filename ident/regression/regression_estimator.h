@@ -55,7 +55,7 @@ struct RestartEvent {
   bool resolved = true;          // false: still more than half low after the replay (heavy tails, not
                                  // a lock-in); the next restart then waits twice as long
   bool end_of_data = false;      // made when the data ended: the restart's estimate had the higher likelihood
-                                 // (SafeStudentRegression::FinishStartup)
+                                 // (SafeStudentRegression::ReconsiderAtEnd)
 };
 
 // The state of a robust estimator's lock-in safeguard (ident/regression/lock_in_monitor.h, docs/explanation/karny-hangos-estimator.md):
@@ -108,6 +108,10 @@ class AnyRegressionEstimator {
   // The data have ended while a data-driven start-up still waits: start from every sample seen
   // (SafeStudentRegression::FinishStartup). False where there is no start-up or it cannot start.
   virtual bool FinishStartup() { return false; }
+  // The data have ended: weigh the estimate against a competing hypothesis and keep the likelier
+  // (SafeStudentRegression::ReconsiderAtEnd). Only for regressors that do not depend on the estimate
+  // (its kept samples are replayed). False where there is none or the estimate stays.
+  virtual bool ReconsiderAtEnd() { return false; }
 };
 
 // Adapter: wraps a concrete estimator E.
@@ -160,6 +164,12 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
   bool FinishStartup() override {
     if constexpr (requires { e_.FinishStartup(); })
       return e_.FinishStartup();
+    else
+      return false;
+  }
+  bool ReconsiderAtEnd() override {
+    if constexpr (requires { e_.ReconsiderAtEnd(); })
+      return e_.ReconsiderAtEnd();
     else
       return false;
   }

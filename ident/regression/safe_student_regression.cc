@@ -174,12 +174,14 @@ void SafeStudentRegression::Replay() noexcept {
 }
 
 bool SafeStudentRegression::FinishStartup() noexcept {
-  if (options_.base.exact || stored_ <= num_parameters()) return false;
-  if (in_startup()) {
-    Restart(stored_, /*lock_in=*/false, /*strict=*/false);
-    start_at_end_ = started_;
-    return started_;
-  }
+  if (!in_startup() || stored_ <= num_parameters()) return false;
+  Restart(stored_, /*lock_in=*/false, /*strict=*/false);
+  start_at_end_ = started_;
+  return started_;
+}
+
+bool SafeStudentRegression::ReconsiderAtEnd() noexcept {
+  if (options_.base.exact || in_startup() || stored_ <= num_parameters()) return false;
   return CompeteWithRobustRestart();
 }
 

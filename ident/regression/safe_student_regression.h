@@ -139,14 +139,15 @@ class SafeStudentRegression {
   // the start's checks): starts from the robust fit of every kept sample, with only a rank-deficient
   // window refused, and replays them. True if it started; false (state unchanged) otherwise or when not
   // in the start-up. The command line calls it after the last estimation row.
-  //
-  // After the start-up it weighs the recursion's estimate against a competing hypothesis: a restart from
+  bool FinishStartup() noexcept;
+  // The end of the data after the start-up: weighs the recursion's estimate against a competing hypothesis: a restart from
   // the robust fit of every kept sample (as for a lock-in), a replay of them all and kCompetingPasses − 1
   // further passes (BeginPass) over them. The one with the higher
   // Student-t_k likelihood of the kept samples (scale profiled out, by more than kCompetingMargin) is kept; an
   // adopted restart is recorded (RestartEvent::end_of_data). Up to kMaxCompetingSamples kept samples (the
-  // robust fit costs O(nρ²) per start it tries); none of this with `base.exact` or without restarts.
-  bool FinishStartup() noexcept;
+  // robust fit costs O(nρ²) per start it tries); none of this with `base.exact` or without restarts. The
+  // workflow calls it after FinishStartup when the regressors do not depend on the estimate (not ARMAX/OE).
+  bool ReconsiderAtEnd() noexcept;
   // Negative log-likelihood margin a restart must win by at the end of the data.
   static constexpr double kCompetingMargin = 1.0;
   static constexpr long kMaxCompetingSamples = 100'000;

@@ -83,6 +83,7 @@ class RecordingEstimator final : public AnyRegressionEstimator {
   }
   bool in_startup() const override { return inner_.in_startup(); }
   bool FinishStartup() override { return inner_.FinishStartup(); }
+  bool ReconsiderAtEnd() override { return inner_.ReconsiderAtEnd(); }
 
  private:
   AnyRegressionEstimator& inner_;

@@ -102,6 +102,10 @@ class Estimator {
     const Guard guard(*this);
     return estimator_->FinishStartup();
   }
+  bool ReconsiderAtEnd() {
+    const Guard guard(*this);
+    return estimator_->ReconsiderAtEnd();
+  }
   const AnyRegressionEstimator& get() const { return *estimator_; }
   bool enabled() const { return enabled_; }
   void set_enabled(bool enabled) { enabled_ = enabled; }
@@ -208,6 +212,9 @@ void RegisterRegression(py::module_& m) {
            "Prepare another pass over the same samples from the current estimate (False: no change possible)")
       .def("finish_startup", &Estimator::FinishStartup,
            "The data have ended during the robust start-up: start from every sample seen")
+      .def("reconsider_at_end", &Estimator::ReconsiderAtEnd,
+           "The data have ended: keep a restart from the robust fit of every kept sample if its likelihood is "
+           "higher (cauchy, student; regressors that do not depend on the estimate)")
       .def_property("enabled", &Estimator::enabled, &Estimator::set_enabled,
                     "False: update() and update_many() skip every sample (status SKIPPED)")
       .def_property_readonly("parameters", &Estimator::parameters, "theta-hat (numpy array, n)")

@@ -144,6 +144,8 @@ class Estimation {
   // every regressor must vary and none may be a combination of the others.
   std::pair<int, int> Finish(const std::string& name) {
     estimator_.FinishStartup();
+    // A competing restart replays the kept regressors, which must not depend on the estimate.
+    if (!uses_estimate_) estimator_.ReconsiderAtEnd();
     const int rho = source_.num_parameters();
     const std::vector<std::string> names = source_.parameter_names();
     IDENT_REQUIRE(updates_ > 0 || failed_ < rejected_,
