@@ -71,8 +71,9 @@ void BM_GridObserver(benchmark::State& state) {
     k = (k + 1) % run.y.size();
   }
   state.SetItemsProcessed(state.iterations());
+  state.counters["kernel_builds_per_step"] = static_cast<double>(grid.kernel_builds()) / state.iterations();
 }
-BENCHMARK(BM_GridObserver)->Arg(64)->Arg(128)->Arg(256)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_GridObserver)->Arg(48)->Arg(64)->Arg(96)->Arg(128)->Arg(256)->Unit(benchmark::kMicrosecond);
 
 template <class Filter>
 void BM_LcGaussianFilterExact(benchmark::State& state) {
