@@ -1,5 +1,5 @@
-// ident mems [--t-mean LIST] [--steps N] [--seed S] [--grid-points N] [--grid-tolerance T] [--h H] [--ep-window W] [--csv FILE]
-//            [--trace FILE] [--plot FILE]
+// ident mems [--t-mean LIST] [--steps N] [--seed S] [--grid-points N] [--grid-tolerance T] [--h H]
+//            [--ep-window W] [--csv FILE] [--trace FILE] [--plot FILE]
 // The MEMS accelerometer study of Henningsson & Åström (2006, sec. V): prints the analogue of Fig. 9
 // (RMS velocity error of each observer against the measured mean time between events) and writes the
 // Fig. 8 variance traces (--trace CSV, and the second panel of --plot). See studies/mems/mems_study.h.
