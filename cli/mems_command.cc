@@ -1,5 +1,5 @@
-// ident mems [--t-mean LIST] [--steps N] [--seed S] [--grid-points N] [--h H] [--ep-window W] [--csv FILE]
-//            [--trace FILE] [--plot FILE]
+// ident mems [--t-mean LIST] [--steps N] [--seed S] [--grid-points N] [--grid-tolerance T] [--h H]
+//            [--ep-window W] [--csv FILE] [--trace FILE] [--plot FILE]
 // The MEMS accelerometer study of Henningsson & Åström (2006, sec. V): prints the analogue of Fig. 9
 // (RMS velocity error of each observer against the measured mean time between events) and writes the
 // Fig. 8 variance traces (--trace CSV, and the second panel of --plot). See studies/mems/mems_study.h.
@@ -27,7 +27,8 @@ struct MemsCommandOptions {
   std::vector<double> t_targets = {0.3, 0.5, 1.0, 1.5, 2.0, 3.0};
   int steps = 4000;
   unsigned seed = 1;
-  int grid_points = 96;
+  int grid_points = 64;
+  double grid_tolerance = 0.02;
   double h = 0.01;
   int ep_window = 16;
   std::string csv, trace, plot;
@@ -61,11 +62,12 @@ void RunMems(const MemsCommandOptions& o) {
     s.burn_in = o.steps / 10;
     s.seed = o.seed + static_cast<unsigned>(i);
     s.grid_points = o.grid_points;
+    s.grid_tolerance = o.grid_tolerance;
     s.h = o.h;
     s.ep_window = o.ep_window;
     s.record_trace = i == 0 && (!o.trace.empty() || !o.plot.empty());
     const std::string problem = s.Validate();
-    IDENT_REQUIRE(problem.empty(), "{} (from --t-mean/--steps/--grid-points/--h/--ep-window)", problem);
+    IDENT_REQUIRE(problem.empty(), "{} (from --t-mean/--steps/--grid-points/--grid-tolerance/--h/--ep-window)", problem);
     return s;
   };
   for (size_t i = 0; i < o.t_targets.size(); ++i) study_options(i);
@@ -84,8 +86,11 @@ void RunMems(const MemsCommandOptions& o) {
   for (size_t i = 0; i < o.t_targets.size(); ++i) results.push_back(RunMemsStudy(study_options(i)));
   // Fig. 9 analogue.
   std::ostringstream report;
-  report << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {}x{} grid)\n", o.h, o.steps,
-                        o.grid_points, o.grid_points);
+  std::string grid_sizes;
+  for (const auto& r : results) grid_sizes += fmt::format("{}{}x{}", grid_sizes.empty() ? "" : ",", r.grid_points,
+                                                          r.grid_points);
+  report << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {} grid)\n", o.h, o.steps,
+                        grid_sizes);
   report << "RMS velocity error (calibration = predicted variance / mean squared error)\n";
   report << fmt::format("{:>8} {:>7}", "t_mean", "events");
   for (const auto& [col, name] : kColumns) report << fmt::format(" {:>17}", col);
@@ -113,6 +118,17 @@ void RunMems(const MemsCommandOptions& o) {
       "lc_truncated: every reading exact, Gaussian restricted to the current reading's interval, "
       "no sigma_o\n",
       results.front().sigma_o);
+  // The reference grid per rate: its size and the refinement check against the coarser grid.
+  report << fmt::format("grid reference: points per axis, mean var(x2), relative moment difference to the coarser "
+                        "grid (tolerance {})\n",
+                        o.grid_tolerance);
+  report << fmt::format("{:>8} {:>7} {:>12} {:>8} {:>11} {:>10}\n", "t_mean", "points", "mean_var_x2", "coarser",
+                        "difference", "converged");
+  for (const auto& r : results)
+    report << fmt::format("{:8.3f} {:7d} {:12.6f} {:8} {:11} {:>10}\n", r.t_mean, r.grid_points,
+                          r.grid_mean_variance, r.grid_coarse_points > 0 ? std::to_string(r.grid_coarse_points) : "-",
+                          r.grid_coarse_points > 0 ? fmt::format("{:.4f}", r.grid_difference) : "-",
+                          r.grid_coarse_points > 0 ? (r.grid_converged ? "yes" : "no") : "-");
   long truncated_failures = 0, truncated_projection_failures = 0;
   for (const auto& r : results) {
     truncated_failures += r.truncated_failures;
@@ -127,6 +143,7 @@ void RunMems(const MemsCommandOptions& o) {
     for (const auto& [col, name] : kColumns) f += ",rms_" + col;
     for (const auto& [col, name] : kColumns) f += ",calibration_" + col;
     for (const auto& [col, name] : kColumns) f += ",calibration_se_" + col;
+    f += ",grid_points,grid_coarse_points,grid_difference,grid_converged,grid_mean_var";
     f += "\n";
     for (size_t i = 0; i < results.size(); ++i) {
       const auto& r = results[i];
@@ -134,6 +151,9 @@ void RunMems(const MemsCommandOptions& o) {
       for (const auto& [col, name] : kColumns) f += fmt::format(",{:.6g}", r.Get(name).rms);
       for (const auto& [col, name] : kColumns) f += fmt::format(",{:.6g}", r.Get(name).calibration);
       for (const auto& [col, name] : kColumns) f += fmt::format(",{:.6g}", r.Get(name).calibration_se);
+      f += fmt::format(",{},{},{},{},{:.6g}", r.grid_points, r.grid_coarse_points,
+                       r.grid_coarse_points > 0 ? fmt::format("{:.6g}", r.grid_difference) : "",
+                       r.grid_coarse_points > 0 ? (r.grid_converged ? "1" : "0") : "", r.grid_mean_variance);
       f += "\n";
     }
     csv_file->Write(f);
@@ -197,7 +217,13 @@ void AddMemsCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--steps", opts->steps, "simulated steps per rate (first 10 % are burn-in)")->capture_default_str();
   cmd->add_option("--seed", opts->seed, "random seed (rate i uses seed + i)")->capture_default_str();
-  cmd->add_option("--grid-points", opts->grid_points, "grid observer points per axis")->capture_default_str();
+  cmd->add_option("--grid-points", opts->grid_points,
+                  "grid observer points per axis (the first grid of the refinement check when --grid-tolerance > 0)")
+      ->capture_default_str();
+  cmd->add_option("--grid-tolerance", opts->grid_tolerance,
+                  "refine the grid (x1.5 per axis) until its moments agree with the next finer grid to this relative "
+                  "difference; 0 = the --grid-points grid unchecked")
+      ->capture_default_str();
   cmd->add_option("--h", opts->h, "sampling period")->capture_default_str();
   cmd->add_option("--ep-window", opts->ep_window, "lc_window: readings refined jointly by sliding-window EP")
       ->capture_default_str();

@@ -176,16 +176,33 @@ class ActiveSet {
     phi = LocalMle(kn, phi);
     const double range = x_(m_ - 1) - x_(0);
     int iterations = 0;
+    // Knots are added in rounds: between each pair of neighbouring knots the point with the largest D_j > 0
+    // (a local maximum of D: adding it is an ascent direction, [DHR] sec. 3.2), all at once, then the
+    // Newton/step-back loop restores concavity, dropping knots as needed. A round that keeps none of its
+    // new knots is repeated with the single best one (the one-knot algorithm of [DHR], which stops when that
+    // knot is rejected at once).
+    bool single = false;
+    std::vector<char> is_knot(m_, 0);
+    std::vector<int> added, before;
     while (iterations < o_.max_iterations) {
       const Eigen::VectorXd D = DirectionalDerivatives(x_, w_, phi);
-      int best = -1;
-      std::vector<char> is_knot(m_, 0);
+      std::fill(is_knot.begin(), is_knot.end(), 0);
       for (int a : kn) is_knot[a] = 1;
-      for (int j = 1; j + 1 < m_; ++j)
-        if (!is_knot[j] && D(j) > o_.tolerance * range && (best < 0 || D(j) > D(best))) best = j;
+      added.clear();
+      int best = -1;
+      for (size_t a = 0; a + 1 < kn.size(); ++a) {
+        int local = -1;
+        for (int j = kn[a] + 1; j < kn[a + 1]; ++j)
+          if (D(j) > o_.tolerance * range && (local < 0 || D(j) > D(local))) local = j;
+        if (local < 0) continue;
+        added.push_back(local);
+        if (best < 0 || D(local) > D(best)) best = local;
+      }
       if (best < 0) break;
+      if (single) added.assign(1, best);
       ++iterations;
-      kn.insert(std::upper_bound(kn.begin(), kn.end(), best), best);
+      before = kn;
+      for (int j : added) kn.insert(std::upper_bound(kn.begin(), kn.end(), j), j);
       bool stalled = false;
       for (;;) {
         const Eigen::VectorXd phi_new = LocalMle(kn, phi);
@@ -195,7 +212,8 @@ class ActiveSet {
           break;
         }
         // Step back from the concave phi towards phi_new until the first knot turns linear [DHR sec. 3.2].
-        const Eigen::VectorXd conv_old = Convexity(kn, phi);
+        // phi is concave: a positive slope change at a knot is rounding (at a new knot phi is linear).
+        const Eigen::VectorXd conv_old = Convexity(kn, phi).cwiseMin(0.0);
         double lambda = 1;
         for (int a = 0; a < conv_new.size(); ++a)
           if (conv_new(a) > 0) lambda = std::min(lambda, conv_old(a) / (conv_old(a) - conv_new(a)));
@@ -205,7 +223,8 @@ class ActiveSet {
           const bool drop = conv_new(a) > 0 && conv_old(a) / (conv_old(a) - conv_new(a)) <= lambda * (1 + 1e-12);
           if (!drop) kept.push_back(kn[a]);
         }
-        if (lambda == 0 && kept.size() + 1 == kn.size() && std::find(kept.begin(), kept.end(), best) == kept.end()) {
+        if (single && lambda == 0 && kept.size() + 1 == kn.size() &&
+            std::find(kept.begin(), kept.end(), best) == kept.end()) {
           stalled = true;  // the new knot is rejected at once: D(best) is at rounding level
           kn = kept;
           break;
@@ -219,6 +238,8 @@ class ActiveSet {
         kn = kept;
       }
       if (stalled) break;
+      // A round that kept none of its knots: the next one adds the single best knot.
+      single = !single && kn == before;
     }
     LogConcaveMle mle;
     mle.n = n;

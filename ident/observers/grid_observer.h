@@ -1,23 +1,35 @@
 // Grid Bayesian observer: the exact observer recursion of Henningsson & Åström (2006) on a grid,
 // for 1 to 3 state dimensions.
 //
-//   (1) dynamics       f^d(x)  ∝ f_{k−1}(A⁻¹(x − B u))     multilinear interpolation of the old grid
-//   (2) process noise  f^dn    = f_N * f^d                 FFT convolution (Eigen FFT, zero padded); a
-//                                                         Gaussian f_N multiplies the spectrum by a
-//                                                         lattice characteristic function with the
-//                                                         exact covariance P_N (grid_observer.cc), any
-//                                                         other log-concave f_N is sampled on the grid
+//   (1) dynamics       f^d(x)  ∝ f_{k−1}(A⁻¹(x − B u))     cubic (Catmull–Rom) interpolation of the old
+//                                                         grid, separable along lines of axis 0 when the
+//                                                         map keeps them (A⁻¹ upper triangular, e.g. the
+//                                                         double integrator's shear)
+//   (2) process noise  f^dn    = f_N * f^d                 a Gaussian f_N is the lattice kernel with the
+//                                                         exact covariance P_N (its spectrum, a lattice
+//                                                         characteristic function, grid_observer.cc),
+//                                                         computed once per spacing and P_N: a direct
+//                                                         convolution when it has few taps, else an FFT
+//                                                         (Eigen FFT, zero padded); any other log-concave
+//                                                         f_N is sampled on the grid (FFT)
 //   (3) measurement    f_k(x)  ∝ f_M(y, x) · f^dn(x)      pointwise product, in log space shifted by
-//                                                         max log f_M (no underflow), renormalised
+//                                                         max log f_M (no underflow), renormalised; a
+//                                                         reading c'x ∈ [lo, hi] with c along one axis
+//                                                         weighs each node by the fraction of its cell
+//                                                         inside the interval (the cut is exact to
+//                                                         first order in the spacing)
 //
-// The grid moves and resizes every step: an axis-aligned box around the image under x ↦ A x + B u of
-// the previous density's support (nodes with f > 1e-12·max f), widened by noise_sigmas standard
-// deviations of the process noise. Discretisation error: interpolation on a shifted grid smooths each
-// axis by at most Δ_i²/4 of variance per step (Δ_i = spacing), and the density is represented to the
-// grid spacing, so moments are accurate to O(Δ²); tests state their tolerances in units of Δ².
+// The grid follows the density: each step it must hold the image under x ↦ A x + B u of the previous
+// density's support (nodes with f > support_level·max f), widened by noise_sigmas process-noise
+// standard deviations. The spacing is kept while that box fits and fills at least 60 % of the grid, and
+// the origin moves by B u plus whole cells, so an axis that A maps onto itself (a row e_i' of A) is
+// carried node onto node without interpolation; otherwise the axis is re-gridded to the box plus 20 %.
+// Discretisation error: O(Δ⁴) per step from the interpolation of smooth densities, O(Δ²) for the
+// moments overall (node values, cut cells); GridRefinement (grid_refinement.h) checks the size.
 //
 // Read-outs: mean(), covariance() (sums over the grid), density() with axis(i) coordinates.
-// Cost per step: O(N log N) for N padded grid points; no allocation after construction.
+// Cost per step: O(N) for the dynamics and the reading, O(N · taps) or O(N log N) for the noise, N grid
+// points; no allocation after construction.
 //
 // Example:
 //   ident::GridObserver grid(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity(), {.points = {128, 128}});
@@ -91,41 +103,60 @@ class GridObserver {
   double axis(int i, int j) const { return origin_[i] + j * spacing_[i]; }
   // Density values, dimension 0 fastest: index = j0 + n0 (j1 + n1 j2); integrates to 1 (Riemann sum).
   const std::vector<double>& density() const { return p_; }
+  // Times the Gaussian noise kernel was built (once per new spacing or P_N), for benchmarks.
+  long kernel_builds() const { return kernel_builds_; }
 
  private:
   StepReport PredictImpl(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& u,
                          const LogDensity* log_noise);
   // The support box of the density: centre and half-width per axis of the nodes above support_level · max.
   void SupportBox(std::array<double, 3>& mid, std::array<double, 3>& half) const;
-  // Moves the grid onto the box's image under x ↦ A x + B u (shift = B u), widened by the process noise;
-  // false if that grid is beyond double range.
+  // Places the grid over the box's image under x ↦ A x + B u (shift = B u), widened by the process noise,
+  // keeping the spacing and whole-cell alignment when it can; false if that grid is beyond double range.
   bool MoveGrid(const models::LinearStateSpace& model, const Eigen::Ref<const Eigen::VectorXd>& shift,
                 const std::array<double, 3>& mid, const std::array<double, 3>& half);
-  // p ← the density before the step at A⁻¹(x − B u) on the moved grid (eq. (1)), multilinear interpolation
-  // between the old grid's nodes (old_origin, old_spacing).
+  // q ← the density p before the step at A⁻¹(x − B u) on the moved grid (eq. (1)), cubic interpolation
+  // between the old grid's nodes (old_origin, old_spacing), zero outside the old grid.
   void PushForward(const Eigen::Ref<const Eigen::MatrixXd>& Ainv, const Eigen::Ref<const Eigen::VectorXd>& shift,
                    const std::array<double, 3>& old_origin, const std::array<double, 3>& old_spacing);
+  // q ← f_N * q (eq. (2)).
   void Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* log_noise);
-  bool Normalise();
-  bool UpdateMoments();  // false if a moment is not finite
-  // Completes a step: normalise and update the moments, or restore the saved state (kNumericalFailure).
+  // The lattice Gaussian kernel of noise_cov on the current spacing: its spectrum, and its taps if few.
+  void BuildGaussianKernel(const Eigen::MatrixXd& noise_cov);
+  // The lattice characteristic function of noise_cov on the padded grid (spectrum_).
+  void BuildSpectrum(const Eigen::MatrixXd& noise_cov);
+  // 1–2 states: the taps of a factorised lattice kernel with covariance noise_cov; false if not applicable
+  // or more than max_taps.
+  bool FactorisedTaps(const Eigen::MatrixXd& noise_cov, double max_taps);
+  void FftLines(std::vector<std::complex<double>>& data, bool inverse, bool skip_padding);
+  // Completes a step on q: normalise, moments, then q becomes the density; or, if q is not a finite
+  // normalisable density with finite moments, the grid and the density stay as they were (kNumericalFailure).
   StepReport Commit();
-  void Save();
-  void Restore();
+  // Sum, mean and covariance of an unnormalised density v on the current grid; false if not finite or sum ≤ 0.
+  bool Moments(const std::vector<double>& v, double& sum, Eigen::VectorXd& mean, Eigen::MatrixXd& cov) const;
   void NodeCoordinates(int index, Eigen::VectorXd& x) const;
 
   GridObserverOptions options_;
   int dim_ = 0, total_ = 0, padded_total_ = 0;
   std::array<int, 3> n_{1, 1, 1}, np_{1, 1, 1};
   std::array<double, 3> origin_{}, spacing_{1, 1, 1};
-  std::vector<double> p_, q_, p_saved_;
   std::array<double, 3> origin_saved_{}, spacing_saved_{};
-  Eigen::VectorXd mean_saved_;
-  Eigen::MatrixXd cov_saved_;
+  std::vector<double> p_, q_, r_;
+  double max_p_ = 0;  // largest density value, for the support box
+  // Gaussian kernel cache: valid for kernel_spacing_ and kernel_cov_ (dim × dim, row-major).
+  bool kernel_valid_ = false, spectrum_valid_ = false;
+  std::array<double, 3> kernel_spacing_{};
+  std::array<double, 9> kernel_cov_{};
+  std::vector<double> spectrum_;                // padded_total_ multipliers
+  std::vector<std::array<int, 3>> tap_offset_;  // direct convolution taps (empty: use the FFT)
+  std::vector<double> tap_weight_;
+  int taps_ = 0;
+  std::vector<double> line_factor_, axis_ds_, axis_diag_;
+  long kernel_builds_ = 0;  // per-axis likelihood factors (reading along one axis)
   std::vector<std::complex<double>> buf_, line_in_, line_out_, kernel_;
   Eigen::FFT<double> fft_;
-  Eigen::VectorXd mean_, x_;
-  Eigen::MatrixXd cov_;
+  Eigen::VectorXd mean_, x_, mean_new_;
+  Eigen::MatrixXd cov_, cov_new_;
   models::LinearStateSpace model_;
   std::shared_ptr<const models::MeasurementFunction> measurement_;
 };

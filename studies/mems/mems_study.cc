@@ -11,6 +11,7 @@
 #include "common/error.h"
 #include "ident/observers/covariance_bound.h"
 #include "ident/observers/grid_observer.h"
+#include "ident/observers/grid_refinement.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "ident/observers/truncated_gaussian_filter.h"
@@ -32,6 +33,8 @@ std::string MemsStudyOptions::Validate() const {
   if (burn_in < 0 || burn_in > steps - 10)  // at least one step per block of the calibration's jackknife
     return fmt::format("burn_in = {}; need 0 <= burn_in <= steps - 10", burn_in);
   if (grid_points < 16 || grid_points > 1024) return fmt::format("grid_points = {}; need 16..1024", grid_points);
+  if (!(grid_tolerance >= 0 && grid_tolerance < 1))
+    return fmt::format("grid_tolerance = {}; need 0 <= grid_tolerance < 1", grid_tolerance);
   if (ep_window < 1 || ep_window > 4096) return fmt::format("ep_window = {}; need 1..4096", ep_window);
   if (!(sigma_m2 >= 0)) return fmt::format("sigma_m2 = {}; need >= 0", sigma_m2);
   // At least one expected event in the scored part of the run (its mean spacing is t_target).
@@ -101,9 +104,13 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
   const Eigen::Vector2d m0(0.0, v_ref);
   Eigen::Matrix2d P0;
   P0 << 0.3, 0, 0, 1.0;
-  GridObserverOptions gopt;
-  gopt.points = {o.grid_points, o.grid_points};
-  GridObserver grid(m0, P0, gopt);
+  // The grid observer runs after the simulation on the recorded inputs and readings (the control law does not
+  // use it), at a refined size when grid_tolerance > 0 (ident/observers/grid_refinement.h).
+  std::vector<Eigen::VectorXd> grid_u;
+  std::vector<double> grid_y, truth_v, truth_x1;
+  grid_u.reserve(o.steps);
+  grid_y.reserve(o.steps);
+  truth_v.reserve(o.steps);
   KalmanFilter tuned(m0, P0), tuned13(m0, P0);
   LcGaussianFilter plain(m0, P0), event(m0, P0), event_trunc(m0, P0), event_capped(m0, P0), wedge(m0, P0),
       excursion_filter(m0, P0), silent_filter(m0, P0);
@@ -176,8 +183,9 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       if (k >= o.burn_in) ++events_counted;
     }
     // Observers: time update with u(k−1), then the reading y(k).
-    grid.Predict(model, u);
-    grid.Correct(*sensor, y);
+    grid_u.push_back(u);
+    grid_y.push_back(y);
+    truth_v.push_back(x(1));
     for (KalmanFilter* kf : {&tuned, &tuned13}) {
       kf->Predict(model, u);
       const double rz = kf == &tuned ? r_zero : r_zero13;
@@ -257,7 +265,6 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
     y_prev = y;
 
     if (k >= o.burn_in) {
-      acc_grid.Add(grid.mean()(1) - x(1), grid.covariance()(1, 1));
       acc_tuned.Add(tuned.mean()(1) - x(1), tuned.covariance()(1, 1));
       acc_tuned13.Add(tuned13.mean()(1) - x(1), tuned13.covariance()(1, 1));
       acc_plain.Add(plain.mean()(1) - x(1), plain.covariance()(1, 1));
@@ -276,14 +283,44 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       t.t.push_back((k + 1) * o.h);
       t.x1.push_back(x(0));
       t.y.push_back(y);
-      t.var_grid.push_back(grid.covariance()(1, 1));
       t.var_tuned_kalman.push_back(tuned.covariance()(1, 1));
       t.var_lc_gaussian.push_back(truncated_filter.covariance()(1, 1));
       t.var_bound.push_back(bound.covariance()(1, 1));
-      const double e = grid.mean()(1) - x(1);
-      t.err2_grid.push_back(e * e);
     }
   }
+  auto run_grid = [&](int points) {
+    return RunGridObserver(model, *sensor, m0, P0, grid_u, grid_y, {points, points});
+  };
+  GridTrace grid;
+  if (o.grid_tolerance > 0) {
+    GridRefinementOptions ropt;
+    ropt.points = o.grid_points;
+    ropt.max_points = std::max(1024, FinerGridPoints(o.grid_points));
+    ropt.tolerance = o.grid_tolerance;
+    ropt.first_step = o.burn_in;
+    GridRefinementResult refined = RefineGrid(run_grid, ropt);
+    result.grid_points = refined.points;
+    result.grid_coarse_points = refined.coarse_points;
+    result.grid_difference = refined.difference;
+    result.grid_converged = refined.converged;
+    grid = std::move(refined.trace);
+  } else {
+    result.grid_points = o.grid_points;
+    grid = run_grid(o.grid_points);
+  }
+  double grid_var_sum = 0;
+  for (int k = 0; k < o.steps; ++k) {
+    if (k >= o.burn_in) {
+      acc_grid.Add(grid.mean[k](1) - truth_v[k], grid.variance[k](1));
+      grid_var_sum += grid.variance[k](1);
+    }
+    if (o.record_trace) {
+      result.trace.var_grid.push_back(grid.variance[k](1));
+      const double e = grid.mean[k](1) - truth_v[k];
+      result.trace.err2_grid.push_back(e * e);
+    }
+  }
+  result.grid_mean_variance = grid_var_sum / (o.steps - o.burn_in);
   result.events = events_counted;
   result.t_mean =
       events_counted > 0 ? (o.steps - o.burn_in) * o.h / events_counted : std::numeric_limits<double>::infinity();

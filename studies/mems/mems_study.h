@@ -10,7 +10,8 @@
 //   Events:    a "crossing" is a step with y(k) ≠ 0 and y(k−1) = 0 (the first sample past a threshold).
 //
 // Observers (all on the same u, y):
-//   grid            GridObserver, exact threshold sensor (the reference)
+//   grid            GridObserver, exact threshold sensor (the reference); with grid_tolerance > 0 at the size
+//                   RefineGrid (ident/observers/grid_refinement.h) accepts, starting at grid_points
 //   tuned_kalman    KalmanFilter, y = 0 as x1 = 0 with variance σ_o²/h, σ_o = 2^(−1/3) p11^(2/3) σ^(−1/3),
 //                   p11 = 1/√3 as printed in the paper; crossings as x1 = y T with variance σ_M²
 //   tuned_kalman_13 the same with p11 = 1/3 (the variance of the rectangular distribution on (−1, 1))
@@ -49,6 +50,7 @@
 // over a few events is noisy (the exact posterior's own calibration is 1 only in expectation).
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -62,7 +64,8 @@ struct MemsStudyOptions {
   int steps = 10000;             // simulated steps
   int burn_in = 500;             // steps excluded from the statistics
   unsigned seed = 1;
-  int grid_points = 128;      // per axis of the 2-D grid observer
+  int grid_points = 128;       // per axis of the 2-D grid observer (the first grid when grid_tolerance > 0)
+  double grid_tolerance = 0;   // > 0: refine the grid until its moments agree with a finer one to this
   double sigma_m2 = 0.0;      // σ_M² of the modified event measurement; 0 = (2 h v_ref)²/3
   bool record_trace = false;  // keep per-step variances (Fig. 8)
   int ep_window = 16;         // lc_window's EP window W (readings refined jointly)
@@ -93,6 +96,11 @@ struct MemsStudyResult {
   int window_unconverged = 0;     // lc_window steps whose EP sweeps hit the limit
   long truncated_failures = 0;    // lc_truncated steps whose rectangle had no mass (fallback)
   long truncated_projection_failures = 0;  // lc_truncated projections without a parent (see its header)
+  int grid_points = 0;             // points per axis of the grid whose moments are reported
+  int grid_coarse_points = 0;      // the coarser grid of the refinement check (0: no check)
+  double grid_difference = std::numeric_limits<double>::quiet_NaN();  // their relative moment difference
+  bool grid_converged = false;     // grid_difference ≤ grid_tolerance
+  double grid_mean_variance = 0;   // mean predicted var(x2) of the grid after burn-in
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };
