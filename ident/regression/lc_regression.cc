@@ -135,13 +135,31 @@ bool LcRegression::Start() noexcept {
     for (Eigen::Index i = 0; i < Z.rows(); ++i)
       if (Z.row(i).dot(H.col(i)) > kMaxStartLeverage) return have_window_ = false;
     const BatchRegressionResult fit = CauchyMlRegression(Z, Y);
-    if (!fit.theta.allFinite()) return false;
+    if (!fit.theta.allFinite()) return have_window_ = false;
+    // The same with the fit's Cauchy weights w = 1/(1 + r²/γ²): rows the fit treats as outliers do not
+    // determine a direction, so one inlier alone must not either (weighted leverage above 0.8).
+    if (fit.scale > 0) {
+      const Eigen::ArrayXd r = (Y - Z * fit.theta).array() / fit.scale;
+      const Eigen::VectorXd w = (1 / (1 + r.square())).matrix();
+      const Eigen::MatrixXd ZtWZ = Z.transpose() * w.asDiagonal() * Z;
+      Eigen::LDLT<Eigen::MatrixXd> weighted(ZtWZ);
+      if (weighted.info() != Eigen::Success || !(weighted.vectorD().minCoeff() > 1e-12 * weighted.vectorD().maxCoeff()))
+        return have_window_ = false;
+      const Eigen::MatrixXd Hw = weighted.solve(Z.transpose());
+      for (Eigen::Index i = 0; i < Z.rows(); ++i)
+        if (w(i) * Z.row(i).dot(Hw.col(i)) > kMaxStartLeverage) return have_window_ = false;
+    }
     if (options_.scale == 0) {
       const Eigen::VectorXd residuals = Y - Z * fit.theta;
+      // More than half of the rows fitted exactly (a quantised or constant stretch of output) leave the
+      // noise scale undetermined: wait for more samples.
+      long exact = 0;
+      for (Eigen::Index i = 0; i < Z.rows(); ++i)
+        exact += std::abs(residuals(i)) <= 1e-9 * (std::abs(Y(i)) + Z.row(i).cwiseAbs().dot(fit.theta.cwiseAbs()));
+      if (2 * exact > Z.rows()) return have_window_ = false;
       // MadScale = 1.4826·MAD; MAD/median|u| is σ of f.
-      double mad = MadScale(residuals) / 1.482602218505602;
-      if (!(mad > 0)) mad = RobustScale(residuals) / 1.482602218505602;
-      if (!(mad > 0 && std::isfinite(mad))) return false;
+      const double mad = MadScale(residuals) / 1.482602218505602;
+      if (!(mad > 0 && std::isfinite(mad))) return have_window_ = false;
       sigma_ = mad / options_.noise.median_abs();
       log_q_ = std::log(mad);
     }
@@ -186,13 +204,12 @@ StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>&
     return report;
   }
   const double a = e / sigma_;
-  // Leverage guard: a grossly mispredicted sample whose regressor is outlying — a coordinate beyond
-  // kLeverage robust scales of the start window, or beyond √(25 + ρ) Mahalanobis radii of the information
-  // so far (ṽ·n/sd_f² = z'(Z'Z/n)⁻¹z) — is read as an error in the regressor (an ARX output outlier
-  // carried into later regressors), which the model y = z'θ + σu does not describe: it is not used.
-  const double sd = options_.noise.standard_deviation();
-  if (options_.leverage_guard && options_.noise.Weight(a) < kGrossWeight &&
-      (Outlying(z) || vt * static_cast<double>(count_ + 1) / (sd * sd) > 25.0 + rho_)) {
+  // Leverage guard: a grossly mispredicted sample with a regressor coordinate beyond kLeverage robust
+  // scales of the start window is read as an error in the regressor (an ARX output outlier carried into
+  // later regressors), which the model y = z'θ + σu does not describe: it is not used. (A test on the
+  // Mahalanobis radius in the information so far would also refuse, for ever, the samples that have to
+  // correct a direction the start window hardly determined.)
+  if (options_.leverage_guard && options_.noise.Weight(a) < kGrossWeight && Outlying(z)) {
     StepReport report{StepStatus::kUpdated};
     report.prediction_error = e;
     report.weight = 0;

@@ -19,13 +19,14 @@
 //            maximum likelihood from elemental subsets, ident/regression/batch_regression.h) gives the centre
 //            θ0 and the scale σ = MAD(residuals)/median|u| (the MAD consistency of f), the prior is
 //            N(θ0, σ_e²(Z'Z/W)⁻¹) — the information of one average sample, σ_e the noise standard deviation —
-//            and the window is replayed. A window whose Z'Z is singular, or where one row alone decides a
-//            direction (leverage above 0.8), waits for the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
+//            and the window is replayed. A window whose Z'Z is singular, where one row alone decides a
+//            direction (leverage above 0.8, also with the fit's Cauchy weights), or where more than half of the rows are fitted exactly (the scale
+//            undetermined), waits for the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
 //            (mean and covariance, with a scale) skips the start.
-//   Leverage: a grossly mispredicted sample (relative weight below 0.2) whose regressor is outlying — a
-//            coordinate beyond five robust scales of the start window, or z'(Z'Z/n)⁻¹z > 25 + ρ — is an
-//            error in the regressor (an ARX output outlier carried into later regressors), which the model
-//            does not describe, and is not used (weight 0). The start leaves such rows out of its fit.
+//   Leverage: a grossly mispredicted sample (relative weight below 0.2) with a regressor coordinate beyond
+//            five robust scales of the start window is an error in the regressor (an ARX output outlier
+//            carried into later regressors), which the model does not describe, and is not used (weight 0).
+//            The start leaves such rows out of its fit.
 //   Scale:   after the start, σ follows the median of |ê| (ê = y − μ, the prediction error) by the
 //            Robbins–Monro recursion log q ← log q + (2.5/n)(1{|ê| > q} − 1/2) on steps where the parameter
 //            uncertainty is below the noise (v < σ²): a bounded step per sample, so an outlier of any size

@@ -70,8 +70,9 @@ TEST(LcRegression, GaussianNoiseIsRecursiveLeastSquares) {
     const Eigen::VectorXd z = d.Z.row(i).transpose();
     ASSERT_TRUE(rls.Update(d.y(i), z).updated());
     ASSERT_TRUE(lc.Update(d.y(i), z).updated());
-    if (i == 0 || i == 9 || i == 499)
+    if (i == 0 || i == 9 || i == 499) {
       EXPECT_LE((lc.parameters() - rls.parameters()).norm(), 1e-12 * rls.parameters().norm()) << "after " << i + 1;
+    }
   }
 }
 
