@@ -13,6 +13,19 @@
 namespace ident {
 namespace {
 
+// The t_k scale² of residuals r (r2 = r²) by the EM fixed point s² = mean(w r²), w = (k+1)/(k + r²/s²)
+// (its maximum-likelihood value), from `start`; returns `start` if that is not positive.
+double StudentScaleSquared(const Eigen::ArrayXd& r2, double k, double start) {
+  double s2 = start;
+  for (int iteration = 0; iteration < 200 && s2 > 0; ++iteration) {
+    const double next = (r2 * (k + 1) / (k + r2 / s2)).mean();
+    const bool done = std::abs(next - s2) <= 1e-10 * s2;
+    s2 = next;
+    if (done) break;
+  }
+  return s2;
+}
+
 // The estimator that runs until the first restart: the explicit prior, or the provisional one without the
 // plain class's own start-up rule.
 StudentRegressionOptions Provisional(StudentRegressionOptions o) {
@@ -185,24 +198,24 @@ bool SafeStudentRegression::ReconsiderAtEnd() noexcept {
   return CompeteWithRobustRestart();
 }
 
-double SafeStudentRegression::ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta) const {
-  // Student-t_k negative log-likelihood of the kept samples at Θ with the scale at its maximum-likelihood
-  // value (the EM fixed point s² = mean(w r²), w = (k+1)/(k + r²/s²)); constants dropped.
+Eigen::ArrayXd SafeStudentRegression::KeptSquaredResiduals(const Eigen::VectorXd& theta) const {
   const int rho = num_parameters();
-  const double k = options_.base.dof;
   Eigen::ArrayXd r2(stored_);
   for (long i = 0; i < stored_; ++i) {
     const auto sample = history_.col(Column(i));
     r2(i) = std::pow(sample(0) - theta.dot(sample.tail(rho)), 2);
   }
-  double s2 = std::pow(RobustScale(r2.sqrt().matrix()), 2);
-  if (!(s2 > 0)) s2 = std::max(r2.mean(), 1e-300);
-  for (int iteration = 0; iteration < 500; ++iteration) {
-    const double next = (r2 * (k + 1) / (k + r2 / s2)).mean();
-    const bool done = std::abs(next - s2) <= 1e-12 * s2;
-    s2 = next;
-    if (done || !(s2 > 0)) break;
-  }
+  return r2;
+}
+
+double SafeStudentRegression::ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta) const {
+  // Student-t_k negative log-likelihood of the kept samples at Θ with the scale at its maximum-likelihood
+  // value (StudentScaleSquared); constants dropped.
+  const double k = options_.base.dof;
+  const Eigen::ArrayXd r2 = KeptSquaredResiduals(theta);
+  double start = std::pow(RobustScale(r2.sqrt().matrix()), 2);
+  if (!(start > 0)) start = std::max(r2.mean(), 1e-300);
+  const double s2 = StudentScaleSquared(r2, k, start);
   if (!(s2 > 0 && std::isfinite(s2))) return std::numeric_limits<double>::infinity();
   return 0.5 * (k + 1) * (1 + r2 / (k * s2)).log().sum() + 0.5 * static_cast<double>(stored_) * std::log(s2);
 }
@@ -290,21 +303,8 @@ bool SafeStudentRegression::BeginPass() {
   // w_i = (k+1)/(k + r_i²/s²)), to which the recursion's D_y tends [spec §2], instead of a D_y still on its
   // way there from the start-up's deliberately large D_y(0). V_y(0) = D_y(0) + Θ̂'V_zΘ̂.
   if (stored_ > num_parameters()) {
-    const int rho = num_parameters();
-    const Eigen::VectorXd theta = est_->parameters();
-    Eigen::ArrayXd r2(stored_);
-    for (long i = 0; i < stored_; ++i) {
-      const auto sample = history_.col(Column(i));
-      r2(i) = std::pow(sample(0) - theta.dot(sample.tail(rho)), 2);
-    }
-    const double k = o.dof;
-    double s2 = std::pow(RobustScale(r2.sqrt().matrix()), 2);
-    for (int iteration = 0; iteration < 200 && s2 > 0; ++iteration) {
-      const double next = (r2 * (k + 1) / (k + r2 / s2)).mean();
-      const bool done = std::abs(next - s2) <= 1e-10 * s2;
-      s2 = next;
-      if (done) break;
-    }
+    const Eigen::ArrayXd r2 = KeptSquaredResiduals(est_->parameters());
+    const double s2 = StudentScaleSquared(r2, o.dof, std::pow(RobustScale(r2.sqrt().matrix()), 2));
     if (s2 > 0 && std::isfinite(s2)) o.prior->V0(0, 0) += s2 - est_->Dy();
   }
   est_ = StudentRegression(num_parameters(), o);

@@ -188,6 +188,8 @@ class SafeStudentRegression {
   void Restart(long recent, bool lock_in, bool strict = true) noexcept;
   // Replays every kept sample into est_ (the last M weights refill the monitor).
   void Replay() noexcept;
+  // (y − Θ'z)² of every kept sample, oldest first.
+  Eigen::ArrayXd KeptSquaredResiduals(const Eigen::VectorXd& theta) const;
   // Student-t_k NLL of the kept samples at Θ, scale at its ML value (constants dropped).
   double ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta) const;
   bool CompeteWithRobustRestart() noexcept;
