@@ -15,12 +15,12 @@ int Find(const std::vector<std::string>& columns, const std::string& name, const
   io::ThrowUnknownColumn(source, name, columns);
 }
 
-class ArxSource final : public DataSource {
+// What ARX and the polynomial structures share: an output column and input columns walked through a
+// regressor of type R (models::ArxRegressor, models::PseudoLinearRegressor), which forms z(t) and keeps the
+// outputs with their cleaning.
+template <class R>
+class DynamicSource : public DataSource {
  public:
-  std::unique_ptr<DataSource> Clone() const override { return std::make_unique<ArxSource>(*this); }
-  ArxSource(int output, std::vector<int> inputs, const models::ArxStructure& arx,
-            const models::OutputCleaningOptions& cleaning)
-      : output_(output), inputs_(std::move(inputs)), regressor_(arx, cleaning), u_(inputs_.size()) {}
   int num_parameters() const override { return regressor_.structure().num_parameters(); }
   std::string structure() const override { return regressor_.structure().ToString(); }
   std::vector<std::string> parameter_names() const override { return regressor_.structure().ParameterNames(); }
@@ -42,60 +42,46 @@ class ArxSource final : public DataSource {
     return regressor_.PushCheckedOutput(y, y_hat, scale, flagged, judged);
   }
   long cleaned() const override { return regressor_.cleaner().cleaned(); }
-  bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const override {
-    return regressor_.MeasuredRegressor(z_measured);
-  }
-  void RestoreMeasured() override { regressor_.RestoreMeasured(); }
   void EndCleaningWarmUp() override { regressor_.EndCleaningWarmUp(); }
+
+ protected:
+  DynamicSource(int output, std::vector<int> inputs, R regressor)
+      : output_(output), inputs_(std::move(inputs)), regressor_(std::move(regressor)), u_(inputs_.size()) {}
+  R& regressor() { return regressor_; }
+  const R& regressor() const { return regressor_; }
 
  private:
   int output_;
   std::vector<int> inputs_;
-  models::ArxRegressor regressor_;
+  R regressor_;
   Eigen::VectorXd u_;
 };
 
-class PolynomialSource final : public DataSource {
+class ArxSource final : public DynamicSource<models::ArxRegressor> {
  public:
-  std::unique_ptr<DataSource> Clone() const override { return std::make_unique<PolynomialSource>(*this); }
+  ArxSource(int output, std::vector<int> inputs, const models::ArxStructure& arx,
+            const models::OutputCleaningOptions& cleaning)
+      : DynamicSource(output, std::move(inputs), models::ArxRegressor(arx, cleaning)) {}
+  std::unique_ptr<DataSource> Clone() const override { return std::make_unique<ArxSource>(*this); }
+  bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const override {
+    return regressor().MeasuredRegressor(z_measured);
+  }
+  void RestoreMeasured() override { regressor().RestoreMeasured(); }
+};
+
+class PolynomialSource final : public DynamicSource<models::PseudoLinearRegressor> {
+ public:
   PolynomialSource(int output, std::vector<int> inputs, const models::PolynomialStructure& structure,
                    const models::OutputCleaningOptions& cleaning, models::Recursion recursion)
-      : output_(output), inputs_(std::move(inputs)), regressor_(structure, cleaning, recursion), u_(inputs_.size()) {}
-  int num_parameters() const override { return regressor_.structure().num_parameters(); }
-  std::string structure() const override { return regressor_.structure().ToString(); }
-  std::vector<std::string> parameter_names() const override { return regressor_.structure().ParameterNames(); }
-  bool dynamic() const override { return true; }
-  int first_regression_index() const override { return regressor_.structure().first_regression_index(); }
-  int output_column() const override { return output_; }
-  std::vector<int> used_columns() const override {
-    std::vector<int> used = inputs_;
-    used.push_back(output_);
-    return used;
-  }
-  void Reset() override { regressor_.Reset(); }
-  bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) override {
-    for (std::size_t i = 0; i < inputs_.size(); ++i) u_(static_cast<Eigen::Index>(i)) = row(inputs_[i]);
-    return regressor_.Next(u_, z);
-  }
-  void PushOutput(double y) override { regressor_.PushOutput(y); }
-  double PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged) override {
-    return regressor_.PushCheckedOutput(y, y_hat, scale, flagged, judged);
-  }
-  long cleaned() const override { return regressor_.cleaner().cleaned(); }
-  void EndCleaningWarmUp() override { regressor_.EndCleaningWarmUp(); }
+      : DynamicSource(output, std::move(inputs), models::PseudoLinearRegressor(structure, cleaning, recursion)) {}
+  std::unique_ptr<DataSource> Clone() const override { return std::make_unique<PolynomialSource>(*this); }
   bool uses_estimate() const override { return true; }
-  void SetEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta) override { regressor_.SetEstimate(theta); }
+  void SetEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta) override { regressor().SetEstimate(theta); }
   void TrackEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta, bool start_up) override {
-    regressor_.TrackEstimate(theta, start_up);
+    regressor().TrackEstimate(theta, start_up);
   }
-  void ClearEstimate() override { regressor_.ClearEstimate(); }
-  double RegressionOutput(double y) const override { return regressor_.LinearisedOutput(y); }
-
- private:
-  int output_;
-  std::vector<int> inputs_;
-  models::PseudoLinearRegressor regressor_;
-  Eigen::VectorXd u_;
+  void ClearEstimate() override { regressor().ClearEstimate(); }
+  double RegressionOutput(double y) const override { return regressor().LinearisedOutput(y); }
 };
 
 class StaticSource final : public DataSource {
