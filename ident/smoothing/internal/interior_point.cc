@@ -430,39 +430,9 @@ class Solver {
     double* WF = WF_.data();
     if (term.process) {
       for (int i = 0; i < n * n; ++i) Dt[i] += W[i];
-      if (term.F) {  // D_{t-1} += F'WF,  E_t -= W F
-        const double* F = term.F;
-        double* Dp = Dt - nn;
-        double* Et = E + t * nn;
-        for (int b = 0; b < n; ++b)
-          for (int a = 0; a < n; ++a) {
-            double wf = 0;
-            for (int c = 0; c < n; ++c) wf += W[a + c * n] * F[c + b * n];
-            WF[a + b * n] = wf;
-            Et[a + b * n] -= wf;
-          }
-        for (int b = 0; b < n; ++b)
-          for (int a = 0; a < n; ++a) {
-            double s = 0;
-            for (int c = 0; c < n; ++c) s += F[c + a * n] * WF[c + b * n];
-            Dp[a + b * n] += s;
-          }
-      }
-    } else {  // D_t += H'WH
-      const double* H = term.H;
-      const int nz = nz_;
-      for (int b = 0; b < n; ++b)
-        for (int a = 0; a < nz; ++a) {
-          double wh = 0;
-          for (int c = 0; c < nz; ++c) wh += W[a + c * nz] * H[c + b * nz];
-          WF[a + b * nz] = wh;
-        }
-      for (int b = 0; b < n; ++b)
-        for (int a = 0; a < n; ++a) {
-          double s = 0;
-          for (int c = 0; c < nz; ++c) s += H[c + a * nz] * WF[c + b * nz];
-          Dt[a + b * n] += s;
-        }
+      if (term.F) AddProcessCoupling(W, term.F, n, WF, E + t * nn, Dt - nn);  // D_{t-1} += F'WF, E_t -= W F
+    } else {
+      AddMeasurementBlock(W, term.H, n, nz_, WF, Dt);  // D_t += H'WH
     }
   }
 

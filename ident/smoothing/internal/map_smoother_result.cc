@@ -39,8 +39,8 @@ double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dua
   Eigen::MatrixXd rho(n, N);
   double rho_max = residual(&rho);
   if (!(rho_max > 0) || !dual.process_weight.allFinite() || !dual.measurement_weight.allFinite()) return rho_max;
-  // N = sum J'WJ: D_t = W_t + F_t'W_{t+1}F_t + H_t'Wg_t H_t, E_t = -W_t F_{t-1} (plain loops on the small
-  // blocks, as the solver's AddNewtonBlocks).
+  // N = sum J'WJ: D_t = W_t + F_t'W_{t+1}F_t + H_t'Wg_t H_t, E_t = -W_t F_{t-1} (the small-block
+  // kernels of the solver's AddNewtonBlocks, small_kernels.h).
   Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, n * N), E = Eigen::MatrixXd::Zero(n, n * N);
   std::vector<double> WF(static_cast<std::size_t>(n) * n), WH(static_cast<std::size_t>(nz) * n);
   for (int t = 0; t <= T; ++t) {
@@ -48,37 +48,10 @@ double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dua
     const double* Wg = dual.measurement_weight.col(t).data();
     double* Dt = D.data() + static_cast<Eigen::Index>(t) * n * n;
     for (int i = 0; i < n * n; ++i) Dt[i] += W[i];
-    if (t > 0) {
-      const double* F = p.Ft(t - 1).data();
-      double* Et = E.data() + static_cast<Eigen::Index>(t) * n * n;
-      double* Dp = Dt - n * n;
-      for (int b = 0; b < n; ++b)
-        for (int a = 0; a < n; ++a) {
-          double wf = 0;
-          for (int c = 0; c < n; ++c) wf += W[a + c * n] * F[c + b * n];
-          WF[a + b * n] = wf;
-          Et[a + b * n] -= wf;
-        }
-      for (int b = 0; b < n; ++b)
-        for (int a = 0; a < n; ++a) {
-          double f = 0;
-          for (int c = 0; c < n; ++c) f += F[c + a * n] * WF[c + b * n];
-          Dp[a + b * n] += f;
-        }
-    }
-    const double* H = p.Ht(t).data();
-    for (int b = 0; b < n; ++b)
-      for (int a = 0; a < nz; ++a) {
-        double wh = 0;
-        for (int c = 0; c < nz; ++c) wh += Wg[a + c * nz] * H[c + b * nz];
-        WH[a + b * nz] = wh;
-      }
-    for (int b = 0; b < n; ++b)
-      for (int a = 0; a < n; ++a) {
-        double h = 0;
-        for (int c = 0; c < nz; ++c) h += H[c + a * nz] * WH[c + b * nz];
-        Dt[a + b * n] += h;
-      }
+    if (t > 0)
+      AddProcessCoupling(W, p.Ft(t - 1).data(), n, WF.data(), E.data() + static_cast<Eigen::Index>(t) * n * n,
+                         Dt - n * n);
+    AddMeasurementBlock(Wg, p.Ht(t).data(), n, nz, WH.data(), Dt);
   }
   BlockTridiagonalCholesky chol(n, N);
   if (!chol.Factorize(D, E)) return rho_max;

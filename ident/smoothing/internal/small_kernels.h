@@ -28,4 +28,38 @@ template <int kR = 0, int kC = 0>
   }
 }
 
+// The Newton blocks of a process term w_t = x_t − F x_{t−1} with weight W (n x n): WF = W F (scratch, n x n),
+// E_t −= W F, D_{t−1} += F'W F. All n x n column-major.
+inline void AddProcessCoupling(const double* W, const double* F, int n, double* WF, double* Et, double* Dp) {
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a) {
+      double wf = 0;
+      for (int c = 0; c < n; ++c) wf += W[a + c * n] * F[c + b * n];
+      WF[a + b * n] = wf;
+      Et[a + b * n] -= wf;
+    }
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a) {
+      double s = 0;
+      for (int c = 0; c < n; ++c) s += F[c + a * n] * WF[c + b * n];
+      Dp[a + b * n] += s;
+    }
+}
+// The Newton block of a measurement term r_t = z_t − H x_t with weight W (nz x nz): WH = W H (scratch,
+// nz x n), D_t += H'W H (n x n).
+inline void AddMeasurementBlock(const double* W, const double* H, int n, int nz, double* WH, double* Dt) {
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < nz; ++a) {
+      double wh = 0;
+      for (int c = 0; c < nz; ++c) wh += W[a + c * nz] * H[c + b * nz];
+      WH[a + b * nz] = wh;
+    }
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a) {
+      double s = 0;
+      for (int c = 0; c < nz; ++c) s += H[c + a * nz] * WH[c + b * nz];
+      Dt[a + b * n] += s;
+    }
+}
+
 }  // namespace ident::internal
