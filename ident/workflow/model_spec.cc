@@ -9,6 +9,7 @@ std::unique_ptr<DataSource> ModelSpec::MakeSource(const std::vector<std::string>
   // The cleaning options are checked whatever the structure: a bad value is an error, not ignored.
   IDENT_REQUIRE(clean_regressors == "on" || clean_regressors == "off", "--clean-regressors '{}': need on or off",
                 clean_regressors);
+  IDENT_REQUIRE(nc >= 0 && nd >= 0 && nf >= 0, "--nc {}, --nd {}, --nf {}: orders must be >= 0", nc, nd, nf);
   models::OutputCleaningOptions clean = cleaning;
   clean.enabled = clean_regressors == "on";
   const std::string error = clean.Validate();
