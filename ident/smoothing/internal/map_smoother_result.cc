@@ -355,6 +355,14 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptio
                                      res->iterations, res->kkt_residual, certificate);
     return;
   }
+  // The Newton matrix lost positive definiteness at an iterate that still carries a finite certificate:
+  // the iteration reached its precision limit there — a stall at the certified accuracy, not a failure.
+  if (res->status == MapSmootherStatus::kNumericalFailure && std::isfinite(res->relative_gap_bound)) {
+    res->status = MapSmootherStatus::kStalled;
+    res->message = fmt::format(
+        "stalled after {} iterations: the Newton matrix lost positive definiteness at KKT residual {:.1e}",
+        res->iterations, res->kkt_residual);
+  }
   const std::string detail = res->message;  // what the iteration said about a stall or divergence
   switch (res->status) {
     case MapSmootherStatus::kConverged:
