@@ -71,8 +71,7 @@ void RunStream(const StreamCommandOptions& o) {
                        path == io::kStandardInput ? "standard input" : path, {.missing_as_nan = o.missing});
   const std::unique_ptr<workflow::DataSource> source = o.structure.MakeSource(reader.names(), reader.path());
   const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
-  const std::unique_ptr<AnyRegressionEstimator> estimator =
-      MakeRegressionEstimator(settings, source->num_parameters());
+  const std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
   workflow::StreamEstimation stream(*source, *estimator, decision);
   Eigen::VectorXd row(reader.num_columns());
   fmt::memory_buffer line;
@@ -98,10 +97,8 @@ void RunStream(const StreamCommandOptions& o) {
     CheckStandardOutput();
   }
   if (stream.Finish()) {
-    const workflow::StreamStep end{.row = stream.rows(),
-                                   .status = workflow::StreamStatus::kEnd,
-                                   .weight = std::nan(""),
-                                   .nu = estimator->nu()};
+    const workflow::StreamStep end{
+        .row = stream.rows(), .status = workflow::StreamStatus::kEnd, .weight = std::nan(""), .nu = estimator->nu()};
     WriteLine(line, end, estimator->parameters());
   }
   std::fflush(stdout);
@@ -119,9 +116,10 @@ void AddStreamCommand(CLI::App& app) {
   o->structure.AddTo(*stream);
   o->estimator.AddTo(*stream);
   stream->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");
-  stream->add_option("--flush-every", o->flush_every,
-                     "Flush the output after every N lines; 0: only before waiting for more input (the output "
-                     "is always flushed then)")
+  stream
+      ->add_option("--flush-every", o->flush_every,
+                   "Flush the output after every N lines; 0: only before waiting for more input (the output "
+                   "is always flushed then)")
       ->capture_default_str();
   stream->callback([o] { RunStream(*o); });
 }

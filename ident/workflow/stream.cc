@@ -1,7 +1,7 @@
 #include "ident/workflow/stream.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "common/error.h"
@@ -57,7 +57,8 @@ StreamStep StreamEstimation::Row(const Eigen::VectorXd& row) {
   for (int c : used_)
     if (std::isnan(row(c))) last_missing_ = r;
   const bool missing = last_missing_ >= 0 && r - last_missing_ <= reach_;
-  const std::optional<StepReport> report = estimation_->Row(row, static_cast<int>(std::min<long>(r, std::numeric_limits<int>::max())));
+  const std::optional<StepReport> report =
+      estimation_->Row(row, static_cast<int>(std::min<long>(r, std::numeric_limits<int>::max())));
   StreamStep step{.row = r + 1,
                   .status = StreamStatus::kStartUp,
                   .weight = std::numeric_limits<double>::quiet_NaN(),

@@ -72,7 +72,7 @@ class StreamEstimation {
   OutlierDecision decision_;
   std::unique_ptr<internal::Estimation> estimation_;
   std::vector<int> used_;
-  int reach_;              // rows a regressor reaches back (t0)
+  int reach_;  // rows a regressor reaches back (t0)
   long rows_ = 0;
   long last_missing_ = -1;  // 0-based row of the last missing value in a used column
   long restarts_ = 0;

@@ -107,7 +107,9 @@ class StreamProcess {
     }
   }
 
-  void Write(const std::string& text) { ASSERT_EQ(write(writer_, text.data(), text.size()), static_cast<ssize_t>(text.size())); }
+  void Write(const std::string& text) {
+    ASSERT_EQ(write(writer_, text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  }
   void CloseWriter() {
     close(writer_);
     writer_ = -1;
@@ -154,8 +156,8 @@ void StreamThroughFifo(const std::string& flush_option) {
   const std::string fifo = TempDir() + "/rows" + flush_option + ".fifo";
   unlink(fifo.c_str());
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
-  std::vector<std::string> args = {"--output", "y", "--input", "u", "--na", "2", "--nb", "2", "--nk", "1",
-                                   "--estimator", "cauchy"};
+  std::vector<std::string> args = {"--output", "y", "--input", "u", "--na",        "2",
+                                   "--nb",     "2", "--nk",    "1", "--estimator", "cauchy"};
   if (!flush_option.empty()) args.insert(args.end(), {"--flush-every", flush_option});
   StreamProcess stream(fifo, args);
   stream.Write("u,y,x\n");
