@@ -27,8 +27,9 @@
 //   With `base.exact` none of this happens: the spec's recursion with the fixed prior (the --exact option).
 //   An explicit `base.prior` switches off 1 (the prior is used as given); 2 and 3 stay on.
 //
-// The covariance() is the sandwich covariance of ident/regression/student_regression.h (calibrated whatever the
-// noise law); posterior_covariance() the one-sided posterior's own.
+// The covariance() is StudentRegression's sampling covariance (calibrated whatever the noise law: the
+// propagated variance of one pass or the M-estimation sandwich, ident/regression/student_regression.h);
+// after BeginPass() the sandwich alone; posterior_covariance() the one-sided posterior's own.
 //
 // Memory and cost: every updated sample is kept (ρ+1 doubles; `history_limit` caps it, then a restart
 // replays the most recent ones and says so). Update() is O(ρ²); it allocates only when the history grows
