@@ -256,6 +256,11 @@ py::dict Smooth(const std::string& model_json, const Eigen::MatrixXd& z) {
   d["reconstruction_unique"] = r.reconstruction_unique;
   d["nonunique_reconstruction_steps"] = r.nonunique_steps;
   d["dual_infeasibility"] = r.dual_infeasibility;
+  // The duality certificate, as `ident smooth --json` has it: primal − optimum ≤ gap + gap_error_bound.
+  d["status"] = ToString(r.status);
+  d["kkt_residual"] = r.kkt_residual;
+  d["gap_error_bound"] = r.gap_error_bound;
+  d["relative_gap_bound"] = std::isfinite(r.relative_gap_bound) ? py::object(py::float_(r.relative_gap_bound)) : py::none();
   return d;
 }
 

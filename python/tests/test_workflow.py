@@ -141,6 +141,11 @@ def test_smooth_and_logcondens_equal_the_command_line(cli, source_dir):
     np.testing.assert_allclose(result["x"], expected["x"], rtol=1e-12, atol=1e-12)
     assert result["primal"] == pytest.approx(expected["primal"], rel=1e-12)
     assert result["gap"] <= 1e-6 * max(1.0, abs(result["primal"]))
+    assert result["status"] == expected["status"] == "converged"
+    for key in ("kkt_residual", "gap_error_bound", "relative_gap_bound"):
+        assert result[key] == pytest.approx(expected[key], rel=1e-9), key
+    # The certificate bounds primal − optimum, and the optimum is at least the dual objective.
+    assert result["primal"] - result["dual"] <= result["gap"] + result["gap_error_bound"]
 
 
 def test_logcondens_matches_the_r_reference_and_its_optimality_conditions(source_dir):
