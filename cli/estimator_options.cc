@@ -46,6 +46,9 @@ void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
                  "(default 0.3)");
   app.add_flag("--no-lock-in-restart", no_lock_in_restart,
                "cauchy/student: report lock-ins but do not restart the estimator");
+  app.add_option("--history-limit", history_limit,
+                 "cauchy/student: samples kept for a restart to replay (0 = all, the default; else at least the "
+                 "lock-in window): bounds the memory of a long stream, and a restart then replays only the last ones");
 }
 
 std::string ResolveDataPath(const std::string& name) {

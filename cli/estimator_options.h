@@ -1,6 +1,7 @@
 // Command-line options shared by every subcommand that builds a regression estimator
 // (ident fit, ident compare): --estimator, --dof, --delta, --forgetting, --stabilised,
-// --nu0/--vy0/--vz0, --prior FILE.json, --exact, --lock-in-window, --lock-in-threshold, --no-lock-in-restart.
+// --nu0/--vy0/--vz0, --prior FILE.json, --exact, --lock-in-window, --lock-in-threshold, --no-lock-in-restart,
+// --history-limit.
 #pragma once
 
 #include <optional>

@@ -47,6 +47,7 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, 
   if (s.lock_in.window) options.lock_in_window = *s.lock_in.window;
   if (s.lock_in.threshold) options.lock_in_threshold = *s.lock_in.threshold;
   options.restart_on_lock_in = s.lock_in.restart;
+  if (s.lock_in.history) options.history_limit = *s.lock_in.history;
   return std::make_unique<RegressionEstimatorModel<SafeStudentRegression>>(name, rho, options);
 }
 

@@ -36,7 +36,8 @@ struct LockInSettings {
   std::optional<int> window;        // M in 2..1000000 (kMaxLockInWindow; 0 = automatic)
   std::optional<double> threshold;  // 0 < threshold < (k+1)/k
   bool restart = true;              // false: flag lock-ins only, never restart
-  bool any() const { return window || threshold || !restart; }
+  std::optional<long> history;      // samples kept for restarts to replay (0 = all; SafeStudentOptions::history_limit)
+  bool any() const { return window || threshold || !restart || history; }
 };
 
 // Options common to the command line and the registry; each estimator reads those it knows and

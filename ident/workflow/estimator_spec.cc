@@ -26,7 +26,7 @@ EstimatorSettings EstimatorSpec::Resolve(int num_parameters, const std::string& 
                 "--lock-in-window {} exceeds the estimation part's {} rows: the monitor could never fill; need at "
                 "most {}",
                 lock_in_window.value_or(0), estimation_rows, estimation_rows);
-  s.lock_in = {lock_in_window, lock_in_threshold, !no_lock_in_restart};
+  s.lock_in = {lock_in_window, lock_in_threshold, !no_lock_in_restart, history_limit};
   if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
   IDENT_REQUIRE(!(prior && (nu0 || !prior_file.empty())),
                 "give one prior: an explicit prior, nu0/vy0/vz0 or a prior file");

@@ -25,6 +25,7 @@ struct EstimatorSpec {
   std::optional<int> lock_in_window;
   std::optional<double> lock_in_threshold;
   bool no_lock_in_restart = false;
+  std::optional<long> history_limit;  // samples the robust estimators keep for restarts (0 = all)
 
   // Settings for `name` (e.g. "student:3"; empty: this->estimator) and ρ parameters. With
   // `estimation_rows` > 0, a lock-in window longer than the estimation part (which the monitor could

@@ -84,6 +84,33 @@ TEST(LockInCli, DefaultRestartsOutOfTheLockInAndReportsIt) {
   EXPECT_LT(ThetaError(j), 0.05);  // σ = 0.1 on 2000 samples: the estimate is close to Θ
 }
 
+// --history-limit reaches the estimator: its restarts replay at most the last N samples and report the rest as
+// dropped, as the library estimator's with the same history_limit do, and a limit below the lock-in window is
+// refused by the estimator's own check.
+TEST(LockInCli, HistoryLimitBoundsWhatARestartReplays) {
+  const nlohmann::json j =
+      FitJson(LockInRecord().path + kModel + kPrior + " --estimator cauchy --history-limit 300");
+  SafeStudentOptions o;
+  o.history_limit = 300;
+  const SafeStudentRegression lib = RunLibrary(o);
+  ASSERT_GE(lib.restarts(), 1);
+  const nlohmann::json& events = j["lock_in"]["events"];
+  ASSERT_EQ(events.size(), lib.restart_events().size()) << j.dump();
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    const long update = events[i]["update"];
+    EXPECT_EQ(events[i]["replayed"].get<long>(), std::min(update, 300L)) << i;
+    EXPECT_EQ(events[i]["dropped"].get<long>(), update - std::min(update, 300L)) << i;
+    EXPECT_EQ(events[i]["replayed"].get<long>(), lib.restart_events()[i].replayed) << i;
+  }
+  ExpectSameTheta(j, lib);
+  const CliResult small = RunCli("fit " + LockInRecord().path + kModel + kPrior + " --estimator cauchy --history-limit 50");
+  EXPECT_EQ(small.exit_code, 1);
+  EXPECT_NE(small.err.find("history_limit = 50; need 0 (keep every sample) or at least the lock-in window 100"),
+            std::string::npos)
+      << small.err;
+  EXPECT_EQ(RunCli("fit " + LockInRecord().path + kModel + " --history-limit 300").exit_code, 1);  // rls
+}
+
 TEST(LockInCli, NoRestartFlagsTheLockInAndStaysInIt) {
   const nlohmann::json j = FitJson(LockInRecord().path + kModel + kPrior + " --estimator cauchy --no-lock-in-restart");
   SafeStudentOptions o;
