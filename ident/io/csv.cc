@@ -69,6 +69,7 @@ bool IsBlank(std::string_view line) { return Trim(line).empty(); }
 
 // A comment: the first byte that is not a space or tab is '#'.
 bool IsComment(std::string_view line) {
+  if (!line.empty() && !IsSpace(line.front())) return line.front() == '#';
   const std::size_t first = line.find_first_not_of(" \t");
   return first != std::string_view::npos && line[first] == '#';
 }
@@ -347,15 +348,26 @@ int CsvReader::ColumnIndex(std::string_view name) const {
 }
 
 double CsvReader::ParseCell(std::string_view cell, int column) const {
-  double value = std::numeric_limits<double>::quiet_NaN();
-  if (cell.empty()) {
-    if (!options_.missing_as_nan)
-      throw DataError(
-          fmt::format("{}:{}: column {} ({}) is empty (pass --missing to treat empty cells as "
-                      "missing samples)",
-                      path_, line_, column + 1, ShowCell(names_[column])));
-    return value;
+  // The common case inline; every problem is diagnosed by ThrowBadCell.
+  if (!cell.empty() && cell.front() != '+' && cell.find('\0') == std::string_view::npos) {
+    double value = 0;
+    const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), value);
+    if (ec == std::errc() && ptr == cell.data() + cell.size()) {
+      if (std::isfinite(value)) return value;
+      if (options_.missing_as_nan) return std::numeric_limits<double>::quiet_NaN();
+    }
   }
+  if (cell.empty() && options_.missing_as_nan) return std::numeric_limits<double>::quiet_NaN();
+  return ParseUncommonCell(cell, column);
+}
+
+double CsvReader::ParseUncommonCell(std::string_view cell, int column) const {
+  double value = std::numeric_limits<double>::quiet_NaN();
+  if (cell.empty())
+    throw DataError(
+        fmt::format("{}:{}: column {} ({}) is empty (pass --missing to treat empty cells as "
+                    "missing samples)",
+                    path_, line_, column + 1, ShowCell(names_[column])));
   if (cell.find('\0') != std::string_view::npos)
     throw DataError(fmt::format("{}:{}: column {} ({}): contains a NUL byte", path_, line_, column + 1,
                                 ShowCell(names_[column])));
@@ -383,7 +395,7 @@ double CsvReader::ParseCell(std::string_view cell, int column) const {
                       path_, line_, column + 1, ShowCell(names_[column]), ShowCell(cell)));
     value = std::numeric_limits<double>::quiet_NaN();
   }
-  return value;
+  return value;  // '+' followed by a finite number
 }
 
 void CsvReader::ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) {

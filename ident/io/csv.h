@@ -115,6 +115,8 @@ class CsvReader {
   // Parses one data line into `row`; throws DataError naming line_.
   void ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row);
   double ParseCell(std::string_view cell, int column) const;
+  // A cell the fast path of ParseCell does not take: '+'-signed, empty, NaN/Inf or bad (throws DataError).
+  double ParseUncommonCell(std::string_view cell, int column) const;
   // Reads the next line (LF, CRLF or CR ended) into buffer_ and counts it; false at the end of the input.
   bool ReadLine();
   // Refills chunk_ from the stream; false at its end.
