@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
 #include "cli/fit_plot.h"
@@ -38,6 +39,7 @@ struct FitCommandOptions {
   int passes = 1;
   std::string detrend;
   bool missing = false;
+  io::CsvOptions csv;  // --delimiter
   bool json = false;
   std::string trace;
   std::string plot;
@@ -164,7 +166,7 @@ void RunFit(const FitCommandOptions& o) {
   CheckOutputPaths({{"--trace", o.trace}, {"--plot", o.plot}, {"--save", o.save}},
                    {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
-  const io::CsvOptions csv{.missing_as_nan = o.missing};
+  const io::CsvOptions csv{.missing_as_nan = o.missing, .delimiter = o.csv.delimiter};
   // Standard input, a pipe or a device is read once, into memory; a regular file is first checked by its
   // header and length, and streamed when long.
   std::optional<io::DataTable> once;
@@ -273,6 +275,7 @@ void AddFitCommand(CLI::App& app) {
                   "Write the fitted model (structure, theta, covariance, detrending means, ...) as JSON for "
                   "ident predict");
   fit->add_flag("--json", o->json, "Print one JSON object instead of the report");
+  AddDelimiterOption(*fit, o->csv);
   auto* split_option = fit->get_option("--split");
   fit->callback([o, split_option] {
     // Without structure options a bundled record takes its suggested structure and split, as in compare.
