@@ -96,6 +96,23 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
   fmt::print("  {}\n", a.Verdict());
 }
 
+// One line: the time column's gaps, the first kShownGaps of them with their rows and times.
+void PrintTimeGaps(const workflow::TimeCheck& time, bool filled) {
+  constexpr std::size_t kShownGaps = 5;
+  long missing = 0;
+  for (const workflow::TimeGap& g : time.gaps) missing += g.missing;
+  std::string shown;
+  for (std::size_t i = 0; i < time.gaps.size() && i < kShownGaps; ++i) {
+    const workflow::TimeGap& g = time.gaps[i];
+    shown += fmt::format("{}row {} ({} -> {})", i ? ", " : "", g.row, g.t_before, g.t_after);
+  }
+  if (time.gaps.size() > kShownGaps) shown += ", ...";
+  fmt::print("time column '{}': {} gap{} (steps above {} x the median step {:.6g}; {} samples missing{}): {}\n",
+             time.column, time.gaps.size(), time.gaps.size() == 1 ? "" : "s", workflow::kTimeGapFactor,
+             time.median_step, missing,
+             filled ? ", filled as missing samples" : "; --missing fills them as missing samples", shown);
+}
+
 void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o,
                  const std::vector<std::pair<std::string, double>>& means = {}) {
   fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
@@ -112,7 +129,9 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
     fmt::print(", validation on {} (all {} rows)", r.validation_data, r.samples_validation);
   else if (o.split != 1)
     fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
-  fmt::print("\n\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
+  fmt::print("\n");
+  if (r.time && !r.time->gaps.empty()) PrintTimeGaps(*r.time, o.missing);
+  fmt::print("\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
   for (int i = 0; i < r.theta.size(); ++i)
     fmt::print("  {:<12} {:>14.6g} {:>12.4g}\n", r.parameter_names[i], r.theta(i), r.theta_std(i));
   // Least squares estimates a standard deviation; the robust and batch estimators a scale (Cauchy's
@@ -168,11 +187,21 @@ void RunFit(const FitCommandOptions& o) {
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing, .delimiter = o.csv.delimiter};
   // Standard input, a pipe or a device is read once, into memory; a regular file is first checked by its
-  // header and length, and streamed when long.
+  // header and length, and streamed when long. Records up to kInMemoryRows rows are read whole, for the
+  // time column's check, the residual analysis and plots; longer ones stream through the estimator in
+  // constant memory (without them).
   std::optional<io::DataTable> once;
   if (!io::CanReadTwice(path)) once = io::ReadCsv(path, csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
+  const bool streamed = !once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
+                        workflow::CountCsvDataRows(path) > kInMemoryRows;
+  if (!streamed && !once) once = io::ReadCsv(path, csv);
+  std::optional<workflow::TimeCheck> time;
+  if (once) {
+    time = workflow::CheckTimeColumn(*once, source->used_columns());
+    if (time && o.missing && !time->gaps.empty()) once = workflow::FillTimeGaps(*once, *time);
+  }
   workflow::FitRequest request;
   request.model = o.structure;
   request.estimator = o.estimator;
@@ -203,10 +232,7 @@ void RunFit(const FitCommandOptions& o) {
     for (std::optional<OutputFile>* f : {&trace, &plot, &save})
       if (*f) (*f)->Commit();
   };
-  // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
-  // stream through the estimator in constant memory (without the residual analysis).
-  if (!once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
-      workflow::CountCsvDataRows(path) > kInMemoryRows) {
+  if (streamed) {
     if (plan.scaled_prior) plan.UseScaledPrior(workflow::CsvEstimationMeanSquares(path, csv, *source, plan.options));
     const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
     commit_outputs();
@@ -227,8 +253,8 @@ void RunFit(const FitCommandOptions& o) {
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
   }
-  workflow::RecordFit fit =
-      workflow::FitTable(once ? std::move(*once) : io::ReadCsv(path, csv), *source, plan, kResidualLags);
+  workflow::RecordFit fit = workflow::FitTable(std::move(*once), *source, plan, kResidualLags);
+  fit.result.time = time;
   if (!o.validate.empty()) {
     const std::string validation_path = ResolveDataPath(o.validate);
     workflow::ValidateOn(fit, io::ReadCsv(validation_path, csv), validation_path, request.model, kResidualLags);

@@ -28,6 +28,7 @@
 #include "ident/regression/outlier_decision.h"
 #include "ident/regression/regression_estimator.h"
 #include "ident/workflow/data_source.h"
+#include "ident/workflow/time_column.h"
 
 namespace ident::workflow {
 
@@ -79,6 +80,8 @@ struct FitResult {
   long cleaned = 0;                     // outputs cleaned in later regressors (--clean-regressors on)
   std::optional<LockInStatus> lock_in;  // the robust estimators' lock-in safeguard at the end of estimation
   FitScores validation;
+  // The record's time column (workflow/time_column.h); null when there is none or it was not checked.
+  std::optional<TimeCheck> time;
 };
 
 // The row range [first, first + count) of a table.
