@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "ident/io/mat_file.h"
 #include "cli/csv_options.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
@@ -171,7 +172,7 @@ void RunCompare(CompareCommandOptions& o) {
   request.split = split;
   request.detrend = detrend;
   request.progress = isatty(STDERR_FILENO) ? std::function<void(int, int)>(ProgressBar) : ProgressLines();
-  const workflow::CompareResult result = workflow::CompareRecord(io::ReadCsv(path, o.read), path, request);
+  const workflow::CompareResult result = workflow::CompareRecord(io::ReadDataFile(path, o.read), path, request);
   const std::string name = dataset ? dataset->name : path;
   if (plot) {
     PlotCompare(*plot, result, spec);

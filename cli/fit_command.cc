@@ -20,6 +20,7 @@
 #include "cli/structure_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/fit_record.h"
 #include "ident/workflow/residual_analysis.h"
@@ -186,17 +187,17 @@ void RunFit(const FitCommandOptions& o) {
                    {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing, .delimiter = o.csv.delimiter};
-  // Standard input, a pipe or a device is read once, into memory; a regular file is first checked by its
+  // Standard input, a pipe, a device or a .mat file is read once, into memory; a regular file is first checked by its
   // header and length, and streamed when long. Records up to kInMemoryRows rows are read whole, for the
   // time column's check, the residual analysis and plots; longer ones stream through the estimator in
   // constant memory (without them).
   std::optional<io::DataTable> once;
-  if (!io::CanReadTwice(path)) once = io::ReadCsv(path, csv);
+  if (!io::CanReadTwice(path) || io::IsMatFile(path)) once = io::ReadDataFile(path, csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
   const bool streamed = !once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
                         workflow::CountCsvDataRows(path) > kInMemoryRows;
-  if (!streamed && !once) once = io::ReadCsv(path, csv);
+  if (!streamed && !once) once = io::ReadDataFile(path, csv);
   std::optional<workflow::TimeCheck> time;
   if (once) {
     time = workflow::CheckTimeColumn(*once, source->used_columns());
@@ -257,7 +258,7 @@ void RunFit(const FitCommandOptions& o) {
   fit.result.time = time;
   if (!o.validate.empty()) {
     const std::string validation_path = ResolveDataPath(o.validate);
-    workflow::ValidateOn(fit, io::ReadCsv(validation_path, csv), validation_path, request.model, kResidualLags);
+    workflow::ValidateOn(fit, io::ReadDataFile(validation_path, csv), validation_path, request.model, kResidualLags);
   }
   if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
   if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");

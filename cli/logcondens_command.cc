@@ -13,6 +13,7 @@
 #include "ident/density/logconcave_mle.h"
 #include "ident/io/csv.h"
 #include "cli/commands.h"
+#include "ident/io/mat_file.h"
 #include "cli/csv_options.h"
 
 namespace ident::cli {
@@ -26,7 +27,7 @@ struct LogcondensOptions {
 };
 
 std::vector<double> ReadSamples(const LogcondensOptions& o) {
-  const io::DataTable table = io::ReadCsv(o.samples, o.csv);
+  const io::DataTable table = io::ReadDataFile(o.samples, o.csv);
   int col = 0;
   if (!o.column.empty()) {
     col = table.ColumnIndex(o.column);

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "ident/io/mat_file.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
 #include "common/error.h"
@@ -54,7 +55,7 @@ void RunOrders(const OrdersOptions& o) {
   std::tie(grid.nk_min, grid.nk_max) = workflow::OrderGrid::ParseRange(o.nk, "--nk");
   IDENT_REQUIRE(grid.na_min >= 0 && grid.nb_min >= 1 && grid.nk_min >= 0,
                 "orders: need na >= 0, nb >= 1 and nk >= 0 (got --na {} --nb {} --nk {})", o.na, o.nb, o.nk);
-  io::DataTable table = io::ReadCsv(path, o.csv);
+  io::DataTable table = io::ReadDataFile(path, o.csv);
   // The largest structure's source: it reads the output and the input, and splits and detrends them.
   const models::ArxStructure largest(grid.na_max, {grid.nb_max}, {grid.nk_max});
   std::unique_ptr<workflow::DataSource> source =

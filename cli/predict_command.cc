@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "ident/io/mat_file.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
 #include "common/error.h"
@@ -48,7 +49,7 @@ std::pair<double, double> FitOf(const std::vector<double>& y, const std::vector<
 void RunPredict(const PredictOptions& o) {
   const workflow::SavedModel m = workflow::SavedModel::Read(o.model);
   const std::string path = ResolveDataPath(o.data);
-  io::DataTable table = io::ReadCsv(path, {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
+  io::DataTable table = io::ReadDataFile(path, {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
   std::unique_ptr<workflow::DataSource> source = m.model.MakeSource(table.names, path);
   IDENT_REQUIRE(source->num_parameters() == m.theta.size(), "{}: theta has {} entries; {} needs {}", o.model,
                 m.theta.size(), source->structure(), source->num_parameters());

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "tests/support/cli.h"
+#include "tests/support/mat_writer.h"
 
 namespace ident {
 namespace {
@@ -170,6 +171,23 @@ TEST(RealFiles, TimeThatDoesNotIncreaseIsAnError) {
                      " --missing",
                  "rf_long_gap.csv:5: time column 't' jumps from 2 to 1000");
 }
+
+#if IDENT_HAVE_MATIO
+// A .mat file (v5 and v7.3) of the record's vectors fits as its CSV does, bit for bit.
+TEST(RealFiles, MatFilesFitAsTheirCsv) {
+  const RealFileRecord r = RealFileNoiseless(200, 0.7, 0.5);
+  const nlohmann::json csv = RealFileFitJson(WriteFile("rf_mat.csv", RealFileText(r, ",")) + kRealFileArx);
+  for (const mat_ft version : {MAT_FT_MAT5, MAT_FT_MAT73}) {
+    const std::string path = testing::TempDir() + (version == MAT_FT_MAT5 ? "/rf_v5.mat" : "/rf_v73.mat");
+    testing::WriteMatFile(path, version, {{"t", {200, 1}, r.t}, {"u", {200, 1}, r.u}, {"y", {1, 200}, r.y}});
+    const nlohmann::json mat = RealFileFitJson(path + kRealFileArx);
+    EXPECT_EQ(mat["theta"], csv["theta"]) << path;
+    EXPECT_EQ(mat["time_gaps"], nlohmann::json::array()) << path;
+  }
+  ExpectCliError("fit " + WriteFile("rf_bad.mat", "not a mat file") + kRealFileArx,
+                 "rf_bad.mat' as a MATLAB file");
+}
+#endif
 
 }  // namespace
 }  // namespace ident
