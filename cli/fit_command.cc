@@ -213,7 +213,7 @@ void RunFit(const FitCommandOptions& o) {
   // The record's length first: building an estimator costs O(rho^3) for large orders.
   workflow::FitOptions length_check;
   length_check.split = o.split;
-  const long estimation_rows = once ? workflow::EstimationRows(once->num_rows(), o.split)
+  const long estimation_rows = once ? workflow::CheckRecordLength(once->num_rows(), *source, length_check, path)
                                     : workflow::CheckCsvRecordLength(path, csv, *source, length_check);
   workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
   // The trace and the plot go to temporary files, renamed onto their names only after the whole fit has
