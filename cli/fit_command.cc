@@ -290,7 +290,9 @@ void AddFitCommand(CLI::App& app) {
   fit->add_option("--detrend", o->detrend,
                   "Subtract the estimation-part means (mean) or not (none); default mean, none with --intercept")
       ->check(CLI::IsMember({"mean", "none"}));
-  fit->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");
+  fit->add_flag("--missing", o->missing,
+                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
+                "with missing samples");
   fit->add_option("--trace", o->trace, "Write one CSV row per update: t,nu,beta,pred_err,theta1..,Dy");
   fit->add_option("--plot", o->plot,
                   "Draw measured vs one-step and simulated output (validation) and the parameter trajectories "

@@ -108,9 +108,11 @@ Delimiter DelimiterOf(char separator) {
   }
 }
 
-// Detection (see csv.h): the separator that fits the header and the first data line (null: none), or,
-// when two of ',', ';' and tab fit, both of them in `ambiguous`.
-char DetectSeparator(std::string_view header, const std::string_view* data, std::pair<char, char>* ambiguous) {
+// Detection (see csv.h): the separator that fits the header and the first data line (0: whitespace), or,
+// when two of them split the header (and fit the data line, else *fits_data = false), both in `ambiguous`.
+char DetectSeparator(std::string_view header, const std::string_view* data, std::pair<char, char>* ambiguous,
+                     bool* fits_data) {
+  *fits_data = true;
   std::vector<char> fit, splits;
   for (const char c : {',', ';', '\t'}) {
     const std::size_t h = CountFields(header, c);
@@ -127,6 +129,7 @@ char DetectSeparator(std::string_view header, const std::string_view* data, std:
   if (splits.size() == 1) return splits[0];  // the rows will say what does not fit
   if (splits.size() > 1) {
     *ambiguous = {splits[0], splits[1]};
+    *fits_data = false;
     return ',';
   }
   return ',';  // one column
@@ -315,14 +318,16 @@ void CsvReader::ReadHeader() {
 
 void CsvReader::ChooseDelimiter(std::string_view header, const std::string_view* data) {
   std::pair<char, char> ambiguous{0, 0};
-  const char detected = DetectSeparator(header, data, &ambiguous);
+  bool fits_data = true;
+  const char detected = DetectSeparator(header, data, &ambiguous, &fits_data);
   if (options_.delimiter == Delimiter::kAuto) {
     if (ambiguous.first != 0)
       throw DataError(fmt::format(
           "{}:{}: cannot tell the delimiter: {} and {} both split the header{} into several fields (pass "
           "--delimiter)",
           path_, header_line_, DelimiterName(DelimiterOf(ambiguous.first)),
-          DelimiterName(DelimiterOf(ambiguous.second)), data ? fmt::format(" and line {}", held_line_) : ""));
+          DelimiterName(DelimiterOf(ambiguous.second)),
+          data && fits_data ? fmt::format(" and line {}", held_line_) : ""));
     delimiter_ = DelimiterOf(detected);
     separator_ = detected;
     return;

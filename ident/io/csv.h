@@ -16,8 +16,8 @@
 //   x.csv: no data rows after the header
 //   x.csv:1: duplicate column name 'u' (columns 2 and 3)
 //   x.csv:1: the header has 100001 columns; at most 100000 are supported
-//   x.csv:1: cannot tell the delimiter: ',' and ';' both split the header and line 2 into the same number
-//            of fields (pass --delimiter)
+//   x.csv:1: cannot tell the delimiter: ',' and ';' both split the header and line 2 into several fields
+//            (pass --delimiter)
 //   x.csv:1: the header has one column with the delimiter ','; the file looks ';'-separated (pass
 //            --delimiter ';')
 //   x.csv:7: line longer than 1048576 bytes

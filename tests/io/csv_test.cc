@@ -277,6 +277,7 @@ TEST(CsvReader, DelimiterErrorsAndHints) {
   ExpectDataError(WriteFile("dec.csv", "t;u;y\n0;1.5;2\n1;1,5;2\n"),
                   "dec.csv:3: column 2 ('u'): '1,5' is not a number (the delimiter is ';': decimals take '.', not "
                   "',')");
+  ExpectDataError(WriteFile("amb2.csv", "a,b;c\n1\n"), "amb2.csv:1: cannot tell the delimiter: ',' and ';' both split the header into");
   ExpectDataError(WriteFile("ragged.dat", "1 2 3\n4 5\n"), "ragged.dat:2: row has 2 fields; the header has 3");
   ExpectDataError(WriteFile("long.dat", "1 2\n4 5 6 7\n"), "long.dat:2: row has 4 fields; the header has 2");
   ExpectDataError(WriteFile("long.tsv", "a\tb\n4\t5\t6\t7\n"), "long.tsv:2: row has 4 fields; the header has 2");
