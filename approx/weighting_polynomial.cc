@@ -57,6 +57,17 @@ double BetaHi(const WeightingProblem& p) { return BetaHiInline(p); }
 
 std::array<double, 4> WeightingCoefficients(const WeightingProblem& p) { return Coefficients(p); }
 
+double WeightElasticity(const WeightingProblem& p, double beta) {
+  const std::array<double, 4> mu = Coefficients(p);
+  const double dp_dbeta = (3 * mu[3] * beta + 2 * mu[2]) * beta + mu[1];
+  // ∂μ1/∂ξ = ν−δ−ρ+1−k, ∂μ2/∂ξ = (k−1)ν+2δ+ρ−3 + kξ_z, ∂μ3/∂ξ = (2−kν−δ)ξ_z [spec §4].
+  const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho;
+  const double dp_dxi = (((2 - k * nu - d) * p.xi_z * beta + (k - 1) * nu + 2 * d + rho - 3 + k * p.xi_z) * beta +
+                         (nu - d - rho + 1 - k)) *
+                        beta;
+  return 2 * (p.xi_z - p.xi) * dp_dxi / dp_dbeta;
+}
+
 double LogH0(const WeightingProblem& p, double beta) {
   const double kappa = (p.k + 1) / 2, n = p.nu - p.delta;
   return kappa * (std::log(beta) + (p.nu - 1) * std::log1p(-beta)) - (n + 1) / 2 * std::log1p(-beta) -

@@ -78,6 +78,11 @@ double BetaHi(const WeightingProblem& p);  // (k+1)/(kν+δ−2)
 // μ0..μ3 of spec §4 (unscaled).
 std::array<double, 4> WeightingCoefficients(const WeightingProblem& p);
 
+// ê·dβ/dê for a root β of P(β; ξ, ξ_z) [spec §4] as the prediction error ê moves with ξ_z fixed:
+// P_β·dβ + P_ξ·dξ = 0 and ξ = ξ_z − ê²/D_y give 2u·P_ξ/P_β, u = ξ_z − ξ = ê²/D_y. For large ν, ν·β is the
+// EM weight (k+1)/(k+u) and ν·(β + ê·dβ/dê) the slope ψ' of the Student-t score ψ = w·ê.
+double WeightElasticity(const WeightingProblem& p, double beta);
+
 // log H0(β) (with log1p), valid on the branch β ≥ β0.
 double LogH0(const WeightingProblem& p, double beta);
 

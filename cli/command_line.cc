@@ -29,6 +29,7 @@ int RunCommandLine(int argc, char** argv) {
   AddCompareCommand(app);
   AddOrdersCommand(app);
   AddPredictCommand(app);
+  AddStreamCommand(app);
   AddMemsCommand(app);
   AddLogcondensCommand(app);
   AddSmoothCommand(app);

@@ -15,6 +15,7 @@ void AddLogcondensCommand(CLI::App& app);  // ident logcondens (logcondens_comma
 void AddSmoothCommand(CLI::App& app);      // ident smooth     (smooth_command.cc)
 void AddOrdersCommand(CLI::App& app);      // ident orders     (orders_command.cc)
 void AddPredictCommand(CLI::App& app);     // ident predict    (predict_command.cc)
+void AddStreamCommand(CLI::App& app);      // ident stream     (stream_command.cc)
 
 // Exit codes of every subcommand.
 inline constexpr int kExitOk = 0;

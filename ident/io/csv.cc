@@ -218,14 +218,20 @@ bool CsvReader::Fill() {
   if (chunk_.empty()) chunk_.resize(kChunkBytes);
   chunk_pos_ = chunk_end_ = 0;
   if (!*in_) return false;
+  // One sgetn, which may return fewer bytes than asked for: a buffer that hands over what a pipe holds
+  // (ident/io/arriving_input.h) makes each line readable as soon as it has arrived. No bytes: the end.
+  std::streamsize got = 0;
   try {
-    in_->read(chunk_.data(), static_cast<std::streamsize>(chunk_.size()));
+    got = in_->rdbuf()->sgetn(chunk_.data(), static_cast<std::streamsize>(chunk_.size()));
   } catch (const std::exception& e) {
     throw DataError(fmt::format("cannot read '{}': {}", path_, e.what()));
   }
-  if (in_->bad()) throw DataError(fmt::format("{}:{}: read error", path_, line_ + 1));
-  chunk_end_ = static_cast<std::size_t>(in_->gcount());
-  return chunk_end_ > 0;
+  if (got <= 0) {
+    in_->setstate(std::ios::eofbit | std::ios::failbit);
+    return false;
+  }
+  chunk_end_ = static_cast<std::size_t>(got);
+  return true;
 }
 
 bool CsvReader::ReadLine() {

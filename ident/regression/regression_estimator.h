@@ -94,6 +94,8 @@ class AnyRegressionEstimator {
   virtual void Reset() = 0;
   // The lock-in safeguard's state; nullopt for estimators without one (RLS, --exact).
   virtual std::optional<LockInStatus> lock_in() const { return std::nullopt; }
+  // The restarts lock_in() lists, counted without copying them (0 for estimators without the safeguard).
+  virtual long restarts() const { return 0; }
   // True if the estimator weighs samples by their fit (its steps' weights can flag outliers), false if
   // every sample counts alike (least squares) or it reports no per-sample weights (batch).
   virtual bool judges_outliers() const { return false; }
@@ -136,6 +138,12 @@ class RegressionEstimatorModel final : public AnyRegressionEstimator {
       return e_.lock_in();
     else
       return std::nullopt;
+  }
+  long restarts() const override {
+    if constexpr (requires { e_.restarts(); })
+      return e_.restarts();
+    else
+      return 0;
   }
   bool judges_outliers() const override {
     if constexpr (requires { e_.judges_outliers(); })

@@ -53,7 +53,7 @@ int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
 // has no start.
 std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::MatrixXd>& window,
                                                  const SafeStudentOptions& options, double nu0, double growth,
-                                                 bool strict = true) {
+                                                 bool strict, Eigen::VectorXd& influence, double& seed) {
   const Eigen::Index rho = window.cols() - 1;
   // Rows with a regressor coordinate beyond kLeverage robust scales of its column are left out of the fit
   // and of M_w (a gross output outlier entering later ARX regressors is such a row), as long as at least
@@ -115,6 +115,22 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
     prior.V0.topRightCorner(1, rho) = prior.V0.bottomLeftCorner(rho, 1).transpose();
     prior.V0(0, 0) = sigma0 * sigma0 + fit.theta.dot(M * fit.theta);
     prior.Validate();
+    // Each row's influence on Θ_r, for the propagated variance of the replay (PropagatedVariance):
+    // δΘ_r ≈ (Σψ'_j z_j z_j')⁻¹ Σ ψ_i z_i, in the scalar form ψ_i/Σψ'_j, with the Cauchy score
+    // ψ = w·r and its slope ψ' = 2(1−u)/(1+u)², u = r²/γ² (Huber 1981, §7.6); rows left out have none.
+    const Eigen::ArrayXd u = r.array().square() / gamma2;
+    const double slope = (2 * (1 - u) / (1 + u).square()).sum();
+    const Eigen::ArrayXd score = w.array() * r.array() / std::max(slope, 0.25 * w.sum());
+    influence.setZero(n);
+    for (Eigen::Index i = 0, k = 0; i < n; ++i)
+      if (keep(i)) influence(i) = score(k++);
+    // The seed of the propagation: Σ x_i²·q_i/ρ, q_i = z_i'M_w⁻¹z_i (PropagatedVariance).
+    const Eigen::LLT<Eigen::MatrixXd> metric(M);
+    seed = 0;
+    for (Eigen::Index i = 0; i < Z.rows(); ++i) {
+      const Eigen::VectorXd zi = Z.row(i).transpose();
+      seed += score(i) * score(i) * zi.dot(metric.solve(zi)) / static_cast<double>(rho);
+    }
     return prior;
   } catch (const InvalidArgument&) {
     return std::nullopt;
@@ -178,9 +194,11 @@ std::optional<LockInStatus> SafeStudentRegression::lock_in() const {
 void SafeStudentRegression::Replay() noexcept {
   const int rho = num_parameters();
   monitor_.Clear();
+  const long first_fitted = stored_ - start_influence_.size();  // the window the start was fitted to
   for (long i = 0; i < stored_; ++i) {
     const auto sample = history_.col(Column(i));
     est_->set_outlying_regressor(Outlying(sample.tail(rho)));
+    est_->set_start_influence(i >= first_fitted ? start_influence_(i - first_fitted) : 0.0);
     const StepReport r = est_->Update(sample(0), sample.tail(rho));
     if (r.updated() && i >= stored_ - monitor_.window()) monitor_.Add(r.nu * r.weight);
   }
@@ -263,14 +281,21 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool stri
   // Start-up: the window's fit is the prior of its samples; lock-in: ν0 = ρ+k+δ pseudo-samples at the
   // recent fit. Either way every kept sample is replayed.
   const double nu0 = lock_in_restart ? rho + o.dof + o.delta : static_cast<double>(recent);
-  std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth, strict);
+  Eigen::VectorXd influence;
+  double seed = 0;
+  std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth, strict, influence, seed);
   if (!prior && !lock_in_restart) return;  // not identifiable yet: the start-up waits for more samples
   centre_ = centre;
   spread_ = spread;
-  if (!prior) prior = RegressionPrior::FromWindow(window, rho + o.dof + o.delta, o.delta);  // vague, equivariant
+  if (!prior) {
+    prior = RegressionPrior::FromWindow(window, rho + o.dof + o.delta, o.delta);  // vague, equivariant
+    influence.resize(0);
+  }
   try {
     o.prior = *prior;
     est_ = StudentRegression(rho, o);  // assigned only if the constructor succeeds
+    start_influence_ = std::move(influence);
+    if (start_influence_.size() > 0) est_->SeedPropagatedVariance(seed);
   } catch (...) {
     // Not reached for a finite window (the prior is validated); the current estimator is kept.
   }
@@ -308,6 +333,8 @@ bool SafeStudentRegression::BeginPass() {
     if (s2 > 0 && std::isfinite(s2)) o.prior->V0(0, 0) += s2 - est_->Dy();
   }
   est_ = StudentRegression(num_parameters(), o);
+  est_->use_sandwich_covariance(true);  // the samples again: the estimate settles at the M-estimator's
+  start_influence_.resize(0);
   stored_ = ring_start_ = updates_ = 0;
   next_restart_ = 0;
   backoff_ = 1;
@@ -324,6 +351,7 @@ void SafeStudentRegression::Reset() {
   started_ = false;
   lock_ins_ = 0;
   events_.clear();
+  start_influence_.resize(0);
   start_update_ = start_window_ = 0;
   start_at_end_ = false;
   monitor_.Clear();

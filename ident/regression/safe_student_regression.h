@@ -200,6 +200,7 @@ class SafeStudentRegression {
   bool started_ = false;
   LockInMonitor monitor_;
   Eigen::MatrixXd history_;          // (ρ+1) x capacity: y, z of every updated sample (column = sample)
+  Eigen::VectorXd start_influence_;  // influence of the last (re)start window's samples on its fit
   Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the last (re)start window
   long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
   int lock_ins_ = 0;

@@ -119,6 +119,7 @@ struct StudentStepDetails {
   double beta0 = std::numeric_limits<double>::quiet_NaN();
   double beta_hi = std::numeric_limits<double>::quiet_NaN();
   int num_maxima = 0;
+  double elasticity = 0;  // ê·dβ/dê of the β taken, ξ_z fixed (PropagatedVariance)
 };
 
 // The scalar sandwich of M-estimation for the Student-t score (Huber 1981, §7.6). With u = ê²/D_y and the
@@ -149,6 +150,32 @@ struct SandwichFactor {
     if (!(n > rho + 1 && dpsi > 0)) return std::numeric_limits<double>::quiet_NaN();
     const double mean = dpsi / n, kappa = 1 + rho / n * std::max(dpsi2 / n - mean * mean, 0.0) / (mean * mean);
     return kappa * kappa * n / (n - rho) * (psi2 / n) / (mean * mean);
+  }
+};
+
+// The recursion's own sampling variance, propagated step by step: the delta method on the step
+// Θ̂(t) = Θ̂(t−1) + g·Ṽ_z⁻¹z·ê, g = β/(1−βξ_z) [spec §3]. Its error δ(t) = Θ̂(t) − Θ is multiplied by
+// I − γ·Ṽ_z⁻¹zz', γ = g + ê·dg/dê (the slope of the step's score g·ê, as ê = e − z'δ(t−1)), and gains
+// g·e·Ṽ_z⁻¹z. With Cov(Θ̂) ≈ s·V_z⁻¹, each rank-one term Ṽ_z⁻¹zz'Ṽ_z⁻¹ is taken at its average over
+// directions, (q/ρ)·V_z⁻¹, q = z'Ṽ_z⁻¹z = 1 − ξ_z; with c = γq/ρ:
+//   s(t) = ((1 − c)² + (ρ−1)c²)·s(t−1) + (q/ρ)·g·ê·(g·ê + 2·A(t)·x),   A(t) = Π(1 − c) since the seed,
+// where x is the sample's influence on the starting estimate when that estimate was fitted to samples
+// the recursion then replays (zero otherwise): δ(0) = Σ x_i·Ṽ_z⁻¹z_i·(noise of sample i), so a replayed
+// sample's two contributions add before they are squared. Unlike the M-estimation sandwich
+// (SandwichFactor) this carries what weighing each sample once, against the estimate of its time,
+// costs: a weight whose score slope γ·ν differs from 1 forgets the start slower or faster than 1/t,
+// and the variance is then larger than the M-estimator's. O(1) per update.
+struct PropagatedVariance {
+  double s = 0, a = 1, x = 0;  // x: influence of the next sample on the seed (consumed by Add)
+  void Seed(double s0) noexcept { s = s0, a = 1, x = 0; }
+  void Add(double beta, double elasticity, double xi_z, double e, int rho) noexcept {
+    const double d = 1 - beta * xi_z, q = 1 - xi_z;
+    const double g = beta / d, c = (g + elasticity / (d * d)) * q / rho, ge = g * e;
+    const double influence = x;
+    x = 0;
+    if (!(std::isfinite(c) && std::isfinite(ge))) return;
+    a *= 1 - c;
+    s = std::max(((1 - c) * (1 - c) + (rho - 1) * c * c) * s + q / rho * ge * (ge + 2 * a * influence), 0.0);
   }
 };
 
@@ -219,6 +246,7 @@ class BasicStudentRegression {
     }
     stats_.Reset(prior_.nu0, prior_factor_);
     sandwich_ = {};
+    propagated_.Seed(PriorVarianceFactor());
     last_beta_ = std::numeric_limits<double>::quiet_NaN();
     details_ = {};
   }
@@ -262,6 +290,8 @@ class BasicStudentRegression {
     if (s.report.updated()) {
       last_beta_ = s.report.weight;
       sandwich_.Add(options_.dof, details_.xi_z - details_.xi, s.report.prediction_error, s.lambda);
+      propagated_.Add(s.report.weight, details_.elasticity, details_.xi_z, s.report.prediction_error,
+                      num_parameters());
     }
     return s.report;
   }
@@ -278,15 +308,25 @@ class BasicStudentRegression {
     // The guard acts on a regressor the caller calls outlying, or one far out in the metric of the
     // information matrix: z'Ṽ_z⁻¹z = 1 − ξ_z, ≈ ρ on average over the samples Ṽ_z summarises.
     if (!options_.leverage_guard || !(outlying_regressor_ || 1 - in.xi_z > kLeverage * kLeverage + num_parameters()))
-      return w.beta;
-    if (w.num_maxima > 1) return w.smallest_maximum;  // the outlier reading of the two [spec §5]
+      return RootElasticity(problem, w.beta);
+    if (w.num_maxima > 1) return RootElasticity(problem, w.smallest_maximum);  // the outlier reading [spec §5]
     // One maximum, a gross error: the smallest admissible weight β0 = 1/(ν − (ν−1)ξ), ξ = 1 − h'Ṽ⁻¹h,
     // whose update β0·hh' has β0·h'Ṽ⁻¹h = (1−ξ)/(1 + (ν−1)(1−ξ)) < 1/(ν−1) in the metric of Ṽ: the
     // information of one ordinary sample, whatever the size of h.
     // "Gross" is judged against the leverage (Schweppe's GM form): ê²/D_y beyond 25·min(1, (25+ρ)/q), so
     // beyond the leverage limit the product of error and lever arm, not the error alone, decides.
     const double q = 1 - in.xi_z, limit = kLeverage * kLeverage + num_parameters();
-    return in.xi_z - in.xi > kLeverage * kLeverage * std::min(1.0, limit / q) ? w.beta0 : w.beta;
+    if (!(in.xi_z - in.xi > kLeverage * kLeverage * std::min(1.0, limit / q))) return RootElasticity(problem, w.beta);
+    // β0 = 1/(ν − (ν−1)ξ) for ξ < 0: dβ0/dξ = (ν−1)β0², dξ/dê = −2ê/D_y.
+    details_.elasticity = in.xi < 0 ? -2 * (in.xi_z - in.xi) * (nu - 1) * w.beta0 * w.beta0 : 0;
+    return w.beta0;
+  }
+
+  // β, recording ê·dβ/dê (approx::WeightElasticity) for a root β of the weighting cubic.
+  double RootElasticity(const approx::WeightingProblem& problem, double beta) noexcept {
+    const double e = approx::WeightElasticity(problem, beta);
+    details_.elasticity = std::isfinite(e) ? e : 0;
+    return beta;
   }
 
   // s = 1.4826·MAD of column c of the window (RMS if 0, else 1).
@@ -324,6 +364,7 @@ class BasicStudentRegression {
     prior_factor_.SetDiagonal(v0);
     stats_.Reset(nu0, prior_factor_);
     sandwich_ = {};
+    propagated_.Seed(PriorVarianceFactor());
     for (int t = 0; t < window_size_; ++t) Step(window_(t, 0), window_.row(t).tail(rho).transpose());
   }
 
@@ -341,9 +382,12 @@ class BasicStudentRegression {
   const StudentStepDetails& last_step() const { return details_; }
   // The noise scale σ (D_y → σ² for large ν [spec §2]).
   double noise_std() const { return std::sqrt(stats_.Dy()); }
-  // The sampling covariance of Θ̂: the sandwich c·V_z⁻¹/n of M-estimation (see SandwichFactor), which
-  // holds whatever the noise law; +inf entries until more than ρ+1 updates. posterior_covariance() is the
-  // one-sided posterior's own D_y V_z⁻¹/(ν−δ−ρ), too small by (k+3)/(k+1) even under the model.
+  // The sampling covariance of Θ̂, whatever the noise law: the larger of the recursion's propagated
+  // variance (PropagatedVariance) and the sandwich c·V_z⁻¹/n of M-estimation (SandwichFactor), the
+  // M-estimator's own, which no single pass with the same score beats (its excess over the sandwich is
+  // γ̄²/(2γ̄−1) ≥ 1 asymptotically, γ̄ = E[γ]·ν); the sandwich alone once use_sandwich_covariance() is
+  // set. +inf entries until more than ρ+1 updates. posterior_covariance() is the one-sided posterior's
+  // own D_y V_z⁻¹/(ν−δ−ρ), too small by (k+3)/(k+1) even under the model.
   Eigen::MatrixXd covariance() const {
     Eigen::MatrixXd out(num_parameters(), num_parameters());
     CovarianceInto(out);
@@ -352,8 +396,18 @@ class BasicStudentRegression {
   // The same covariance into a caller-owned ρ x ρ matrix, without allocating, at any time. ~(5/6)ρ³
   // flops. Throws InvalidArgument only if `out` has the wrong size.
   void CovarianceInto(Eigen::Ref<Eigen::MatrixXd> out) const {
-    ScaledVzInverseOrInfinity(sandwich_.Factor(num_parameters()) / sandwich_.n, out);
+    const double sandwich = sandwich_.Factor(num_parameters()) / sandwich_.n;  // NaN until ρ+1 updates
+    ScaledVzInverseOrInfinity(sandwich_covariance_ || !(propagated_.s > sandwich) ? sandwich : propagated_.s, out);
   }
+  // covariance() from the M-estimation sandwich alone: for an estimate that has settled at the
+  // M-estimator's fixed point, after further passes over the same samples, which the propagation would
+  // count twice.
+  void use_sandwich_covariance(bool on) noexcept { sandwich_covariance_ = on; }
+  // Seeds the propagated variance (PropagatedVariance) with the variance factor s0 of the starting
+  // estimate, and gives the influence x of the next sample on it (for a start fitted to samples that are
+  // then replayed). Without a seed, s0 is the prior's own D_y(0)/(ν0−δ−ρ).
+  void SeedPropagatedVariance(double s0) noexcept { propagated_.Seed(s0); }
+  void set_start_influence(double x) noexcept { propagated_.x = x; }
   // Cov(Θ) of the one-sided posterior: D_y V_z⁻¹/(ν−δ−ρ) (multivariate t, ν−δ−ρ+2 d.o.f.) [spec §2];
   // +inf entries while ν ≤ δ+ρ.
   Eigen::MatrixXd posterior_covariance() const {
@@ -380,6 +434,11 @@ class BasicStudentRegression {
   const RegressionPrior& prior() const { return prior_; }
 
  private:
+  // D_y/(ν−δ−ρ), the one-sided posterior's covariance factor; +inf while ν ≤ δ+ρ.
+  double PriorVarianceFactor() const noexcept {
+    const double dof = stats_.nu() - options_.delta - num_parameters();
+    return dof > 0 ? stats_.Dy() / dof : std::numeric_limits<double>::infinity();
+  }
   // out = s·V_z⁻¹, or +inf entries unless s is positive and finite. Throws only for a wrong size.
   void ScaledVzInverseOrInfinity(double s, Eigen::Ref<Eigen::MatrixXd> out) const {
     IDENT_REQUIRE(out.rows() == num_parameters() && out.cols() == num_parameters(),
@@ -406,6 +465,8 @@ class BasicStudentRegression {
   StudentStepDetails details_;
   approx::WeightConstants weight_constants_;  // of the last ν(t) (Weight())
   SandwichFactor sandwich_;
+  PropagatedVariance propagated_{PriorVarianceFactor()};
+  bool sandwich_covariance_ = false;
   bool enabled_ = true;
   int window_size_ = 0, window_count_ = 0;  // data-driven start-up (0 = off)
   Eigen::MatrixXd window_;                  // W x (ρ+1): y, z of the first W samples

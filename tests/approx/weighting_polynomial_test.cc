@@ -208,5 +208,25 @@ TEST(WeightingPolynomial, HandlesExtremeScalingAfterOutliersOnATinyScale) {  // 
   }
 }
 
+// ê·dβ/dê = 2u·dβ/du at fixed ξ_z (u = ξ_z − ξ): against central differences of the solved β, and for large
+// ν against the EM weight's limit: ν·(β + ê·dβ/dê) → ψ' = (k+1)(k−u)/(k+u)², the Student-t score's slope.
+TEST(WeightingPolynomial, ElasticityMatchesCentralDifferencesAndTheScoreSlope) {
+  for (const double k : {1.0, 3.0, 10.0})
+    for (const double u : {0.05, 0.7, 3.0, 30.0})
+      for (const double xi_z : {0.4, -0.5, -3.0}) {
+        const double nu = 60;
+        auto beta_at = [&](double uu) { return SolveWeight({nu, xi_z - uu, xi_z, 4, k, 1}).beta; };
+        const double h = 1e-6 * u, numeric = 2 * u * (beta_at(u + h) - beta_at(u - h)) / (2 * h);
+        const double analytic = WeightElasticity({nu, xi_z - u, xi_z, 4, k, 1}, beta_at(u));
+        EXPECT_NEAR(analytic, numeric, 1e-6 * std::abs(numeric) + 1e-12) << k << " " << u << " " << xi_z;
+      }
+  for (const double k : {1.0, 3.0})
+    for (const double u : {0.1, 1.0, 4.0}) {
+      const double nu = 1e6, beta = SolveWeight({nu, -2 - u, -2, 3, k, 1}).beta;
+      const double slope = nu * (beta + WeightElasticity({nu, -2 - u, -2, 3, k, 1}, beta));
+      EXPECT_NEAR(slope, (k + 1) * (k - u) / ((k + u) * (k + u)), 1e-3) << k << " " << u;
+    }
+}
+
 }  // namespace
 }  // namespace ident::approx

@@ -167,40 +167,53 @@ TYPED_TEST(StudentRealtime, PosteriorCovarianceAtAnyTimeEqualsTheDenseMultivaria
   }
 }
 
-// The sampling covariance c·V_z⁻¹/n with c = κ²·n/(n−ρ)·mean(ψ²)/mean(ψ')², κ = 1 + (ρ/n)·var(ψ')/mean(ψ')²,
-// ψ = wê, ψ' = (k+1)(k−u)/(k+u)²,
-// w = (k+1)/(k+u), u = ξ_z − ξ, means discounted by λ [ident/regression/student_regression.h]. Reference: the sums
-// formed here from the step reports and details, V_z densely from the reported weights as above.
-TYPED_TEST(StudentRealtime, CovarianceIsTheSandwichOfTheStepsAtAnyTime) {
+// The sampling covariance: the larger of two variance factors times V_z⁻¹ [ident/regression/student_regression.h].
+// The sandwich c/n, c = κ²·n/(n−ρ)·mean(ψ²)/mean(ψ')², κ = 1 + (ρ/n)·var(ψ')/mean(ψ')², ψ = wê,
+// ψ' = (k+1)(k−u)/(k+u)², w = (k+1)/(k+u), u = ξ_z − ξ, means discounted by λ; and the propagated
+// s(t) = ((1−c)² + (ρ−1)c²)s(t−1) + (q/ρ)(gê)², c = γq/ρ, q = 1 − ξ_z, g = β/(1−βξ_z), γ = g + ê·dg/dê, from
+// s(0) = D_y(0)/(ν0−δ−ρ). Reference: the sums formed here from the step reports and details, dβ/dê by central
+// differences of the weighting problem's solution, V_z densely from the reported weights as above.
+TYPED_TEST(StudentRealtime, CovarianceIsTheLargerOfSandwichAndPropagationAtAnyTime) {
   const auto data = ArxDataWithOutliers(35, 400);
   const StudentRegressionOptions o = Cauchy(0.99);
   TypeParam est(4, o);
   Eigen::MatrixXd V = o.prior->V0;
   double psi2 = 0, dpsi = 0, dpsi2 = 0, n = 0;
+  const double dy0 = V(0, 0) - (V.block(0, 1, 1, 4) * V.bottomRightCorner(4, 4).llt().solve(V.block(1, 0, 4, 1)))(0, 0);
+  double s = dy0 / (o.prior->nu0 - 1 - 4);
+  int propagated_larger = 0;
   Eigen::Matrix4d P;
   for (int t = 0; t < 400; ++t) {
     const StepReport r = est.Update(data[t].y, data[t].z);
     ASSERT_TRUE(r.updated());
     DenseStep(V, r, data[t].y, data[t].z);
-    const double u = est.last_step().xi_z - est.last_step().xi, w = 2 / (1 + u);
+    const double xi = est.last_step().xi, xi_z = est.last_step().xi_z, u = xi_z - xi, w = 2 / (1 + u);
     psi2 = 0.99 * psi2 + w * w * r.prediction_error * r.prediction_error;
     const double d = 2 * (1 - u) / ((1 + u) * (1 + u));
     dpsi = 0.99 * dpsi + d;
     dpsi2 = 0.99 * dpsi2 + d * d;
     n = 0.99 * n + 1;
+    auto beta_at = [&](double uu) { return approx::SolveWeight({r.nu, xi_z - uu, xi_z, 4, 1.0, 1}).beta; };
+    ASSERT_NEAR(beta_at(u), r.weight, 1e-12 * r.weight) << t;
+    const double h = 1e-5 * u, elasticity = 2 * u * (beta_at(u + h) - beta_at(u - h)) / (2 * h);
+    const double q = 1 - xi_z, a = 1 - r.weight * xi_z, g = r.weight / a;
+    const double c_step = (g + elasticity / (a * a)) * q / 4, ge = g * r.prediction_error;
+    s = ((1 - c_step) * (1 - c_step) + 3 * c_step * c_step) * s + q / 4 * ge * ge;
     est.CovarianceInto(P);
     if (t < 5) {  // n ≤ ρ + 1
       EXPECT_TRUE((P.array() == std::numeric_limits<double>::infinity()).all()) << t;
       continue;
     }
-    if (t != 5 && t != 30 && t != 399) continue;
     const double m = dpsi / n, kappa = 1 + 4 / n * (dpsi2 / n - m * m) / (m * m);
-    const double c = kappa * kappa * n / (n - 4) * (psi2 / n) / (m * m);
-    const Eigen::MatrixXd cov =
-        c / n * Eigen::LLT<Eigen::MatrixXd>(V.bottomRightCorner(4, 4)).solve(Eigen::MatrixXd::Identity(4, 4));
-    EXPECT_LT((P - cov).norm(), 1e-9 * cov.norm()) << "t = " << t;
+    const double sandwich = kappa * kappa * n / (n - 4) * (psi2 / n) / (m * m) / n;
+    propagated_larger += s > sandwich;
+    if (t != 5 && t != 30 && t != 399) continue;
+    const Eigen::MatrixXd cov = std::max(s, sandwich) * Eigen::LLT<Eigen::MatrixXd>(V.bottomRightCorner(4, 4))
+                                                            .solve(Eigen::MatrixXd::Identity(4, 4));
+    EXPECT_LT((P - cov).norm(), 1e-6 * cov.norm()) << "t = " << t;
     EXPECT_LT((P - est.covariance()).norm(), 1e-14 * cov.norm()) << "t = " << t;
   }
+  EXPECT_GT(propagated_larger, 0);  // both read-outs are exercised
 }
 
 TYPED_TEST(StudentRealtime, PosteriorCovarianceIsInfiniteWhileNuIsAtMostDeltaPlusRho) {

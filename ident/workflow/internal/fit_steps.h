@@ -88,11 +88,13 @@ class Estimation {
     if (uses_estimate_ && in_startup_) shadow_.emplace(source.num_parameters());
   }
 
-  // `r` is the 0-based row index in the record (the trace prints r + 1).
-  void Row(const Eigen::VectorXd& row, int r) {
+  // `r` is the 0-based row index in the record (the trace prints r + 1). Returns the estimator's step, or
+  // nothing when no regression happens at this row (the regressor's first rows).
+  std::optional<StepReport> Row(const Eigen::VectorXd& row, int r) {
     const double y = row(source_.output_column());
     bool flagged = false;
     double y_hat = std::nan(""), scale = std::nan("");
+    std::optional<StepReport> step;
     if (source_.Regressor(row, z_)) {
       // y(t−1) was cleaned: keep the reading of it (additive outlier or innovation) that predicts y(t) better.
       if (source_.MeasuredRegressor(z_measured_) &&
@@ -101,7 +103,7 @@ class Estimation {
         z_ = z_measured_;
       }
       const double y_regressed = source_.RegressionOutput(y);  // y, or RPEM's linearised output
-      const StepReport report = estimator_.Update(y_regressed, z_);
+      const StepReport report = *(step = estimator_.Update(y_regressed, z_));
       if (in_startup_ && !estimator_.in_startup()) {  // the robust start is made: the model judges from now on
         in_startup_ = false;
         source_.EndCleaningWarmUp();
@@ -138,6 +140,7 @@ class Estimation {
       }
     }
     source_.PushCheckedOutput(y, y_hat, scale, flagged, judged_);
+    return step;
   }
 
   // The end of the pass: a start-up that still waits starts from every sample seen. Identifiability:
