@@ -17,7 +17,6 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
-#include "ident/io/mat_file.h"
 #include "cli/csv_options.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
@@ -27,6 +26,7 @@
 #include "cli/structure_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 #include "ident/workflow/compare_record.h"
 
 namespace ident::cli {

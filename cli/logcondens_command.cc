@@ -9,12 +9,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "common/error.h"
 #include "ident/density/logconcave_mle.h"
 #include "ident/io/csv.h"
-#include "cli/commands.h"
 #include "ident/io/mat_file.h"
-#include "cli/csv_options.h"
 
 namespace ident::cli {
 namespace {

@@ -11,11 +11,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
-#include "ident/io/mat_file.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 #include "ident/workflow/json_number.h"
 #include "ident/workflow/order_selection.h"
 #include "ident/workflow/predictions.h"

@@ -92,47 +92,62 @@ bool AllNumbers(const std::vector<std::string_view>& fields) {
 
 char SeparatorOf(Delimiter d) {
   switch (d) {
-    case Delimiter::kSemicolon: return ';';
-    case Delimiter::kTab: return '\t';
-    case Delimiter::kWhitespace: return 0;
-    default: return ',';
+    case Delimiter::kSemicolon:
+      return ';';
+    case Delimiter::kTab:
+      return '\t';
+    case Delimiter::kWhitespace:
+      return 0;
+    default:
+      return ',';
   }
 }
 
 Delimiter DelimiterOf(char separator) {
   switch (separator) {
-    case ';': return Delimiter::kSemicolon;
-    case '\t': return Delimiter::kTab;
-    case 0: return Delimiter::kWhitespace;
-    default: return Delimiter::kComma;
+    case ';':
+      return Delimiter::kSemicolon;
+    case '\t':
+      return Delimiter::kTab;
+    case 0:
+      return Delimiter::kWhitespace;
+    default:
+      return Delimiter::kComma;
   }
 }
 
-// Detection (see csv.h): the separator that fits the header and the first data line (0: whitespace), or,
-// when two of them split the header (and fit the data line, else *fits_data = false), both in `ambiguous`.
+// Detection (see csv.h). The one of ',', ';' and tab that splits the header; when several do, the one
+// that splits the first data line (`data`, null if none) into as many fields, and when two still fit
+// (or none does), both in `ambiguous` (*fits_data: whether they fit the data line). When none splits
+// the header: whitespace (0) if runs of spaces split the header and the data line, else ',' (one column).
 char DetectSeparator(std::string_view header, const std::string_view* data, std::pair<char, char>* ambiguous,
                      bool* fits_data) {
   *fits_data = true;
   std::vector<char> fit, splits;
   for (const char c : {',', ';', '\t'}) {
     const std::size_t h = CountFields(header, c);
-    if (h > 1 && (data == nullptr || CountFields(*data, c) == h)) fit.push_back(c);
     if (h > 1) splits.push_back(c);
+    if (h > 1 && (data == nullptr || CountFields(*data, c) == h)) fit.push_back(c);
   }
-  if (fit.size() > 1) {
-    *ambiguous = {fit[0], fit[1]};
-    return ',';
-  }
-  if (fit.size() == 1) return fit[0];
-  const std::size_t h = CountFields(header, 0);
-  if (h > 1 && (data == nullptr || CountFields(*data, 0) > 1)) return 0;
   if (splits.size() == 1) return splits[0];  // the rows will say what does not fit
   if (splits.size() > 1) {
-    *ambiguous = {splits[0], splits[1]};
-    *fits_data = false;
+    if (fit.size() == 1) return fit[0];
+    *fits_data = fit.size() > 1;
+    *ambiguous = fit.size() > 1 ? std::pair{fit[0], fit[1]} : std::pair{splits[0], splits[1]};
     return ',';
   }
+  if (CountFields(header, 0) > 1 && (data == nullptr || CountFields(*data, 0) > 1)) return 0;
   return ',';  // one column
+}
+
+// True if DetectSeparator (or the check of a given delimiter) needs the first data line: the header
+// alone does not decide. Otherwise the reader reads no line ahead (a stream's header is checked as soon
+// as it arrives).
+bool NeedsDataLine(std::string_view header, Delimiter given) {
+  if (given != Delimiter::kAuto) return CountFields(header, SeparatorOf(given)) == 1;
+  int splits = 0;
+  for (const char c : {',', ';', '\t'}) splits += CountFields(header, c) > 1;
+  return splits > 1 || (splits == 0 && CountFields(header, 0) > 1);
 }
 
 constexpr std::size_t kShownBytes = 32;     // of a cell or name echoed in a message
@@ -176,11 +191,16 @@ Delimiter ParseDelimiter(std::string_view text) {
 
 std::string DelimiterName(Delimiter delimiter) {
   switch (delimiter) {
-    case Delimiter::kAuto: return "auto";
-    case Delimiter::kComma: return "','";
-    case Delimiter::kSemicolon: return "';'";
-    case Delimiter::kTab: return "tab";
-    case Delimiter::kWhitespace: return "space";
+    case Delimiter::kAuto:
+      return "auto";
+    case Delimiter::kComma:
+      return "','";
+    case Delimiter::kSemicolon:
+      return "';'";
+    case Delimiter::kTab:
+      return "tab";
+    case Delimiter::kWhitespace:
+      return "space";
   }
   return "?";
 }
@@ -280,8 +300,10 @@ void CsvReader::ReadHeader() {
   if (!got_header) throw DataError(fmt::format("{}: the file is empty", path));
   header_.swap(buffer_);
   header_line_ = line_;
-  // The first data line, read ahead for the delimiter and held for Next().
-  while (ReadLine()) {
+  // The first data line, read ahead for the delimiter when the header does not decide it, and held for
+  // Next().
+  const bool read_ahead = NeedsDataLine(header_, options_.delimiter);
+  while (read_ahead && ReadLine()) {
     if (!IsBlank(buffer_) && !IsComment(buffer_)) {
       held_ = true;
       held_line_ = line_;
@@ -308,8 +330,7 @@ void CsvReader::ReadHeader() {
   for (std::size_t j = 0; j < fields.size(); ++j) {
     std::string_view name = fields[j];
     if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
-    if (name.empty())
-      throw DataError(fmt::format("{}:{}: column {} has an empty name", path, header_line_, j + 1));
+    if (name.empty()) throw DataError(fmt::format("{}:{}: column {} has an empty name", path, header_line_, j + 1));
     if (name.find('\0') != std::string_view::npos)
       throw DataError(fmt::format("{}:{}: column {} name contains a NUL byte", path, header_line_, j + 1));
     const auto [it, inserted] = seen.emplace(name, j);
@@ -328,12 +349,12 @@ void CsvReader::ChooseDelimiter(std::string_view header, const std::string_view*
   const char detected = DetectSeparator(header, data, &ambiguous, &fits_data);
   if (options_.delimiter == Delimiter::kAuto) {
     if (ambiguous.first != 0)
-      throw DataError(fmt::format(
-          "{}:{}: cannot tell the delimiter: {} and {} both split the header{} into several fields (pass "
-          "--delimiter)",
-          path_, header_line_, DelimiterName(DelimiterOf(ambiguous.first)),
-          DelimiterName(DelimiterOf(ambiguous.second)),
-          data && fits_data ? fmt::format(" and line {}", held_line_) : ""));
+      throw DataError(
+          fmt::format("{}:{}: cannot tell the delimiter: {} and {} both split the header{} into several fields (pass "
+                      "--delimiter)",
+                      path_, header_line_, DelimiterName(DelimiterOf(ambiguous.first)),
+                      DelimiterName(DelimiterOf(ambiguous.second)),
+                      data && fits_data ? fmt::format(" and line {}", held_line_) : ""));
     delimiter_ = DelimiterOf(detected);
     separator_ = detected;
     return;
@@ -380,8 +401,8 @@ double CsvReader::ParseUncommonCell(std::string_view cell, int column) const {
                     "missing samples)",
                     path_, line_, column + 1, ShowCell(names_[column])));
   if (cell.find('\0') != std::string_view::npos)
-    throw DataError(fmt::format("{}:{}: column {} ({}): contains a NUL byte", path_, line_, column + 1,
-                                ShowCell(names_[column])));
+    throw DataError(
+        fmt::format("{}:{}: column {} ({}): contains a NUL byte", path_, line_, column + 1, ShowCell(names_[column])));
   std::string_view digits = cell;
   if (digits.front() == '+') digits.remove_prefix(1);
   const bool second_sign = digits.size() < cell.size() && !digits.empty() && digits.front() == '-';
@@ -392,11 +413,11 @@ double CsvReader::ParseUncommonCell(std::string_view cell, int column) const {
   if (ec != std::errc() || ptr != digits.data() + digits.size() || second_sign) {
     // A decimal comma: '1,5' in a file whose cells are not separated by commas.
     const bool decimal_comma = separator_ != ',' && cell.find(',') != std::string_view::npos;
-    throw DataError(fmt::format("{}:{}: column {} ({}): {} is not a number{}", path_, line_, column + 1,
-                                ShowCell(names_[column]), ShowCell(cell),
-                                decimal_comma ? fmt::format(" (the delimiter is {}: decimals take '.', not ',')",
-                                                            DelimiterName(delimiter_))
-                                              : ""));
+    throw DataError(fmt::format(
+        "{}:{}: column {} ({}): {} is not a number{}", path_, line_, column + 1, ShowCell(names_[column]),
+        ShowCell(cell),
+        decimal_comma ? fmt::format(" (the delimiter is {}: decimals take '.', not ',')", DelimiterName(delimiter_))
+                      : ""));
   }
   if (!std::isfinite(value)) {
     if (!options_.missing_as_nan)

@@ -2,9 +2,11 @@
 //
 // Format: a header line of column names, then numeric rows with '.' decimal points; LF, CRLF or CR line
 // ends. The delimiter is ',', ';', a tab or runs of spaces/tabs (whitespace: DaISy .dat files), given as
-// CsvOptions::delimiter or detected from the header and the first data line (Delimiter::kAuto): the one
-// of ',', ';' and tab that splits both into the same number (> 1) of fields; else whitespace when it
-// splits both into several; else ',' (one column). Two of ',', ';' and tab that fit both are ambiguous.
+// CsvOptions::delimiter or detected (Delimiter::kAuto): the one of ',', ';' and tab that splits the
+// header; if several do, the one that splits the first data line into as many fields (two that fit, or
+// none, are ambiguous); if none does, whitespace when it splits the header and the first data line into
+// several fields, else ',' (one column). The first data line is read ahead only when the header does not
+// decide.
 // A first line whose cells are all numbers is data: the file has no header and its columns are named
 // c1, c2, ... (CsvReader::generated_names()). Blank lines before the first data row and at the end and
 // lines whose first non-blank byte is '#' (comments, anywhere) are skipped and counted in line numbers;

@@ -62,17 +62,38 @@ void CopyAs(const void* data, std::size_t n, std::vector<double>& out) {
 std::vector<double> Values(const matvar_t& v, std::size_t n) {
   std::vector<double> out;
   switch (v.class_type) {
-    case MAT_C_DOUBLE: CopyAs<double>(v.data, n, out); break;
-    case MAT_C_SINGLE: CopyAs<float>(v.data, n, out); break;
-    case MAT_C_INT8: CopyAs<std::int8_t>(v.data, n, out); break;
-    case MAT_C_UINT8: CopyAs<std::uint8_t>(v.data, n, out); break;
-    case MAT_C_INT16: CopyAs<std::int16_t>(v.data, n, out); break;
-    case MAT_C_UINT16: CopyAs<std::uint16_t>(v.data, n, out); break;
-    case MAT_C_INT32: CopyAs<std::int32_t>(v.data, n, out); break;
-    case MAT_C_UINT32: CopyAs<std::uint32_t>(v.data, n, out); break;
-    case MAT_C_INT64: CopyAs<std::int64_t>(v.data, n, out); break;
-    case MAT_C_UINT64: CopyAs<std::uint64_t>(v.data, n, out); break;
-    default: break;
+    case MAT_C_DOUBLE:
+      CopyAs<double>(v.data, n, out);
+      break;
+    case MAT_C_SINGLE:
+      CopyAs<float>(v.data, n, out);
+      break;
+    case MAT_C_INT8:
+      CopyAs<std::int8_t>(v.data, n, out);
+      break;
+    case MAT_C_UINT8:
+      CopyAs<std::uint8_t>(v.data, n, out);
+      break;
+    case MAT_C_INT16:
+      CopyAs<std::int16_t>(v.data, n, out);
+      break;
+    case MAT_C_UINT16:
+      CopyAs<std::uint16_t>(v.data, n, out);
+      break;
+    case MAT_C_INT32:
+      CopyAs<std::int32_t>(v.data, n, out);
+      break;
+    case MAT_C_UINT32:
+      CopyAs<std::uint32_t>(v.data, n, out);
+      break;
+    case MAT_C_INT64:
+      CopyAs<std::int64_t>(v.data, n, out);
+      break;
+    case MAT_C_UINT64:
+      CopyAs<std::uint64_t>(v.data, n, out);
+      break;
+    default:
+      break;
   }
   return out;
 }
@@ -89,8 +110,10 @@ DataTable ReadMat(const std::string& path, const CsvOptions& options) {
   static const int log_set = Mat_LogInitFunc("ident", QuietMatioLog);
   (void)log_set;
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw DataError(fmt::format("cannot read '{}': it is a directory", path));
-  if (!std::filesystem::exists(path, ec)) throw DataError(fmt::format("cannot open '{}': No such file or directory", path));
+  if (std::filesystem::is_directory(path, ec))
+    throw DataError(fmt::format("cannot read '{}': it is a directory", path));
+  if (!std::filesystem::exists(path, ec))
+    throw DataError(fmt::format("cannot open '{}': No such file or directory", path));
   MatFile file(Mat_Open(path.c_str(), MAT_ACC_RDONLY));
   if (!file) throw DataError(fmt::format("cannot open '{}' as a MATLAB file (v5, v7 or v7.3)", path));
   std::vector<MatColumns> found;
@@ -136,7 +159,8 @@ DataTable ReadMat(const std::string& path, const CsvOptions& options) {
     for (std::size_t k = 0; k < m.cols; ++k, ++j) {
       std::string name = m.cols == 1 ? m.variable : fmt::format("{}_{}", m.variable, k + 1);
       if (!names.insert(name).second)
-        throw DataError(fmt::format("{}: two columns named {} (variable {})", path, ShowCell(name), ShowCell(m.variable)));
+        throw DataError(
+            fmt::format("{}: two columns named {} (variable {})", path, ShowCell(name), ShowCell(m.variable)));
       for (std::size_t i = 0; i < rows; ++i) {
         double v = m.values[k * rows + i];
         if (!std::isfinite(v)) {

@@ -17,10 +17,10 @@
 namespace ident::workflow {
 
 struct TimeGap {
-  int row = 0;            // 1-based data row of the record that ends the gap (t_after's)
+  int row = 0;  // 1-based data row of the record that ends the gap (t_after's)
   double t_before = 0, t_after = 0;
-  long missing = 0;       // samples missing in it: round(step / median step) - 1, at least 1
-  long filled = 0;        // rows FillTimeGaps inserted for it
+  long missing = 0;  // samples missing in it: round(step / median step) - 1, at least 1
+  long filled = 0;   // rows FillTimeGaps inserted for it
 };
 
 struct TimeCheck {

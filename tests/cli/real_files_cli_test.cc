@@ -38,7 +38,8 @@ RealFileRecord RealFileNoiseless(int n, double a, double b) {
 }
 
 // The record's rows except `dropped` (0-based), as text with `sep` between cells and '.' decimals.
-std::string RealFileText(const RealFileRecord& r, const std::string& sep, bool header = true, const std::vector<int>& dropped = {}) {
+std::string RealFileText(const RealFileRecord& r, const std::string& sep, bool header = true,
+                         const std::vector<int>& dropped = {}) {
   std::string s = header ? fmt::format("t{0}u{0}y\n", sep) : "";
   for (std::size_t k = 0; k < r.t.size(); ++k) {
     if (std::find(dropped.begin(), dropped.end(), static_cast<int>(k)) != dropped.end()) continue;
@@ -79,7 +80,7 @@ TEST(RealFiles, HeaderlessDatFileHasColumnsC1ToCn) {
   const RealFileRecord r = RealFileNoiseless(200, 0.7, 0.5);
   const nlohmann::json j =
       RealFileFitJson(WriteFile("rf_daisy.dat", RealFileText(r, "  ", /*header=*/false)) +
-              " --output c3 --input c2 --na 1 --nb 1 --nk 1 --split 1 --detrend none --delimiter space");
+                      " --output c3 --input c2 --na 1 --nb 1 --nk 1 --split 1 --detrend none --delimiter space");
   ASSERT_TRUE(j.contains("theta"));
   EXPECT_NEAR(j["theta"][0].get<double>(), -0.7, 1e-6);  // a1 of A(q) = 1 + a1 q^-1
   EXPECT_NEAR(j["theta"][1].get<double>(), 0.5, 1e-6);
@@ -93,11 +94,12 @@ TEST(RealFiles, DelimiterProblemsAreOneLineErrors) {
                  "(pass --delimiter ';')");
   ExpectCliError("fit " + WriteFile("rf_decimal.csv", "t;u;y\n0;1;2\n1;2,5;3\n") + kRealFileArx,
                  "rf_decimal.csv:3: column 2 ('u'): '2,5' is not a number (the delimiter is ';': decimals take '.'");
-  ExpectCliError("fit " + WriteFile("rf_amb.csv", "t,u;y\n0,1;2\n") + kRealFileArx, "rf_amb.csv:1: cannot tell the delimiter");
+  ExpectCliError("fit " + WriteFile("rf_amb.csv", "t,u;y\n0,1;2\n") + kRealFileArx,
+                 "rf_amb.csv:1: cannot tell the delimiter");
   ExpectCliError("orders " + semi + " --output y --input u --delimiter '|'", "--delimiter", 2);
 }
 
-// --delimiter reaches the reader of compare, orders, predict, smooth and logcondens.
+// --delimiter reaches the reader of compare, orders, predict, stream, smooth and logcondens.
 TEST(RealFiles, EveryReadingCommandTakesDelimiter) {
   const RealFileRecord r = RealFileNoiseless(300, 0.7, 0.5);
   const std::string semi = WriteFile("rf_cmds.csv", RealFileText(r, ";"));
@@ -113,6 +115,10 @@ TEST(RealFiles, EveryReadingCommandTakesDelimiter) {
   ASSERT_EQ(RunCli("fit " + semi + kRealFileArx + " --save " + model).exit_code, 0);
   ExpectCliError("predict " + model + " " + semi + " --delimiter ,", "rf_cmds.csv:1: the header has one column");
   EXPECT_EQ(RunCli("predict " + model + " " + semi + " --delimiter ';' --json").exit_code, 0);
+  ExpectCliError("stream " + semi + " --output y --input u --delimiter ,", "rf_cmds.csv:1: the header has one column");
+  const CliResult st = RunCli("stream " + semi + " --output y --input u --na 1 --nb 1 --nk 1 --delimiter ';'");
+  EXPECT_EQ(st.exit_code, 0) << st.err;
+  EXPECT_EQ(std::count(st.out.begin(), st.out.end(), '\n'), 300);  // one JSON line per row
   const std::string smooth_model = WriteFile("rf_smooth.json", R"({"A": [[1]], "C": [[1]], "x0": [0],
     "process_penalty": {"type": "quadratic", "weight": 1}, "measurement_penalty": {"type": "quadratic", "weight": 1}})");
   ExpectCliError("smooth --model " + smooth_model + " " + WriteFile("rf_z.csv", "k;z\n0;1\n1;2\n") + " --delimiter ,",
@@ -157,18 +163,20 @@ TEST(RealFiles, TimeGapsAreReportedAndFilledWithMissing) {
             std::string::npos)
       << text.out;
   // No gap: an empty list; t read by the model: not checked.
-  EXPECT_EQ(RealFileFitJson(WriteFile("rf_nogap.csv", RealFileText(r, ",")) + kRealFileArx)["time_gaps"], nlohmann::json::array());
+  EXPECT_EQ(RealFileFitJson(WriteFile("rf_nogap.csv", RealFileText(r, ",")) + kRealFileArx)["time_gaps"],
+            nlohmann::json::array());
   EXPECT_TRUE(RealFileFitJson(path + " --output y --regressors t,u --split 1")["time_gaps"].is_null());
 }
 
 TEST(RealFiles, TimeThatDoesNotIncreaseIsAnError) {
-  ExpectCliError("fit " + WriteFile("rf_back.csv", "t,u,y\n0.1,1,2\n# c\n0.2,2,3\n0.3,1,2\n0.2,3,4\n0.5,1,1\n") + kRealFileArx,
-                 "rf_back.csv:6: time column 't' does not increase: 0.2 after 0.3");
+  ExpectCliError(
+      "fit " + WriteFile("rf_back.csv", "t,u,y\n0.1,1,2\n# c\n0.2,2,3\n0.3,1,2\n0.2,3,4\n0.5,1,1\n") + kRealFileArx,
+      "rf_back.csv:6: time column 't' does not increase: 0.2 after 0.3");
   ExpectCliError("fit " + WriteFile("rf_same.csv", "time,u,y\n1,1,2\n2,2,3\n2,1,2\n3,1,1\n") + kRealFileArx,
                  "rf_same.csv:4: time column 'time' does not increase: 2 after 2");
   // A gap longer than the record is not filled.
-  ExpectCliError("fit " + WriteFile("rf_long_gap.csv", "t,u,y\n0,1,2\n1,2,3\n2,1,2\n1000,1,1\n1001,2,2\n") + kRealFileArx +
-                     " --missing",
+  ExpectCliError("fit " + WriteFile("rf_long_gap.csv", "t,u,y\n0,1,2\n1,2,3\n2,1,2\n1000,1,1\n1001,2,2\n") +
+                     kRealFileArx + " --missing",
                  "rf_long_gap.csv:5: time column 't' jumps from 2 to 1000");
 }
 
@@ -184,8 +192,7 @@ TEST(RealFiles, MatFilesFitAsTheirCsv) {
     EXPECT_EQ(mat["theta"], csv["theta"]) << path;
     EXPECT_EQ(mat["time_gaps"], nlohmann::json::array()) << path;
   }
-  ExpectCliError("fit " + WriteFile("rf_bad.mat", "not a mat file") + kRealFileArx,
-                 "rf_bad.mat' as a MATLAB file");
+  ExpectCliError("fit " + WriteFile("rf_bad.mat", "not a mat file") + kRealFileArx, "rf_bad.mat' as a MATLAB file");
 }
 #endif
 

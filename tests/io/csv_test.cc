@@ -227,11 +227,9 @@ TEST(CsvReader, WideHeadersUpToTheColumnLimit) {
   }
 }
 
-
 // Delimiters: ';', tab and whitespace runs are detected from the header and the first data line.
 TEST(CsvReader, DetectsSemicolonTabAndWhitespace) {
-  for (const auto& [name, text, expected] :
-       std::vector<std::tuple<std::string, std::string, Delimiter>>{
+  for (const auto& [name, text, expected] : std::vector<std::tuple<std::string, std::string, Delimiter>>{
            {"semi.csv", "t;u;y\n0;1.5;-2\n1;2;3e1\n", Delimiter::kSemicolon},
            {"tab.tsv", "t\tu\ty\n0\t1.5\t-2\n1\t2\t3e1\n", Delimiter::kTab},
            {"spaces.dat", "  t   u  y\n  0  1.5   -2\n1 2\t3e1  \n", Delimiter::kWhitespace},
@@ -277,7 +275,8 @@ TEST(CsvReader, DelimiterErrorsAndHints) {
   ExpectDataError(WriteFile("dec.csv", "t;u;y\n0;1.5;2\n1;1,5;2\n"),
                   "dec.csv:3: column 2 ('u'): '1,5' is not a number (the delimiter is ';': decimals take '.', not "
                   "',')");
-  ExpectDataError(WriteFile("amb2.csv", "a,b;c\n1\n"), "amb2.csv:1: cannot tell the delimiter: ',' and ';' both split the header into");
+  ExpectDataError(WriteFile("amb2.csv", "a,b;c\n1\n"),
+                  "amb2.csv:1: cannot tell the delimiter: ',' and ';' both split the header into");
   ExpectDataError(WriteFile("ragged.dat", "1 2 3\n4 5\n"), "ragged.dat:2: row has 2 fields; the header has 3");
   ExpectDataError(WriteFile("long.dat", "1 2\n4 5 6 7\n"), "long.dat:2: row has 4 fields; the header has 2");
   ExpectDataError(WriteFile("long.tsv", "a\tb\n4\t5\t6\t7\n"), "long.tsv:2: row has 4 fields; the header has 2");
@@ -309,12 +308,13 @@ TEST(CsvReader, HeaderlessNumericFilesGetGeneratedNames) {
   EXPECT_EQ(m.values(0, 2), 3);
   EXPECT_EQ(ReadCsv(WriteFile("single.dat", "7\n8\n")).values(1, 0), 8);
   // A bad cell of the first line is named by its line.
-  ExpectDataError(WriteFile("first_bad.dat", "1 2 3\n1 2 x\n"), "first_bad.dat:2: column 3 ('c3'): 'x' is not a number");
+  ExpectDataError(WriteFile("first_bad.dat", "1 2 3\n1 2 x\n"),
+                  "first_bad.dat:2: column 3 ('c3'): 'x' is not a number");
 }
 
 TEST(CsvReader, CommentLinesAreSkippedAndCounted) {
-  const std::string path =
-      WriteFile("comments.csv", "# recorded 2 rows\n  # units: s, V, V\nt,u,y\n# first\n0,1,2\n\t# between\n1,3,4\n#end\n");
+  const std::string path = WriteFile(
+      "comments.csv", "# recorded 2 rows\n  # units: s, V, V\nt,u,y\n# first\n0,1,2\n\t# between\n1,3,4\n#end\n");
   const DataTable t = ReadCsv(path);
   ASSERT_EQ(t.names, (std::vector<std::string>{"t", "u", "y"}));
   ASSERT_EQ(t.num_rows(), 2);
