@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
 #include "cli/gnuplot.h"
@@ -25,6 +26,7 @@
 #include "cli/structure_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 #include "ident/workflow/compare_record.h"
 
 namespace ident::cli {
@@ -32,6 +34,7 @@ namespace {
 
 struct CompareCommandOptions {
   std::string data;
+  io::CsvOptions read;  // --delimiter
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
   std::vector<std::string> estimators{"rls,cauchy,student:3"};  // comma-separated lists, split by RunCompare
@@ -169,7 +172,7 @@ void RunCompare(CompareCommandOptions& o) {
   request.split = split;
   request.detrend = detrend;
   request.progress = isatty(STDERR_FILENO) ? std::function<void(int, int)>(ProgressBar) : ProgressLines();
-  const workflow::CompareResult result = workflow::CompareRecord(io::ReadCsv(path), path, request);
+  const workflow::CompareResult result = workflow::CompareRecord(io::ReadDataFile(path, o.read), path, request);
   const std::string name = dataset ? dataset->name : path;
   if (plot) {
     PlotCompare(*plot, result, spec);
@@ -212,6 +215,7 @@ void AddCompareCommand(CLI::App& app) {
   cmd->add_option("--plot", o->plot, "Draw the one-step fit per trial and estimator into FILE.svg or FILE.png");
   auto* json = cmd->add_flag("--json", o->json, "Print one JSON object (schema in docs/reference/cli.md)");
   cmd->add_flag("--csv", o->csv, "Print one CSV row per estimator")->excludes(json);
+  AddDelimiterOption(*cmd, o->read);
   cmd->callback([o] { RunCompare(*o); });
 }
 

@@ -10,6 +10,7 @@
 #include <fmt/ranges.h>
 
 #include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
 #include "cli/fit_plot.h"
@@ -19,6 +20,7 @@
 #include "cli/structure_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/fit_record.h"
 #include "ident/workflow/residual_analysis.h"
@@ -38,6 +40,7 @@ struct FitCommandOptions {
   int passes = 1;
   std::string detrend;
   bool missing = false;
+  io::CsvOptions csv;  // --delimiter
   bool json = false;
   std::string trace;
   std::string plot;
@@ -94,6 +97,23 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
   fmt::print("  {}\n", a.Verdict());
 }
 
+// One line: the time column's gaps, the first kShownGaps of them with their rows and times.
+void PrintTimeGaps(const workflow::TimeCheck& time, bool filled) {
+  constexpr std::size_t kShownGaps = 5;
+  long missing = 0;
+  for (const workflow::TimeGap& g : time.gaps) missing += g.missing;
+  std::string shown;
+  for (std::size_t i = 0; i < time.gaps.size() && i < kShownGaps; ++i) {
+    const workflow::TimeGap& g = time.gaps[i];
+    shown += fmt::format("{}row {} ({} -> {})", i ? ", " : "", g.row, g.t_before, g.t_after);
+  }
+  if (time.gaps.size() > kShownGaps) shown += ", ...";
+  fmt::print("time column '{}': {} gap{} (steps above {} x the median step {:.6g}; {} samples missing{}): {}\n",
+             time.column, time.gaps.size(), time.gaps.size() == 1 ? "" : "s", workflow::kTimeGapFactor,
+             time.median_step, missing,
+             filled ? ", filled as missing samples" : "; --missing fills them as missing samples", shown);
+}
+
 void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o,
                  const std::vector<std::pair<std::string, double>>& means = {}) {
   fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
@@ -110,7 +130,9 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
     fmt::print(", validation on {} (all {} rows)", r.validation_data, r.samples_validation);
   else if (o.split != 1)
     fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
-  fmt::print("\n\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
+  fmt::print("\n");
+  if (r.time && !r.time->gaps.empty()) PrintTimeGaps(*r.time, o.missing);
+  fmt::print("\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
   for (int i = 0; i < r.theta.size(); ++i)
     fmt::print("  {:<12} {:>14.6g} {:>12.4g}\n", r.parameter_names[i], r.theta(i), r.theta_std(i));
   // Least squares estimates a standard deviation; the robust and batch estimators a scale (Cauchy's
@@ -164,13 +186,23 @@ void RunFit(const FitCommandOptions& o) {
   CheckOutputPaths({{"--trace", o.trace}, {"--plot", o.plot}, {"--save", o.save}},
                    {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
-  const io::CsvOptions csv{.missing_as_nan = o.missing};
-  // Standard input, a pipe or a device is read once, into memory; a regular file is first checked by its
-  // header and length, and streamed when long.
+  const io::CsvOptions csv{.missing_as_nan = o.missing, .delimiter = o.csv.delimiter};
+  // Standard input, a pipe, a device or a .mat file is read once, into memory; a regular file is first checked by its
+  // header and length, and streamed when long. Records up to kInMemoryRows rows are read whole, for the
+  // time column's check, the residual analysis and plots; longer ones stream through the estimator in
+  // constant memory (without them).
   std::optional<io::DataTable> once;
-  if (!io::CanReadTwice(path)) once = io::ReadCsv(path, csv);
+  if (!io::CanReadTwice(path) || io::IsMatFile(path)) once = io::ReadDataFile(path, csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
+  const bool streamed = !once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
+                        workflow::CountCsvDataRows(path) > kInMemoryRows;
+  if (!streamed && !once) once = io::ReadDataFile(path, csv);
+  std::optional<workflow::TimeCheck> time;
+  if (once) {
+    time = workflow::CheckTimeColumn(*once, source->used_columns());
+    if (time && o.missing && !time->gaps.empty()) once = workflow::FillTimeGaps(*once, *time);
+  }
   workflow::FitRequest request;
   request.model = o.structure;
   request.estimator = o.estimator;
@@ -181,7 +213,7 @@ void RunFit(const FitCommandOptions& o) {
   // The record's length first: building an estimator costs O(rho^3) for large orders.
   workflow::FitOptions length_check;
   length_check.split = o.split;
-  const long estimation_rows = once ? workflow::EstimationRows(once->num_rows(), o.split)
+  const long estimation_rows = once ? workflow::CheckRecordLength(once->num_rows(), *source, length_check, path)
                                     : workflow::CheckCsvRecordLength(path, csv, *source, length_check);
   workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
   // The trace and the plot go to temporary files, renamed onto their names only after the whole fit has
@@ -201,10 +233,7 @@ void RunFit(const FitCommandOptions& o) {
     for (std::optional<OutputFile>* f : {&trace, &plot, &save})
       if (*f) (*f)->Commit();
   };
-  // Records up to kInMemoryRows rows are read whole, for the residual analysis and plots; longer ones
-  // stream through the estimator in constant memory (without the residual analysis).
-  if (!once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
-      workflow::CountCsvDataRows(path) > kInMemoryRows) {
+  if (streamed) {
     if (plan.scaled_prior) plan.UseScaledPrior(workflow::CsvEstimationMeanSquares(path, csv, *source, plan.options));
     const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
     commit_outputs();
@@ -225,11 +254,11 @@ void RunFit(const FitCommandOptions& o) {
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
   }
-  workflow::RecordFit fit =
-      workflow::FitTable(once ? std::move(*once) : io::ReadCsv(path, csv), *source, plan, kResidualLags);
+  workflow::RecordFit fit = workflow::FitTable(std::move(*once), *source, plan, kResidualLags);
+  fit.result.time = time;
   if (!o.validate.empty()) {
     const std::string validation_path = ResolveDataPath(o.validate);
-    workflow::ValidateOn(fit, io::ReadCsv(validation_path, csv), validation_path, request.model, kResidualLags);
+    workflow::ValidateOn(fit, io::ReadDataFile(validation_path, csv), validation_path, request.model, kResidualLags);
   }
   if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
   if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
@@ -261,7 +290,9 @@ void AddFitCommand(CLI::App& app) {
   fit->add_option("--detrend", o->detrend,
                   "Subtract the estimation-part means (mean) or not (none); default mean, none with --intercept")
       ->check(CLI::IsMember({"mean", "none"}));
-  fit->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");
+  fit->add_flag("--missing", o->missing,
+                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
+                "with missing samples");
   fit->add_option("--trace", o->trace, "Write one CSV row per update: t,nu,beta,pred_err,theta1..,Dy");
   fit->add_option("--plot", o->plot,
                   "Draw measured vs one-step and simulated output (validation) and the parameter trajectories "
@@ -273,6 +304,7 @@ void AddFitCommand(CLI::App& app) {
                   "Write the fitted model (structure, theta, covariance, detrending means, ...) as JSON for "
                   "ident predict");
   fit->add_flag("--json", o->json, "Print one JSON object instead of the report");
+  AddDelimiterOption(*fit, o->csv);
   auto* split_option = fit->get_option("--split");
   fit->callback([o, split_option] {
     // Without structure options a bundled record takes its suggested structure and split, as in compare.

@@ -9,10 +9,12 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "common/error.h"
 #include "ident/density/logconcave_mle.h"
 #include "ident/io/csv.h"
-#include "cli/commands.h"
+#include "ident/io/mat_file.h"
 
 namespace ident::cli {
 namespace {
@@ -20,11 +22,12 @@ namespace {
 struct LogcondensOptions {
   std::string samples;
   std::string column;
+  io::CsvOptions csv;
   bool json = false;
 };
 
 std::vector<double> ReadSamples(const LogcondensOptions& o) {
-  const io::DataTable table = io::ReadCsv(o.samples);
+  const io::DataTable table = io::ReadDataFile(o.samples, o.csv);
   int col = 0;
   if (!o.column.empty()) {
     col = table.ColumnIndex(o.column);
@@ -79,6 +82,7 @@ void AddLogcondensCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--column", o->column, "Column holding the samples");
   cmd->add_flag("--json", o->json, "Print one JSON object {knots, phi, loglik, ...}");
+  AddDelimiterOption(*cmd, o->csv);
   cmd->callback([o] { RunLogcondens(*o); });
 }
 

@@ -9,9 +9,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "cli/estimator_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/order_selection.h"
 
@@ -26,6 +28,7 @@ struct OrdersOptions {
   std::string detrend = "mean";
   int top = 20;
   bool json = false;
+  io::CsvOptions csv;
 };
 
 nlohmann::ordered_json ScoreJson(const workflow::StructureScore& s) {
@@ -52,7 +55,7 @@ void RunOrders(const OrdersOptions& o) {
   std::tie(grid.nk_min, grid.nk_max) = workflow::OrderGrid::ParseRange(o.nk, "--nk");
   IDENT_REQUIRE(grid.na_min >= 0 && grid.nb_min >= 1 && grid.nk_min >= 0,
                 "orders: need na >= 0, nb >= 1 and nk >= 0 (got --na {} --nb {} --nk {})", o.na, o.nb, o.nk);
-  io::DataTable table = io::ReadCsv(path);
+  io::DataTable table = io::ReadDataFile(path, o.csv);
   // The largest structure's source: it reads the output and the input, and splits and detrends them.
   const models::ArxStructure largest(grid.na_max, {grid.nb_max}, {grid.nk_max});
   std::unique_ptr<workflow::DataSource> source =
@@ -117,6 +120,7 @@ void AddOrdersCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--top", o->top, "Rows of the table to print")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print one JSON object {criterion, samples, best, structures: [...]}");
+  AddDelimiterOption(*cmd, o->csv);
   cmd->callback([o] { RunOrders(*o); });
 }
 

@@ -11,9 +11,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "cli/estimator_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 #include "ident/workflow/json_number.h"
 #include "ident/workflow/order_selection.h"
 #include "ident/workflow/predictions.h"
@@ -26,6 +28,7 @@ struct PredictOptions {
   std::string model, data, rows;
   int horizon = 1;
   bool simulate = false, json = false, missing = false;
+  io::CsvOptions csv;
 };
 
 // Fit % and RMS of `y_hat` against `y` over the finite pairs (workflow::Score's definition).
@@ -46,7 +49,7 @@ std::pair<double, double> FitOf(const std::vector<double>& y, const std::vector<
 void RunPredict(const PredictOptions& o) {
   const workflow::SavedModel m = workflow::SavedModel::Read(o.model);
   const std::string path = ResolveDataPath(o.data);
-  io::DataTable table = io::ReadCsv(path, {.missing_as_nan = o.missing});
+  io::DataTable table = io::ReadDataFile(path, {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
   std::unique_ptr<workflow::DataSource> source = m.model.MakeSource(table.names, path);
   IDENT_REQUIRE(source->num_parameters() == m.theta.size(), "{}: theta has {} entries; {} needs {}", o.model,
                 m.theta.size(), source->structure(), source->num_parameters());
@@ -135,6 +138,7 @@ void AddPredictCommand(CLI::App& app) {
   cmd->add_flag("--simulate", o->simulate, "Also the simulated output (the model's own past outputs)");
   cmd->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");
   cmd->add_flag("--json", o->json, "Print fit % and RMS (one_step, simulation, k_step) as JSON instead of the CSV");
+  AddDelimiterOption(*cmd, o->csv);
   cmd->callback([o] { RunPredict(*o); });
 }
 

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "common/error.h"
 #include "ident/smoothing/map_smoother.h"
 #include "ident/workflow/smoothing_model.h"
@@ -24,6 +25,7 @@ namespace {
 struct SmoothOptions {
   std::string model;
   std::string data;
+  io::CsvOptions csv;
   bool json = false;
 };
 
@@ -34,7 +36,7 @@ std::vector<std::vector<double>> Rows(const Eigen::MatrixXd& m) {  // one row pe
 }
 
 void RunSmooth(const SmoothOptions& o) {
-  const MapSmootherProblem p = workflow::ReadSmoothProblem(o.model, o.data);
+  const MapSmootherProblem p = workflow::ReadSmoothProblem(o.model, o.data, o.csv);
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   const MapSmootherResult r = SolveMapSmoother(p);
@@ -102,6 +104,7 @@ void AddSmoothCommand(CLI::App& app) {
       ->required();
   cmd->add_option("DATA", o->data, "CSV with measurement column z (or z1, z2, ...), one row per time")->required();
   cmd->add_flag("--json", o->json, "Print one JSON object {primal, dual, gap, x, iterations, ...}");
+  AddDelimiterOption(*cmd, o->csv);
   cmd->callback([o] { RunSmooth(*o); });
 }
 

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "cli/commands.h"
+#include "cli/csv_options.h"
 #include "cli/estimator_options.h"
 #include "cli/structure_options.h"
 #include "common/error.h"
@@ -29,6 +30,7 @@ struct StreamCommandOptions {
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
   bool missing = false;
+  io::CsvOptions csv;  // --delimiter
   long flush_every = 1;
 };
 
@@ -68,7 +70,8 @@ void RunStream(const StreamCommandOptions& o) {
   const std::string path = o.data == io::kStandardInput ? o.data : ResolveDataPath(o.data);
   // Every line of the rows read so far is out before the program waits for more input.
   io::CsvReader reader(io::OpenArrivingInput(path, [] { std::fflush(stdout); }),
-                       path == io::kStandardInput ? "standard input" : path, {.missing_as_nan = o.missing});
+                       path == io::kStandardInput ? "standard input" : path,
+                       {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
   const std::unique_ptr<workflow::DataSource> source = o.structure.MakeSource(reader.names(), reader.path());
   const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
   const std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
@@ -121,6 +124,7 @@ void AddStreamCommand(CLI::App& app) {
                    "Flush the output after every N lines; 0: only before waiting for more input (the output "
                    "is always flushed then)")
       ->capture_default_str();
+  AddDelimiterOption(*stream, o->csv);
   stream->callback([o] { RunStream(*o); });
 }
 

@@ -1,18 +1,31 @@
 // Reading recorded data from CSV files.
 //
-// Format: one header line of column names, comma-separated numeric rows, '.' decimal point,
-// LF, CRLF or CR line ends; blank lines before the first data row and at the end of the file are
-// ignored; a UTF-8 byte-order mark is skipped. Limits: a line holds at most kMaxCsvLineBytes bytes
-// (1 MiB) and the header at most kMaxCsvColumns names. Every problem is reported as
-// ident::DataError with one line naming the file, the line and the column:
+// Format: a header line of column names, then numeric rows with '.' decimal points; LF, CRLF or CR line
+// ends. The delimiter is ',', ';', a tab or runs of spaces/tabs (whitespace: DaISy .dat files), given as
+// CsvOptions::delimiter or detected (Delimiter::kAuto): the one of ',', ';' and tab that splits the
+// header; if several do, the one that splits the first data line into as many fields (two that fit, or
+// none, are ambiguous); if none does, whitespace when it splits the header and the first data line into
+// several fields, else ',' (one column). The first data line is read ahead only when the header does not
+// decide.
+// A first line whose cells are all numbers is data: the file has no header and its columns are named
+// c1, c2, ... (CsvReader::generated_names()). Blank lines before the first data row and at the end and
+// lines whose first non-blank byte is '#' (comments, anywhere) are skipped and counted in line numbers;
+// a UTF-8 byte-order mark is skipped. Limits: a line holds at most kMaxCsvLineBytes bytes (1 MiB) and
+// the header at most kMaxCsvColumns names. Every problem is reported as ident::DataError with one line
+// naming the file, the line and the column:
 //   cannot open 'x.csv': No such file or directory
 //   x.csv: the file is empty
 //   x.csv: no data rows after the header
 //   x.csv:1: duplicate column name 'u' (columns 2 and 3)
 //   x.csv:1: the header has 100001 columns; at most 100000 are supported
+//   x.csv:1: cannot tell the delimiter: ',' and ';' both split the header and line 2 into several fields
+//            (pass --delimiter)
+//   x.csv:1: the header has one column with the delimiter ','; the file looks ';'-separated (pass
+//            --delimiter ';')
 //   x.csv:7: line longer than 1048576 bytes
 //   x.csv:7: row has 2 fields; the header has 3
 //   x.csv:7: column 3 ('y'): 'abc' is not a number
+//   x.csv:7: column 3 ('y'): '1,5' is not a number (the delimiter is ';': decimals take '.', not ',')
 //   x.csv:7: column 3 ('y'): 'nan' is not a finite number (pass --missing to treat NaN/Inf/empty cells as
 //            missing samples)
 //   x.csv:7: column 2 ('u'): contains a NUL byte
@@ -35,6 +48,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -57,8 +71,17 @@ inline constexpr const char* kStandardInput = "-";
 // a device, which must be read once (into memory).
 bool CanReadTwice(const std::string& path);
 
+// How cells are separated: detected (kAuto), ',', ';', a tab, or runs of spaces and tabs.
+enum class Delimiter { kAuto, kComma, kSemicolon, kTab, kWhitespace };
+
+// The command-line spelling: "auto", ",", ";", "tab" or "space". Throws InvalidArgument otherwise.
+Delimiter ParseDelimiter(std::string_view text);
+// As messages and --delimiter name it: "','", "';'", "tab", "space" (kAuto: "auto").
+std::string DelimiterName(Delimiter delimiter);
+
 struct CsvOptions {
   bool missing_as_nan = false;  // store empty/NaN/Inf cells as NaN instead of rejecting them
+  Delimiter delimiter = Delimiter::kAuto;
 };
 
 // Streams a CSV file row by row (constant memory).
@@ -80,11 +103,22 @@ class CsvReader {
   // 1-based line number of the row last returned by Next().
   long line() const { return line_; }
   long rows_read() const { return rows_; }
+  // The delimiter in use (the detected one for Delimiter::kAuto).
+  Delimiter delimiter() const { return delimiter_; }
+  // True when the first line was data and the columns are named c1, c2, ...
+  bool generated_names() const { return generated_names_; }
 
  private:
   std::string path_;
   CsvOptions options_;
   void ReadHeader();
+  // Chooses delimiter_ from the header line and the first data line (`data`, null if none).
+  void ChooseDelimiter(std::string_view header, const std::string_view* data);
+  // Parses one data line into `row`; throws DataError naming line_.
+  void ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row);
+  double ParseCell(std::string_view cell, int column) const;
+  // A cell the fast path of ParseCell does not take: '+'-signed, empty, NaN/Inf or bad (throws DataError).
+  double ParseUncommonCell(std::string_view cell, int column) const;
   // Reads the next line (LF, CRLF or CR ended) into buffer_ and counts it; false at the end of the input.
   bool ReadLine();
   // Refills chunk_ from the stream; false at its end.
@@ -99,6 +133,14 @@ class CsvReader {
   long line_ = 0;
   long rows_ = 0;
   long blank_line_ = 0;  // first blank line after a data row (an error if another row follows)
+  Delimiter delimiter_ = Delimiter::kComma;
+  char separator_ = ',';  // of delimiter_; 0 for whitespace runs
+  bool generated_names_ = false;
+  // Lines read ahead while the header was read and not yet returned by Next(): the first line of a file
+  // without a header (header_, at header_line_) and the first data line (buffer_, at held_line_).
+  bool header_is_row_ = false, held_ = false;
+  std::string header_;
+  long header_line_ = 0, held_line_ = 0;
 };
 
 // A whole record in memory: values(row, column).
@@ -106,8 +148,14 @@ struct DataTable {
   std::string source;  // file name, for messages
   std::vector<std::string> names;
   Eigen::MatrixXd values;
+  bool generated_names = false;  // the file had no header: columns c1, c2, ...
+  // Where rows sit in the file: (row, line) wherever a row is not on the line after the previous row's
+  // (the first row, and rows after comments or blank lines). Empty for a table not read from text.
+  std::vector<std::pair<int, long>> row_lines;
 
   int num_rows() const { return static_cast<int>(values.rows()); }
+  // The 1-based line of a 0-based row in its file; 0 when unknown.
+  long Line(int row) const;
   // Throws DataError "<source>: no column 'q' (columns: t, u, y)".
   int ColumnIndex(std::string_view name) const;
   Eigen::VectorXd Column(std::string_view name) const { return values.col(ColumnIndex(name)); }

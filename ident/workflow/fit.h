@@ -28,6 +28,7 @@
 #include "ident/regression/outlier_decision.h"
 #include "ident/regression/regression_estimator.h"
 #include "ident/workflow/data_source.h"
+#include "ident/workflow/time_column.h"
 
 namespace ident::workflow {
 
@@ -79,6 +80,8 @@ struct FitResult {
   long cleaned = 0;                     // outputs cleaned in later regressors (--clean-regressors on)
   std::optional<LockInStatus> lock_in;  // the robust estimators' lock-in safeguard at the end of estimation
   FitScores validation;
+  // The record's time column (workflow/time_column.h); null when there is none or it was not checked.
+  std::optional<TimeCheck> time;
 };
 
 // The row range [first, first + count) of a table.
@@ -141,9 +144,12 @@ FitResult FitPrepared(const io::DataTable& prepared, Segment estimation, Segment
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                      AnyRegressionEstimator& estimator, const FitOptions& options);
 
-// Number of data rows of a CSV file: non-blank lines after the first non-blank (header) line.
+// Number of data rows of a CSV file: the lines that are neither blank nor comments, minus one (the header).
 // Reads the file in blocks without parsing numbers. Throws DataError if it cannot be read.
 long CountCsvDataRows(const std::string& path);
+
+// CheckCsvRecordLength for a record of `rows` rows in memory, named `name` in messages.
+int CheckRecordLength(long rows, const DataSource& source, const FitOptions& options, const std::string& name);
 
 // Checks from the header and the number of data rows alone (no number parsing, nothing of the model's
 // size allocated) that the split record is long enough for `source`: throws the InvalidArgument

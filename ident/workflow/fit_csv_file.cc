@@ -29,25 +29,26 @@ long CountCsvDataRows(const std::string& path) {
   std::ifstream in(path, std::ios::in | std::ios::binary);
   if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
   // A line ends at LF or CR (CRLF: an empty line between them, not counted) and counts if it has a
-  // character other than ' ' and '\t' (the reader skips the others).
+  // character other than ' ' and '\t' and the first such is not '#' (the reader skips the others: blank
+  // lines and comments).
   std::vector<char> block(1 << 16);
   long lines = 0;
-  bool content = false;
+  enum { kBlank, kContent, kComment } state = kBlank;  // of the current line so far
   while (in) {
     in.read(block.data(), static_cast<std::streamsize>(block.size()));
     const char* const end = block.data() + in.gcount();
     for (const char* p = block.data(); p < end; ++p) {
       const char c = *p;
       if (c == '\n' || c == '\r') {
-        lines += content;
-        content = false;
-      } else if (c != ' ' && c != '\t') {
-        content = true;
+        lines += state == kContent;
+        state = kBlank;
+      } else if (state == kBlank && c != ' ' && c != '\t') {
+        state = c == '#' ? kComment : kContent;
       }
     }
   }
   if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
-  lines += content;
+  lines += state == kContent;
   return lines > 0 ? lines - 1 : 0;  // minus the header
 }
 
@@ -64,7 +65,7 @@ CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataS
   io::CsvReader header(path, csv);
   CsvLayout layout;
   layout.columns = header.num_columns();
-  layout.rows = CountCsvDataRows(path);
+  layout.rows = CountCsvDataRows(path) + (header.generated_names() ? 1 : 0);  // no header: its line is a row
   if (layout.rows == 0) {
     Eigen::VectorXd row(layout.columns);
     header.Next(row);  // throws "no data rows after the header"
@@ -207,6 +208,11 @@ Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvO
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                      AnyRegressionEstimator& estimator, const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] { return StreamCsvFile(path, csv, source, estimator, options); });
+}
+
+int CheckRecordLength(long rows, const DataSource& source, const FitOptions& options, const std::string& name) {
+  IDENT_REQUIRE(rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", name, rows);
+  return Split(static_cast<int>(rows), source, options, name).first.count;
 }
 
 int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,

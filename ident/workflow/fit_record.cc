@@ -69,6 +69,17 @@ nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::st
   j["Dy"] = r.Dy;
   j["split"] = split;
   j["detrend"] = detrend;
+  if (r.time) {
+    auto& gaps = j["time_gaps"] = nlohmann::ordered_json::array();
+    for (const TimeGap& g : r.time->gaps)
+      gaps.push_back({{"row", g.row},
+                      {"t_before", g.t_before},
+                      {"t_after", g.t_after},
+                      {"missing", g.missing},
+                      {"filled", g.filled}});
+  } else {
+    j["time_gaps"] = nullptr;
+  }
   return j;
 }
 

@@ -86,7 +86,8 @@ void ValidateOn(RecordFit& fit, io::DataTable record, const std::string& name, c
 
 // The JSON object of `ident fit --json`: data, estimator, kind, passes, structure, parameter_names, theta,
 // theta_std, noise_std, fit_percent, rms, simulation_diverged_at, samples_estimation, samples_validation,
-// updates, rejected, cleaned, lock_in, nu, Dy, split, detrend, detrend_means ({column: mean}; null when
+// updates, rejected, cleaned, lock_in, nu, Dy, split, detrend, time_gaps ([{row, t_before, t_after, missing,
+// filled}]; null when no time column was checked, workflow/time_column.h), detrend_means ({column: mean}; null when
 // `means` is null, as for a streamed record), residual_analysis (null when not computed). Non-finite numbers
 // are null.
 nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,

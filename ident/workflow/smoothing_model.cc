@@ -157,7 +157,8 @@ void ParseSmoothModel(const Json& model, const std::string& source, MapSmootherP
   }
 }
 
-MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::string& data_path) {
+MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::string& data_path,
+                                     const io::CsvOptions& csv) {
   std::error_code ec;
   if (std::filesystem::is_directory(model_path, ec))
     throw DataError(fmt::format("cannot read '{}': it is a directory", model_path));
@@ -169,7 +170,7 @@ MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::s
   } catch (const Json::exception& e) {  // parse errors, and numbers beyond double (1e999)
     throw DataError(fmt::format("{}: not valid JSON ({})", model_path, e.what()));
   }
-  const io::DataTable table = io::ReadCsv(data_path);
+  const io::DataTable table = io::ReadCsv(data_path, csv);
   std::vector<int> cols;
   auto find = [&](const std::string& name) {
     auto it = std::find(table.names.begin(), table.names.end(), name);

@@ -20,6 +20,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "ident/io/csv.h"
 #include "ident/smoothing/map_smoother.h"
 
 namespace ident::workflow {
@@ -29,6 +30,7 @@ void ParseSmoothModel(const nlohmann::json& model, const std::string& source, Ma
 models::Penalty ParsePenalty(const nlohmann::json& j, int dim, const std::string& where);
 
 // Reads MODEL.json and DATA.csv into a validated problem. Throws DataError / InvalidArgument.
-MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::string& data_path);
+MapSmootherProblem ReadSmoothProblem(const std::string& model_path, const std::string& data_path,
+                                     const io::CsvOptions& csv = {});
 
 }  // namespace ident::workflow

@@ -143,6 +143,8 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
   io::DataTable table = Table(columns, std::move(values), name);
   std::unique_ptr<workflow::DataSource> source = request.model.MakeSource(table.names, name);
   const int rho = source->num_parameters();
+  // The time column is checked and its gaps reported as `ident fit` does (filled there with --missing).
+  const std::optional<workflow::TimeCheck> time = workflow::CheckTimeColumn(table, source->used_columns());
   workflow::FitPlan plan = workflow::PlanFit(request, rho, workflow::EstimationRows(table.num_rows(), request.split));
   History h;
   if (history)
@@ -163,6 +165,7 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
     py::gil_scoped_release release;
     fit = workflow::FitTable(std::move(table), *source, plan, request.residual_lags);
   }
+  fit.result.time = time;
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   py::dict out;
   const auto means = workflow::DetrendMeans(fit);

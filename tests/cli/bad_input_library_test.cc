@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <Eigen/Core>
 
@@ -169,6 +170,35 @@ TEST(StreamingFit, CountsDataRowsLikeTheReader) {
   const io::DataTable table = io::ReadCsv(path);
   ASSERT_EQ(table.num_rows(), 5);
   EXPECT_EQ(table.values(4, 1), 10);
+}
+
+// Comments and a missing header do not shift the streamed fit's rows: on the dryer record rewritten
+// headerless, ';'-separated, with comment lines, the streamed fit equals the in-memory one.
+TEST(StreamingFit, CommentsAndHeaderlessFilesCountLikeTheReader) {
+  const io::DataTable dryer = io::ReadCsv("datasets/dryer.csv");
+  std::string text = "# dryer, columns t;u;y\n";
+  for (int i = 0; i < dryer.num_rows(); ++i) {
+    text += fmt::format("{:.17g};{:.17g};{:.17g}\n", dryer.values(i, 0), dryer.values(i, 1), dryer.values(i, 2));
+    if (i % 100 == 7) text += "  # a comment\n";
+  }
+  const std::string path = ::testing::TempDir() + "/dryer_headerless.dat";
+  {
+    std::FILE* f = std::fopen(path.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  }
+  EXPECT_EQ(workflow::CountCsvDataRows(path) + 1, dryer.num_rows());  // the first row counted as a header
+  const models::ArxStructure arx(2, {2}, {3});
+  auto s1 = workflow::MakeArxSource(io::CsvReader(path).names(), "c3", {"c2"}, arx, path);
+  auto s2 = s1->Clone();
+  auto e1 = MakeRegressionEstimator({}, 4), e2 = MakeRegressionEstimator({}, 4);
+  const workflow::FitResult a = workflow::Fit(io::ReadCsv(path), *s1, *e1, {});
+  const workflow::FitResult b = workflow::FitCsvFile(path, {}, *s2, *e2, {});
+  EXPECT_EQ(a.samples_estimation, 500);
+  EXPECT_EQ(a.theta, b.theta);
+  EXPECT_EQ(a.samples_estimation, b.samples_estimation);
+  EXPECT_EQ(a.samples_validation, b.samples_validation);
 }
 
 // The record's length is checked from the row count before anything of the model's size is built;

@@ -3,6 +3,10 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <tuple>
+#include <vector>
+
 #include "common/error.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
@@ -221,6 +225,106 @@ TEST(CsvReader, WideHeadersUpToTheColumnLimit) {
     EXPECT_NE(std::string(e.what()).find(", c19, ... (100000 columns)"), std::string::npos) << e.what();
     EXPECT_LT(std::string(e.what()).size(), 300u);
   }
+}
+
+// Delimiters: ';', tab and whitespace runs are detected from the header and the first data line.
+TEST(CsvReader, DetectsSemicolonTabAndWhitespace) {
+  for (const auto& [name, text, expected] : std::vector<std::tuple<std::string, std::string, Delimiter>>{
+           {"semi.csv", "t;u;y\n0;1.5;-2\n1;2;3e1\n", Delimiter::kSemicolon},
+           {"tab.tsv", "t\tu\ty\n0\t1.5\t-2\n1\t2\t3e1\n", Delimiter::kTab},
+           {"spaces.dat", "  t   u  y\n  0  1.5   -2\n1 2\t3e1  \n", Delimiter::kWhitespace},
+           {"comma.csv", "t, u, y\n0, 1.5, -2\n1, 2, 3e1\n", Delimiter::kComma}}) {
+    CsvReader reader(WriteFile(name, text));
+    EXPECT_EQ(reader.delimiter(), expected) << name;
+    const DataTable t = ReadCsv(WriteFile(name, text));
+    ASSERT_EQ(t.names, (std::vector<std::string>{"t", "u", "y"})) << name;
+    ASSERT_EQ(t.num_rows(), 2) << name;
+    EXPECT_EQ(t.values(0, 1), 1.5) << name;
+    EXPECT_EQ(t.values(0, 2), -2) << name;
+    EXPECT_EQ(t.values(1, 2), 30) << name;
+    EXPECT_FALSE(t.generated_names);
+  }
+  // Names with spaces stay one column in a comma, ';' or tab file; a one-column file stays one column.
+  EXPECT_EQ(ReadCsv(WriteFile("sp_names.csv", "time s;u in V\n0;1\n")).names,
+            (std::vector<std::string>{"time s", "u in V"}));
+  EXPECT_EQ(ReadCsv(WriteFile("sp_tab.csv", "time s\tu\n0\t1\n")).names, (std::vector<std::string>{"time s", "u"}));
+  EXPECT_EQ(ReadCsv(WriteFile("one.csv", "my signal\n1.5\n2\n")).names, (std::vector<std::string>{"my signal"}));
+}
+
+TEST(CsvReader, GivenDelimiterIsUsed) {
+  const DataTable t = ReadCsv(WriteFile("given.csv", "a b;c\n1;2\n"), {.delimiter = Delimiter::kSemicolon});
+  EXPECT_EQ(t.names, (std::vector<std::string>{"a b", "c"}));
+  EXPECT_EQ(t.values(0, 1), 2);
+  const DataTable w = ReadCsv(WriteFile("given_ws.csv", "a b\n1 2\n"), {.delimiter = Delimiter::kWhitespace});
+  EXPECT_EQ(w.values(0, 1), 2);
+  EXPECT_EQ(ParseDelimiter("tab"), Delimiter::kTab);
+  EXPECT_EQ(ParseDelimiter("space"), Delimiter::kWhitespace);
+  EXPECT_EQ(ParseDelimiter(";"), Delimiter::kSemicolon);
+  EXPECT_EQ(ParseDelimiter(","), Delimiter::kComma);
+  EXPECT_EQ(ParseDelimiter("auto"), Delimiter::kAuto);
+  EXPECT_THROW(ParseDelimiter("|"), InvalidArgument);
+}
+
+TEST(CsvReader, DelimiterErrorsAndHints) {
+  ExpectDataError(WriteFile("amb.csv", "# two delimiters\na,b;c,d;e\n1,2;3,4;5\n"),
+                  "amb.csv:2: cannot tell the delimiter: ',' and ';' both split the header and line 3");
+  ExpectDataError(WriteFile("wrong.csv", "t;u;y\n0;1;2\n"),
+                  "wrong.csv:1: the header has one column with the delimiter ','; the file looks ';'-separated "
+                  "(pass --delimiter ';')",
+                  {.delimiter = Delimiter::kComma});
+  ExpectDataError(WriteFile("dec.csv", "t;u;y\n0;1.5;2\n1;1,5;2\n"),
+                  "dec.csv:3: column 2 ('u'): '1,5' is not a number (the delimiter is ';': decimals take '.', not "
+                  "',')");
+  ExpectDataError(WriteFile("amb2.csv", "a,b;c\n1\n"),
+                  "amb2.csv:1: cannot tell the delimiter: ',' and ';' both split the header into");
+  ExpectDataError(WriteFile("ragged.dat", "1 2 3\n4 5\n"), "ragged.dat:2: row has 2 fields; the header has 3");
+  ExpectDataError(WriteFile("long.dat", "1 2\n4 5 6 7\n"), "long.dat:2: row has 4 fields; the header has 2");
+  ExpectDataError(WriteFile("long.tsv", "a\tb\n4\t5\t6\t7\n"), "long.tsv:2: row has 4 fields; the header has 2");
+}
+
+// A first line of numbers is data: DaISy .dat files have no header; the columns are c1, c2, ...
+TEST(CsvReader, HeaderlessNumericFilesGetGeneratedNames) {
+  const std::string path = WriteFile("daisy.dat", "   1.0000000e+00  -2.5e-01   3\n   4  5.5 -6\n\n");
+  const DataTable t = ReadCsv(path);
+  EXPECT_TRUE(t.generated_names);
+  ASSERT_EQ(t.names, (std::vector<std::string>{"c1", "c2", "c3"}));
+  ASSERT_EQ(t.num_rows(), 2);
+  EXPECT_EQ(t.values(0, 0), 1);
+  EXPECT_EQ(t.values(0, 1), -0.25);
+  EXPECT_EQ(t.values(1, 2), -6);
+  EXPECT_EQ(t.Line(0), 1);
+  EXPECT_EQ(t.Line(1), 2);
+  CsvReader reader(path);
+  Eigen::VectorXd row(3);
+  ASSERT_TRUE(reader.Next(row));
+  EXPECT_EQ(reader.line(), 1);
+  ASSERT_TRUE(reader.Next(row));
+  EXPECT_EQ(reader.line(), 2);
+  EXPECT_FALSE(reader.Next(row));
+  // One line, comma-separated, with a missing cell; a single number.
+  const DataTable m = ReadCsv(WriteFile("one_row.csv", "1,,3\n"), {.missing_as_nan = true});
+  ASSERT_EQ(m.num_rows(), 1);
+  EXPECT_TRUE(std::isnan(m.values(0, 1)));
+  EXPECT_EQ(m.values(0, 2), 3);
+  EXPECT_EQ(ReadCsv(WriteFile("single.dat", "7\n8\n")).values(1, 0), 8);
+  // A bad cell of the first line is named by its line.
+  ExpectDataError(WriteFile("first_bad.dat", "1 2 3\n1 2 x\n"),
+                  "first_bad.dat:2: column 3 ('c3'): 'x' is not a number");
+}
+
+TEST(CsvReader, CommentLinesAreSkippedAndCounted) {
+  const std::string path = WriteFile(
+      "comments.csv", "# recorded 2 rows\n  # units: s, V, V\nt,u,y\n# first\n0,1,2\n\t# between\n1,3,4\n#end\n");
+  const DataTable t = ReadCsv(path);
+  ASSERT_EQ(t.names, (std::vector<std::string>{"t", "u", "y"}));
+  ASSERT_EQ(t.num_rows(), 2);
+  EXPECT_EQ(t.values(1, 1), 3);
+  EXPECT_EQ(t.Line(0), 5);
+  EXPECT_EQ(t.Line(1), 7);
+  ExpectDataError(WriteFile("comments_bad.csv", "#c\nt,u\n#c\n0,1\n#c\n1,z\n"),
+                  "comments_bad.csv:6: column 2 ('u'): 'z' is not a number");
+  ExpectDataError(WriteFile("only_comments.csv", "# nothing\n#\n"), "only_comments.csv: the file is empty");
+  ExpectDataError(WriteFile("comment_rows.csv", "t,u\n# nothing\n"), "comment_rows.csv: no data rows after the header");
 }
 
 }  // namespace

@@ -1,0 +1,106 @@
+#include "ident/workflow/time_column.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "common/error.h"
+
+namespace ident::workflow {
+
+std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::vector<int>& used_columns) {
+  int column = -1;
+  for (const char* name : {"t", "time"}) {
+    const auto it = std::find(table.names.begin(), table.names.end(), name);
+    if (it != table.names.end()) {
+      column = static_cast<int>(it - table.names.begin());
+      break;
+    }
+  }
+  if (column < 0 || std::find(used_columns.begin(), used_columns.end(), column) != used_columns.end())
+    return std::nullopt;
+  TimeCheck check;
+  check.column = table.names[static_cast<std::size_t>(column)];
+  const auto t = table.values.col(column);
+  // Steps between consecutive recorded times (rows with a NaN time passed over).
+  std::vector<double> steps;
+  steps.reserve(static_cast<std::size_t>(std::max<Eigen::Index>(t.size() - 1, 0)));
+  int previous = -1;
+  for (int i = 0; i < t.size(); ++i) {
+    if (std::isnan(t(i))) continue;
+    if (previous >= 0) {
+      if (!(t(i) > t(previous))) {
+        const long line = table.Line(i);
+        throw DataError(fmt::format("{}{}: time column '{}' does not increase: {} after {}{}", table.source,
+                                    line > 0 ? fmt::format(":{}", line) : "", check.column, t(i), t(previous),
+                                    line > 0 ? "" : fmt::format(" (row {})", i + 1)));
+      }
+      steps.push_back(t(i) - t(previous));
+    }
+    previous = i;
+  }
+  if (steps.empty()) return check;
+  std::vector<double> sorted = steps;
+  const auto middle = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), middle, sorted.end());
+  double median = *middle;
+  if (sorted.size() % 2 == 0) median = (median + *std::max_element(sorted.begin(), middle)) / 2;
+  check.median_step = median;
+  previous = -1;
+  for (int i = 0; i < t.size(); ++i) {
+    if (std::isnan(t(i))) continue;
+    if (previous >= 0 && t(i) - t(previous) > kTimeGapFactor * median) {
+      const double samples = std::round((t(i) - t(previous)) / median);
+      const long missing = samples - 1 >= static_cast<double>(std::numeric_limits<long>::max() / 2)
+                               ? std::numeric_limits<long>::max() / 2
+                               : std::max(1L, static_cast<long>(samples) - 1);
+      check.gaps.push_back({i + 1, t(previous), t(i), missing, 0});
+    }
+    previous = i;
+  }
+  return check;
+}
+
+io::DataTable FillTimeGaps(const io::DataTable& table, TimeCheck& check) {
+  if (check.gaps.empty()) return table;
+  const int column = table.ColumnIndex(check.column);
+  long inserted = 0;
+  for (const TimeGap& g : check.gaps) {
+    inserted += g.missing;
+    if (inserted > table.num_rows()) {
+      const long line = table.Line(g.row - 1);
+      throw DataError(fmt::format(
+          "{}{}: time column '{}' jumps from {} to {}: the gaps miss more samples than the record holds ({} rows); "
+          "cut the record at its gaps",
+          table.source, line > 0 ? fmt::format(":{}", line) : "", check.column, g.t_before, g.t_after,
+          table.num_rows()));
+    }
+  }
+  io::DataTable out;
+  out.source = table.source;
+  out.names = table.names;
+  out.generated_names = table.generated_names;
+  const Eigen::Index cols = table.values.cols();
+  out.values.resize(table.values.rows() + inserted, cols);
+  Eigen::Index to = 0, from = 0;
+  auto copy_until = [&](Eigen::Index end) {  // rows [from, end) of the table
+    const Eigen::Index n = end - from;
+    out.values.middleRows(to, n) = table.values.middleRows(from, n);
+    to += n;
+    from = end;
+  };
+  for (TimeGap& g : check.gaps) {
+    copy_until(g.row - 1);
+    for (long k = 1; k <= g.missing; ++k, ++to) {
+      out.values.row(to).setConstant(std::numeric_limits<double>::quiet_NaN());
+      out.values(to, column) = g.t_before + static_cast<double>(k) * check.median_step;
+    }
+    g.filled = g.missing;
+  }
+  copy_until(table.values.rows());
+  return out;
+}
+
+}  // namespace ident::workflow

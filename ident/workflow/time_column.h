@@ -1,0 +1,44 @@
+// The record's time column: a column named "t" (or else "time") that the model does not read. Its
+// values must increase; a step longer than 1.5 times the median step is a gap (samples not recorded).
+// With missing samples allowed (--missing) each gap is filled with its missing rows, NaN in every
+// column but the time column, so that no regressor straddles a gap: a regressor holding a NaN is not
+// used (workflow/fit.h), and the time axis keeps its sampling interval.
+//
+//   CheckTimeColumn   finds the column, checks it increases, lists its gaps
+//   FillTimeGaps      inserts each gap's missing rows
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ident/io/csv.h"
+
+namespace ident::workflow {
+
+struct TimeGap {
+  int row = 0;  // 1-based data row of the record that ends the gap (t_after's)
+  double t_before = 0, t_after = 0;
+  long missing = 0;  // samples missing in it: round(step / median step) - 1, at least 1
+  long filled = 0;   // rows FillTimeGaps inserted for it
+};
+
+struct TimeCheck {
+  std::string column;
+  double median_step = 0;
+  std::vector<TimeGap> gaps;
+};
+
+// A step longer than this many median steps is a gap.
+inline constexpr double kTimeGapFactor = 1.5;
+
+// Null if the table has no time column or the model reads it (`used_columns`). Rows whose time is NaN
+// (a missing sample) are passed over. Throws DataError
+// "<source>:<line>: time column 't' does not increase: 4 after 5".
+std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::vector<int>& used_columns);
+
+// Inserts each gap's missing rows (time t_before + k * median step, NaN elsewhere), setting
+// TimeGap::filled. Throws DataError when the gaps hold more missing rows than the record has rows.
+io::DataTable FillTimeGaps(const io::DataTable& table, TimeCheck& check);
+
+}  // namespace ident::workflow
