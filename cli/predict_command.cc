@@ -72,9 +72,9 @@ void RunPredict(const PredictOptions& o) {
   const workflow::SegmentPredictions p = workflow::PredictSegment(table, segment, *source, m.theta);
   std::vector<double> k_step;
   if (o.horizon > 1) {
-    IDENT_REQUIRE(!m.model.polynomial(), "--horizon {}: K-step prediction is for ARX models; {} takes --horizon 1",
-                  o.horizon, source->structure());
-    if (source->dynamic()) {
+    if (m.model.polynomial()) {
+      k_step = workflow::PredictKSteps(table, segment, *source, m.theta, o.horizon);
+    } else if (source->dynamic()) {
       std::vector<int> inputs;
       for (const auto& name : m.model.inputs) inputs.push_back(table.ColumnIndex(name));
       const std::size_t count = m.model.inputs.size();

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace ident::workflow {
 
@@ -60,6 +61,36 @@ std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, co
       own[static_cast<std::size_t>(j - (t - k + 1))] = theta.dot(z);
     }
     out[static_cast<std::size_t>(t - first)] = own[static_cast<std::size_t>(k - 1)];
+  }
+  return out;
+}
+
+std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, const DataSource& source,
+                                  const Eigen::VectorXd& theta, int k) {
+  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  const int first = segment.first, end = segment.first + segment.count;
+  std::vector<double> out(static_cast<std::size_t>(segment.count), kNone);
+  std::unique_ptr<DataSource> measured = source.Clone();  // has taken the measured outputs up to t−k
+  measured->Reset();
+  measured->SetEstimate(theta);
+  const int t0 = measured->first_regression_index(), output = measured->output_column();
+  Eigen::VectorXd z(measured->num_parameters());
+  Eigen::VectorXd row(data.values.cols());
+  int taken = first;  // rows the measured source has taken
+  for (int t = first; t < end; ++t) {
+    for (; taken <= t - k; ++taken) {
+      row = data.values.row(taken).transpose();
+      measured->Regressor(row, z);
+      measured->PushOutput(row(output));
+    }
+    std::unique_ptr<DataSource> ahead = measured->Clone();
+    double y_hat = kNone;
+    for (int j = taken; j <= t; ++j) {
+      row = data.values.row(j).transpose();
+      y_hat = ahead->Regressor(row, z) ? theta.dot(z) : kNone;
+      ahead->PushOutput(std::isfinite(y_hat) ? y_hat : j - first < t0 ? row(output) : kNone);
+    }
+    out[static_cast<std::size_t>(t - first)] = y_hat;
   }
   return out;
 }

@@ -32,4 +32,11 @@ std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, co
                                   int output_column, const std::vector<int>& input_columns,
                                   const Eigen::VectorXd& theta, int k);
 
+// The same for any model whose regressors a DataSource forms (ARMAX, OE, Box–Jenkins and ARX): for each t,
+// a copy of the source that has taken the measured outputs up to t−k takes its own predictions after t−k,
+// so the noise model's future innovations are zero — the k-step predictor of the polynomial model (Ljung
+// 1999, §3.2, eq. (3.31)). O(k·ρ) per row plus one copy of the source's state. `source` is Reset() first.
+std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, const DataSource& source,
+                                  const Eigen::VectorXd& theta, int k);
+
 }  // namespace ident::workflow

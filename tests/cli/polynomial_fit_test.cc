@@ -16,6 +16,7 @@
 #include "ident/workflow/model_spec.h"
 #include "ident/workflow/saved_model.h"
 #include "tests/support/cli.h"
+#include "tests/support/test_data.h"
 
 namespace ident::testing {
 namespace {
@@ -184,7 +185,58 @@ TEST(PolynomialFit, SavedModelsReproduceTheFitThroughPredict) {
   EXPECT_EQ(saved["structure"]["kind"], "bj");
   EXPECT_EQ(saved["structure_name"], "BJ(2,1,1,2,3)");
   EXPECT_EQ(saved["parameter_names"], (std::vector<std::string>{"b1", "b2", "c1", "d1", "f1", "f2"}));
-  ExpectCliError("predict " + dir + "/model.json dryer --horizon 2", "K-step prediction is for ARX models");
+}
+
+// K-step prediction of an ARMAX model: the difference equation A y = B u + C e run forward from t−k with the
+// measured outputs and residuals ε up to t−k and zero innovations after it (Ljung 1999, §3.2), written out
+// here; ε(s) = y(s) − ŷ(s|s−1), zero before the segment's first regression row. For every model, a horizon
+// beyond the segment is the simulation, and an output-error model predicts its simulation at every horizon.
+TEST(PolynomialFit, KStepPredictionsRunTheNoiseModelWithZeroFutureInnovations) {
+  const std::string dir = TempDir(), model = dir + "/armax.json";
+  ASSERT_EQ(RunCli("fit dryer --output y --input u --na 2 --nb 2 --nk 3 --nc 1 --save " + model).exit_code, 0);
+  const workflow::SavedModel m = workflow::SavedModel::Read(model);
+  const int k = 3, first = 600, count = 100, t0 = 4;  // t0 = max(na, nb + nk − 1, nc)
+  const CliResult r = RunCli(fmt::format("predict {} dryer --rows 601:700 --horizon {}", model, k));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::DataTable out = io::ParseCsv(r.out, "predict", {.missing_as_nan = true});
+  ASSERT_EQ(out.names, (std::vector<std::string>{"row", "y", "one_step", "residual", "k3_step"}));
+  const io::DataTable data = io::ReadCsv(DatasetPath("dryer.csv"));
+  double my = 0, mu = 0;
+  for (const auto& [name, mean] : m.detrend_means) (name == "y" ? my : mu) = mean;
+  auto y = [&](int i) { return data.values(first + i, 2) - my; };
+  auto u = [&](int i) { return data.values(first + i, 1) - mu; };
+  const Eigen::VectorXd& th = m.theta;  // a1 a2 b1 b2 c1
+  auto step = [&](int i, double y1, double y2, double e1) {
+    return -th(0) * y1 - th(1) * y2 + th(2) * u(i - 3) + th(3) * u(i - 4) + th(4) * e1;
+  };
+  std::vector<double> eps(count, 0.0);
+  for (int i = t0; i < count; ++i) {
+    const double one = step(i, y(i - 1), y(i - 2), eps[i - 1]);
+    eps[i] = y(i) - one;
+    EXPECT_NEAR(out.values(i, 2), one + my, 1e-10) << i;
+  }
+  int checked = 0;
+  for (int i = t0 + k - 1; i < count; ++i, ++checked) {
+    std::vector<double> yy(count), ee(count);
+    for (int s = 0; s <= i - k; ++s) yy[s] = y(s), ee[s] = eps[s];
+    for (int j = i - k + 1; j <= i; ++j) yy[j] = step(j, yy[j - 1], yy[j - 2], ee[j - 1]), ee[j] = 0;
+    EXPECT_NEAR(out.values(i, 4), yy[i] + my, 1e-10) << i;
+  }
+  EXPECT_EQ(checked, count - t0 - k + 1);
+  for (const std::string& structure : {std::string("--nc 1"), std::string("--nf 2"), std::string("--nc 1 --nd 1 --nf 2")}) {
+    const std::string saved = dir + "/model.json";
+    ASSERT_EQ(RunCli("fit dryer " + structure + " --save " + saved).exit_code, 0) << structure;
+    const io::DataTable far = io::ParseCsv(RunCli("predict " + saved + " dryer --rows 601:700 --horizon 1000 --simulate").out,
+                                           "predict", {.missing_as_nan = true});
+    const io::DataTable two = io::ParseCsv(RunCli("predict " + saved + " dryer --rows 601:700 --horizon 2 --simulate").out,
+                                           "predict", {.missing_as_nan = true});
+    ASSERT_EQ(far.num_rows(), count) << structure;
+    for (int i = 0; i < count; ++i) {
+      if (std::isnan(far.values(i, 5))) continue;
+      EXPECT_NEAR(far.values(i, 4), far.values(i, 5), 1e-9) << structure << " " << i;
+      if (structure == "--nf 2") EXPECT_NEAR(two.values(i, 4), two.values(i, 5), 1e-9) << i;
+    }
+  }
 }
 
 // An OE model with an unstable F (a root at 3) predicts by simulating: both diverge and neither has a fit %.
