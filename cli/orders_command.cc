@@ -16,6 +16,7 @@
 #include "ident/io/mat_file.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/order_selection.h"
+#include "ident/workflow/polynomial_order_selection.h"
 
 namespace ident::cli {
 namespace {
@@ -23,6 +24,9 @@ namespace {
 struct OrdersOptions {
   std::string data, output, input;
   std::string na = "1:5", nb = "1:5", nk = "1:5";
+  std::string nc = "0", nd = "0", nf = "0";  // ARMAX/OE/BJ ranges
+  std::string recursion = "rplr";
+  int passes = 3;
   std::string criterion = "aic";
   double split = 0.5;
   std::string detrend = "mean";
@@ -36,6 +40,9 @@ nlohmann::ordered_json ScoreJson(const workflow::StructureScore& s) {
   j["na"] = s.na;
   j["nb"] = s.nb;
   j["nk"] = s.nk;
+  j["nc"] = s.nc;
+  j["nd"] = s.nd;
+  j["nf"] = s.nf;
   j["n_parameters"] = s.n_parameters;
   j["loss"] = s.loss;
   j["aic"] = s.aic;
@@ -55,6 +62,12 @@ void RunOrders(const OrdersOptions& o) {
   std::tie(grid.nk_min, grid.nk_max) = workflow::OrderGrid::ParseRange(o.nk, "--nk");
   IDENT_REQUIRE(grid.na_min >= 0 && grid.nb_min >= 1 && grid.nk_min >= 0,
                 "orders: need na >= 0, nb >= 1 and nk >= 0 (got --na {} --nb {} --nk {})", o.na, o.nb, o.nk);
+  workflow::PolynomialOrderGrid polynomial{grid};
+  std::tie(polynomial.nc_min, polynomial.nc_max) = workflow::OrderGrid::ParseRange(o.nc, "--nc");
+  std::tie(polynomial.nd_min, polynomial.nd_max) = workflow::OrderGrid::ParseRange(o.nd, "--nd");
+  std::tie(polynomial.nf_min, polynomial.nf_max) = workflow::OrderGrid::ParseRange(o.nf, "--nf");
+  const bool with_noise_model = polynomial.nc_max > 0 || polynomial.nd_max > 0 || polynomial.nf_max > 0;
+  IDENT_REQUIRE(o.passes >= 1 && o.passes <= 100, "--passes {}; need 1..100", o.passes);
   io::DataTable table = io::ReadDataFile(path, o.csv);
   // The largest structure's source: it reads the output and the input, and splits and detrends them.
   const models::ArxStructure largest(grid.na_max, {grid.nb_max}, {grid.nk_max});
@@ -64,9 +77,20 @@ void RunOrders(const OrdersOptions& o) {
   options.split = o.split;
   options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
   const auto [estimation, validation] = workflow::PrepareData(table, *source, options);
-  const workflow::OrderSelection r =
-      workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
-                             table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion);
+  workflow::OrderSelection r;
+  if (with_noise_model) {
+    workflow::FitRequest request;
+    request.model.output = o.output;
+    request.model.inputs = {o.input};
+    request.model.recursion = o.recursion;
+    request.split = o.split;
+    request.passes = o.passes;
+    request.detrend = o.detrend;
+    r = workflow::SelectPolynomialOrders(io::ReadDataFile(path, o.csv), path, polynomial, request, o.criterion);
+  } else {
+    r = workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
+                               table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion);
+  }
   if (o.json) {
     nlohmann::ordered_json j;
     j["data"] = path;
@@ -79,23 +103,35 @@ void RunOrders(const OrdersOptions& o) {
     std::cout << j.dump(2) << "\n";
     return;
   }
-  fmt::print("{}: {} ARX structures (na {}, nb {}, nk {}) fitted by least squares on the same {} samples{}\n", path,
-             r.structures.size(), o.na, o.nb, o.nk, r.samples,
-             r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
+  if (with_noise_model)
+    fmt::print("{}: {} structures (na {}, nb {}, nk {}, nc {}, nd {}, nf {}) fitted by {} in {} passes, scored on the same "
+               "{} samples{}\n",
+               path, r.structures.size(), o.na, o.nb, o.nk, o.nc, o.nd, o.nf, o.recursion, o.passes, r.samples,
+               r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
+  else
+    fmt::print("{}: {} ARX structures (na {}, nb {}, nk {}) fitted by least squares on the same {} samples{}\n", path,
+               r.structures.size(), o.na, o.nb, o.nk, r.samples,
+               r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
   fmt::print("ranked by {} (lower is better)\n\n", r.criterion);
-  fmt::print("  {:>3} {:>3} {:>3} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk", "d", "loss", "AIC",
-             "BIC", "FPE", "MDL", r.validation_samples ? fmt::format(" {:>12}", "validation") : "");
+  fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk",
+             with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", "nc", "nd", "nf") : "", "d", "loss", "AIC", "BIC", "FPE",
+             "MDL", r.validation_samples ? fmt::format(" {:>12}", "validation") : "");
   const std::size_t shown = std::min<std::size_t>(r.structures.size(), static_cast<std::size_t>(std::max(1, o.top)));
   for (std::size_t i = 0; i < shown; ++i) {
     const auto& s = r.structures[i];
-    fmt::print("  {:>3} {:>3} {:>3} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g}{}\n", s.na, s.nb, s.nk,
-               s.n_parameters, s.loss, s.aic, s.bic, s.fpe, s.mdl,
+    fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g}{}\n", s.na, s.nb, s.nk,
+               with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", s.nc, s.nd, s.nf) : "", s.n_parameters, s.loss,
+               s.aic, s.bic, s.fpe, s.mdl,
                s.validation_loss ? fmt::format(" {:>12.6g}", *s.validation_loss) : "");
   }
   if (shown < r.structures.size()) fmt::print("  … {} more (--top, --json)\n", r.structures.size() - shown);
   const auto& best = r.structures.front();
-  fmt::print("\nbest by {}: ARX({},{},{})  (ident fit {} --output {} --input {} --na {} --nb {} --nk {})\n",
-             r.criterion, best.na, best.nb, best.nk, o.data, o.output, o.input, best.na, best.nb, best.nk);
+  if (with_noise_model)
+    fmt::print("\nbest by {}: ident fit {} --output {} --input {} --na {} --nb {} --nk {} --nc {} --nd {} --nf {}\n",
+               r.criterion, o.data, o.output, o.input, best.na, best.nb, best.nk, best.nc, best.nd, best.nf);
+  else
+    fmt::print("\nbest by {}: ARX({},{},{})  (ident fit {} --output {} --input {} --na {} --nb {} --nk {})\n",
+               r.criterion, best.na, best.nb, best.nk, o.data, o.output, o.input, best.na, best.nb, best.nk);
 }
 
 }  // namespace
@@ -110,6 +146,17 @@ void AddOrdersCommand(CLI::App& app) {
   cmd->add_option("--na", o->na, "Range of na, A:B or N")->capture_default_str();
   cmd->add_option("--nb", o->nb, "Range of nb (>= 1), A:B or N")->capture_default_str();
   cmd->add_option("--nk", o->nk, "Range of the delay nk, A:B or N")->capture_default_str();
+  cmd->add_option("--nc", o->nc, "Range of the ARMAX/BJ noise numerator order nc, A:B or N (0: ARX)")
+      ->capture_default_str();
+  cmd->add_option("--nd", o->nd, "Range of the Box-Jenkins noise denominator order nd (with nf >= 1)")
+      ->capture_default_str();
+  cmd->add_option("--nf", o->nf, "Range of the output-error/BJ denominator order nf (structures with nf > 0 have na = 0)")
+      ->capture_default_str();
+  cmd->add_option("--recursion", o->recursion, "ARMAX/OE/BJ grids: rplr or rpem")
+      ->check(CLI::IsMember({"rplr", "rpem"}))
+      ->capture_default_str();
+  cmd->add_option("--passes", o->passes, "ARMAX/OE/BJ grids: passes of the recursion per structure")
+      ->capture_default_str();
   cmd->add_option("--criterion", o->criterion, "Rank by aic, bic, fpe, mdl or validation (loss on the validation part)")
       ->check(CLI::IsMember({"aic", "bic", "fpe", "mdl", "validation"}))
       ->capture_default_str();

@@ -33,6 +33,7 @@ struct OrderGrid {
 
 struct StructureScore {
   int na = 0, nb = 0, nk = 0;
+  int nc = 0, nd = 0, nf = 0;  // ARMAX/OE/BJ (ident/workflow/polynomial_order_selection.h); 0 for ARX
   int n_parameters = 0;
   double loss = 0;  // mean square of the one-step residuals over the estimation samples
   double aic = 0, bic = 0, fpe = 0, mdl = 0;

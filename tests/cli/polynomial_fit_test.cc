@@ -14,6 +14,7 @@
 #include "ident/regression/estimator_registry.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/model_spec.h"
+#include "ident/workflow/polynomial_order_selection.h"
 #include "ident/workflow/saved_model.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
@@ -276,6 +277,60 @@ TEST(PolynomialFit, OutputErrorBeatsArxOfTheSameOrderInSimulationOnTheExchanger)
   const nlohmann::json oe = JsonOf("fit exchanger --output y --input u --nb 2 --nf 2 --nk 1 --split 0.5 --passes 5 --recursion rpem --json");
   EXPECT_EQ(oe["structure"], "OE(2,2,1)");
   EXPECT_GE(oe["fit_percent"]["simulation"].get<double>(), best_arx + 10) << "best ARX " << best_arx;
+}
+
+// Order selection over ARMAX/OE structures: on 10⁴ samples of the simulated ARMAX(2,2,2,1) system BIC ranks the
+// true structure first among na 1..3, nc 0..3, and on the OE(2,2,1) system the true nf = 2 without noise model
+// first among nf 1..3, nc 0..1 (the noise is white there).
+TEST(PolynomialOrders, BicFindsTheSimulatedStructure) {
+  workflow::FitRequest request;
+  request.model.output = "y";
+  request.model.inputs = {"u"};
+  request.split = 1;
+  request.passes = 3;
+  request.detrend = "none";
+  workflow::PolynomialOrderGrid armax;
+  armax.arx = {1, 3, 2, 2, 1, 1};
+  armax.nc_min = 0, armax.nc_max = 3;
+  const workflow::OrderSelection a = workflow::SelectPolynomialOrders(Simulate(true, 3).table, "armax", armax, request, "bic");
+  ASSERT_EQ(a.structures.size(), 12u);
+  EXPECT_EQ(a.structures[0].na, 2);
+  EXPECT_EQ(a.structures[0].nc, 2);
+  EXPECT_NEAR(a.structures[0].loss, kNoise * kNoise, 0.05 * kNoise * kNoise);  // the innovations' variance
+  workflow::PolynomialOrderGrid oe;
+  oe.arx = {0, 0, 2, 2, 1, 1};
+  oe.nf_min = 1, oe.nf_max = 3;
+  oe.nc_max = 1;
+  const workflow::OrderSelection o = workflow::SelectPolynomialOrders(Simulate(false, 4).table, "oe", oe, request, "bic");
+  ASSERT_EQ(o.structures.size(), 6u);
+  EXPECT_EQ(o.structures[0].nf, 2);
+  EXPECT_EQ(o.structures[0].nc, 0);
+}
+
+// The loss `ident orders` reports for an ARMAX structure is the mean square of the one-step residuals that
+// `ident predict` gives for the same structure fitted with the same passes, over the rows every structure of
+// the grid is scored on (from row T0 + 1 = 5 of the estimation part: ARX(2,2,3) needs 4 rows of history).
+TEST(PolynomialOrders, LossIsTheMeanSquareOfThePredictedResiduals) {
+  const nlohmann::json j =
+      JsonOf("orders dryer --output y --input u --na 1:2 --nb 2 --nk 3 --nc 0:1 --passes 2 --split 0.5 --json");
+  ASSERT_EQ(j["structures"].size(), 4u);
+  const std::string model = TempDir() + "/orders_armax.json";
+  ASSERT_EQ(RunCli("fit dryer --output y --input u --na 2 --nb 2 --nk 3 --nc 1 --passes 2 --save " + model).exit_code, 0);
+  const io::DataTable p =
+      io::ParseCsv(RunCli("predict " + model + " dryer --rows 1:500").out, "predict", {.missing_as_nan = true});
+  double sum = 0;
+  int n = 0;
+  for (int i = 4; i < p.num_rows(); ++i) sum += p.values(i, 3) * p.values(i, 3), ++n;
+  bool found = false;
+  for (const auto& s : j["structures"])
+    if (s["na"] == 2 && s["nc"] == 1) {
+      found = true;
+      EXPECT_NEAR(s["loss"].get<double>(), sum / n, 1e-12 * sum / n);
+      EXPECT_EQ(s["nd"], 0);
+      EXPECT_EQ(s["nf"], 0);
+    }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(j["samples"], n);
 }
 
 }  // namespace
