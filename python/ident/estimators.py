@@ -21,20 +21,21 @@ class Cauchy(Estimator):
     ``exact=True`` runs the paper's recursion without the safeguards."""
 
     def __init__(self, n, forgetting=1.0, *, stabilised=False, delta=None, nu0=None, V0=None, exact=False,
-                 lock_in_window=None, lock_in_threshold=None, lock_in_restart=True):
+                 lock_in_window=None, lock_in_threshold=None, lock_in_restart=True, history_limit=None):
         super().__init__("cauchy", n, forgetting=forgetting, stabilised=stabilised, delta=delta, nu0=nu0, V0=V0,
                          exact=exact, lock_in_window=lock_in_window, lock_in_threshold=lock_in_threshold,
-                         lock_in_restart=lock_in_restart)
+                         lock_in_restart=lock_in_restart, history_limit=history_limit)
 
 
 class Student(Estimator):
     """The Kárný–Hangos recursive estimator for Student-t noise with ``dof`` degrees of freedom."""
 
     def __init__(self, n, dof, forgetting=1.0, *, stabilised=False, delta=None, nu0=None, V0=None, exact=False,
-                 lock_in_window=None, lock_in_threshold=None, lock_in_restart=True):
+                 lock_in_window=None, lock_in_threshold=None, lock_in_restart=True, history_limit=None):
         super().__init__("student", n, dof=float(dof), forgetting=forgetting, stabilised=stabilised, delta=delta,
                          nu0=nu0, V0=V0, exact=exact, lock_in_window=lock_in_window,
-                         lock_in_threshold=lock_in_threshold, lock_in_restart=lock_in_restart)
+                         lock_in_threshold=lock_in_threshold, lock_in_restart=lock_in_restart,
+                         history_limit=history_limit)
 
 
 class Huber(Estimator):

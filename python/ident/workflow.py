@@ -145,7 +145,7 @@ def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rl
     split. ``estimator``: "rls", "cauchy", "student:3", "huber", "cauchy-ml". ``split``: fraction of rows
     that estimate (the rest validate; 1 = all rows do both). Further options as the command line's, in
     snake case: dof, delta, forgetting, stabilised, nu0, vy0, vz0, prior (a JSON file), exact,
-    lock_in_window, lock_in_threshold, lock_in_restart, clean_regressors (bool), clean_clip, clean_gross,
+    lock_in_window, lock_in_threshold, lock_in_restart, history_limit, clean_regressors (bool), clean_clip, clean_gross,
     clean_below. ``history=True`` keeps every update's weight, ν, θ̂ and its standard errors (for plot()).
     ``residual_lags``: lags of the residual analysis of the validation part (0: none, residual_analysis None).
     """

@@ -161,7 +161,7 @@ py::object LockInDict(const std::optional<LockInStatus>& status) {
 workflow::EstimatorSpec SpecFrom(std::optional<double> dof, std::optional<int> delta, double forgetting,
                                  bool stabilised, std::optional<double> nu0, std::optional<Eigen::MatrixXd> V0,
                                  bool exact, std::optional<int> lock_in_window, std::optional<double> lock_in_threshold,
-                                 bool lock_in_restart) {
+                                 bool lock_in_restart, std::optional<long> history_limit) {
   workflow::EstimatorSpec spec;
   spec.dof = dof;
   spec.delta = delta;
@@ -179,6 +179,7 @@ workflow::EstimatorSpec SpecFrom(std::optional<double> dof, std::optional<int> d
   spec.lock_in_window = lock_in_window;
   spec.lock_in_threshold = lock_in_threshold;
   spec.no_lock_in_restart = !lock_in_restart;
+  spec.history_limit = history_limit;
   return spec;
 }
 
@@ -191,15 +192,17 @@ void RegisterRegression(py::module_& m) {
       .def(py::init([](const std::string& name, int n, std::optional<double> dof, std::optional<int> delta,
                        double forgetting, bool stabilised, std::optional<double> nu0, std::optional<Eigen::MatrixXd> V0,
                        bool exact, std::optional<int> lock_in_window, std::optional<double> lock_in_threshold,
-                       bool lock_in_restart) {
+                       bool lock_in_restart, std::optional<long> history_limit) {
              return std::make_unique<Estimator>(name, n,
                                                 SpecFrom(dof, delta, forgetting, stabilised, nu0, std::move(V0), exact,
-                                                         lock_in_window, lock_in_threshold, lock_in_restart));
+                                                         lock_in_window, lock_in_threshold, lock_in_restart,
+                                                         history_limit));
            }),
            py::arg("name"), py::arg("n"), py::kw_only(), py::arg("dof") = py::none(), py::arg("delta") = py::none(),
            py::arg("forgetting") = 1.0, py::arg("stabilised") = false, py::arg("nu0") = py::none(),
            py::arg("V0") = py::none(), py::arg("exact") = false, py::arg("lock_in_window") = py::none(),
-           py::arg("lock_in_threshold") = py::none(), py::arg("lock_in_restart") = true)
+           py::arg("lock_in_threshold") = py::none(), py::arg("lock_in_restart") = true,
+           py::arg("history_limit") = py::none())
       .def("update", &Estimator::Update, py::arg("y"), py::arg("z"),
            "One sample: output y, regressor z (n entries). Returns a StepReport; a NaN sample is rejected, not "
            "raised")

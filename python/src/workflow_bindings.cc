@@ -110,6 +110,8 @@ Options ReadOptions(const py::dict& kw) {
       e.lock_in_threshold = value.cast<double>();
     else if (key == "lock_in_restart")
       e.no_lock_in_restart = !value.cast<bool>();
+    else if (key == "history_limit")
+      e.history_limit = value.cast<long>();
     else
       throw InvalidArgument("unknown option '" + key + "'");
   }

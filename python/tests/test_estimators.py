@@ -131,6 +131,8 @@ def test_bad_input_raises_value_error_with_the_library_message():
         ident.RLS(0)
     with pytest.raises(ValueError, match="lock-in"):
         ident.Estimator("rls", 2, lock_in_window=50)
+    with pytest.raises(ValueError, match="history_limit = 5; need 0"):
+        ident.Cauchy(2, history_limit=5)
 
 
 def test_numpy_arrays_of_other_layouts_are_accepted():
