@@ -10,6 +10,7 @@
 
 #include "cli/commands.h"
 #include "cli/estimator_options.h"
+#include "cli/progress.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/data_source.h"
@@ -61,9 +62,11 @@ void RunOrders(const OrdersOptions& o) {
   options.split = o.split;
   options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
   const auto [estimation, validation] = workflow::PrepareData(table, *source, options);
-  const workflow::OrderSelection r =
-      workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
-                             table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion);
+  Progress progress("orders");  // on stderr after 2 s: the rows, then the structures
+  const workflow::OrderSelection r = workflow::SelectOrders(
+      table, estimation, o.split < 1 ? validation : workflow::Segment{}, table.ColumnIndex(o.output),
+      table.ColumnIndex(o.input), grid, o.criterion,
+      [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
   if (o.json) {
     nlohmann::ordered_json j;
     j["data"] = path;

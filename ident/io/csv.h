@@ -106,8 +106,12 @@ struct DataTable {
   std::string source;  // file name, for messages
   std::vector<std::string> names;
   Eigen::MatrixXd values;
+  // 0-based rows at which a further experiment starts (ascending, each in (0, rows)): the walkers of
+  // ident/workflow restart the regressor history there, so no regressor straddles two experiments.
+  std::vector<int> experiment_starts;
 
   int num_rows() const { return static_cast<int>(values.rows()); }
+  bool StartsExperiment(int row) const;
   // Throws DataError "<source>: no column 'q' (columns: t, u, y)".
   int ColumnIndex(std::string_view name) const;
   Eigen::VectorXd Column(std::string_view name) const { return values.col(ColumnIndex(name)); }

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <optional>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -49,9 +50,12 @@ struct OrderSelection {
 
 // "aic", "bic", "fpe", "mdl" or "validation" (needs split < 1). `output` and `input` are column indices of
 // the prepared (split and detrended) table. Throws InvalidArgument for a bad grid or criterion, too few
-// samples, or regressors that do not determine a structure (a singular block).
-OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, Segment validation, int output,
-                            int input, const OrderGrid& grid, const std::string& criterion);
+// samples, or regressors that do not determine a structure (a singular block). `progress`, if set, is told
+// (done, total, unit) as the rows ("rows") and then the structures ("structures") are worked through.
+OrderSelection SelectOrders(
+    const io::DataTable& prepared, Segment estimation, Segment validation, int output, int input,
+    const OrderGrid& grid, const std::string& criterion,
+    const std::function<void(long done, long total, const char* unit)>& progress = {});
 
 // The value of `criterion` for one structure (lower is better).
 double CriterionValue(const StructureScore& s, const std::string& criterion);
