@@ -127,7 +127,7 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
 
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags) {
   RecordFit fit;
-  fit.experiments = WholeRecord(table, table.source);
+  fit.experiments = WholeRecord(table, "1");
   for (std::size_t i = 0; i < table.experiment_starts.size(); ++i) {
     const int start = table.experiment_starts[i];
     fit.experiments.back().count = start - fit.experiments.back().first;

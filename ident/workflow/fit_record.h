@@ -61,8 +61,8 @@ struct RecordFit {
   io::DataTable prepared;  // the split and detrended table
   Segment estimation, validation;
   std::vector<std::pair<std::string, double>> detrend_means;  // (column, mean subtracted); empty: none
-  // The experiments of the table (ident/workflow/experiments.h): the table's name for one, "1", "2", …
-  // from its experiment_starts for several (callers that know better names set them).
+  // The experiments of the table (ident/workflow/experiments.h), named "1", "2", … from its
+  // experiment_starts (callers that know better names set them).
   std::vector<Experiment> experiments;
   // When residual_lags > 0 and the validation part has more than residual_lags + 1 samples.
   std::optional<ResidualAnalysis> residuals;
