@@ -82,8 +82,9 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
     return std::make_pair(r[k], static_cast<int>(k) + first_lag);
   };
   if (!a.applies) {
-    fmt::print("\n  residual analysis: no correlation tests over lags (a static regression's rows need not be a time "
-               "series)\n");
+    fmt::print(
+        "\n  residual analysis: no correlation tests over lags (a static regression's rows need not be a time "
+        "series)\n");
     return;
   }
   const int lags = static_cast<int>(a.autocorrelation.size());

@@ -13,13 +13,13 @@
 
 #include <fmt/format.h>
 
-#include "common/error.h"
-#include "studies/mems/mems_study.h"
 #include "cli/commands.h"
 #include "cli/gnuplot.h"
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
 #include "cli/progress.h"
+#include "common/error.h"
+#include "studies/mems/mems_study.h"
 
 namespace ident::cli {
 namespace {

@@ -26,8 +26,9 @@ void Progress::Report(long done, long total, const char* unit, int pass) {
   if (tenth <= reported_) return;
   reported_ = tenth;
   if (std::chrono::steady_clock::now() - start_ < std::chrono::seconds(2)) return;
-  const std::string line = fmt::format("ident {}: {}{} % ({} of {} {})", command_,
-                                       pass > 0 ? fmt::format("pass {}: ", pass) : "", 10 * tenth, done, total, unit);
+  const long percent = total > 0 ? 100 * done / total : 100;
+  const std::string stage = pass > 0 ? fmt::format("pass {}: ", pass) : "";
+  const std::string line = fmt::format("ident {}: {}{} % ({} of {} {})", command_, stage, percent, done, total, unit);
   if (terminal_) {
     fmt::print(stderr, "\r{:<72}{}", line, tenth == 10 ? "\n" : "");
     open_line_ = tenth < 10;

@@ -21,8 +21,8 @@ std::vector<Experiment> LabelExperiments(io::DataTable& table, const std::string
   for (int r = 0; r < table.num_rows(); ++r) {
     const double label = table.values(r, c);
     if (std::isnan(label))
-      throw DataError(fmt::format("{}: data row {}: the experiment column '{}' is missing", table.source, r + 1,
-                                  column));
+      throw DataError(
+          fmt::format("{}: data row {}: the experiment column '{}' is missing", table.source, r + 1, column));
     if (r == 0 || label != table.values(r - 1, c)) {
       if (r > 0) table.experiment_starts.push_back(r);
       experiments.push_back({.name = fmt::format("{:g}", label), .first = r, .count = 0});

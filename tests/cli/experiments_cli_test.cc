@@ -6,8 +6,8 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
-#include <nlohmann/json.hpp>
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
 #include "tests/support/cli.h"
 
@@ -70,7 +70,8 @@ nlohmann::json ExperimentsFitJson(const std::string& args) {
   return nlohmann::json::parse(r.out);
 }
 
-const std::string kExperimentsArx = " --output y --input u --na 2 --nb 2 --nk 1 --estimator rls --split 1 --detrend none";
+const std::string kExperimentsArx =
+    " --output y --input u --na 2 --nb 2 --nk 1 --estimator rls --split 1 --detrend none";
 
 class Experiments : public ::testing::Test {
  protected:
@@ -145,8 +146,7 @@ TEST_F(Experiments, SimulationRestartsInEachExperiment) {
 TEST_F(Experiments, ReportListsTheExperimentsRows) {
   const CliResult r = RunCli("fit " + labelled + kExperimentsArx + " --experiment-column run");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("2 experiments (regressors restart at each): 1 rows 1-300, 2 rows 301-550"),
-            std::string::npos)
+  EXPECT_NE(r.out.find("2 experiments (regressors restart at each): 1 rows 1-300, 2 rows 301-550"), std::string::npos)
       << r.out;
 }
 
