@@ -17,10 +17,12 @@
 #include "cli/gnuplot.h"
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
+#include "cli/progress.h"
 #include "cli/structure_options.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/io/mat_file.h"
+#include "ident/workflow/experiments.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/fit_record.h"
 #include "ident/workflow/residual_analysis.h"
@@ -33,7 +35,8 @@ constexpr long kInMemoryRows = 1'000'000;
 constexpr int kResidualLags = 20;
 
 struct FitCommandOptions {
-  std::string data;
+  std::vector<std::string> data;  // one record, or one file per experiment
+  std::string experiment_column;
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
   double split = 0.5;
@@ -66,7 +69,8 @@ workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow:
   m.passes = fit.result.passes;
   m.data_path = path;
   m.data_rows = fit.prepared.num_rows();
-  m.data_checksum = io::CanReadTwice(path) ? workflow::FileChecksum(path) : "";  // standard input: gone
+  // Standard input is gone; several files have no one checksum.
+  m.data_checksum = fit.experiments.size() == 1 && io::CanReadTwice(path) ? workflow::FileChecksum(path) : "";
   m.split = request.split;
   m.validation = fit.validation;
   m.validation_scores = fit.result.validation;
@@ -80,6 +84,12 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
       if (std::abs(r[i]) > std::abs(r[k])) k = i;
     return std::make_pair(r[k], static_cast<int>(k) + first_lag);
   };
+  if (!a.applies) {
+    fmt::print(
+        "\n  residual analysis: no correlation tests over lags (a static regression's rows need not be a time "
+        "series)\n");
+    return;
+  }
   const int lags = static_cast<int>(a.autocorrelation.size());
   fmt::print("\n  residual analysis (validation one-step residuals, N = {}, 99 % band ±{:.3f}):\n", a.samples, a.band);
   const auto [r_ee, tau_ee] = worst(a.autocorrelation, 1);
@@ -115,7 +125,8 @@ void PrintTimeGaps(const workflow::TimeCheck& time, bool filled) {
 }
 
 void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o,
-                 const std::vector<std::pair<std::string, double>>& means = {}) {
+                 const std::vector<std::pair<std::string, double>>& means = {},
+                 const std::vector<workflow::Experiment>& experiments = {}) {
   fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
              r.passes > 1 ? fmt::format(", {} passes", r.passes) : "", o.detrend);
   const bool separate = !r.validation_data.empty();
@@ -130,6 +141,12 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
     fmt::print(", validation on {} (all {} rows)", r.validation_data, r.samples_validation);
   else if (o.split != 1)
     fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
+  if (experiments.size() > 1) {
+    fmt::print("\n{} experiments (regressors restart at each):", experiments.size());
+    for (std::size_t i = 0; i < experiments.size(); ++i)
+      fmt::print("{} {} rows {}-{}", i ? "," : "", experiments[i].name, experiments[i].first + 1,
+                 experiments[i].first + experiments[i].count);
+  }
   fmt::print("\n");
   if (r.time && !r.time->gaps.empty()) PrintTimeGaps(*r.time, o.missing);
   fmt::print("\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
@@ -182,24 +199,35 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
 }
 
 void RunFit(const FitCommandOptions& o) {
-  const std::string path = ResolveDataPath(o.data);
-  CheckOutputPaths({{"--trace", o.trace}, {"--plot", o.plot}, {"--save", o.save}},
-                   {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
+  std::vector<std::string> paths;
+  for (const std::string& d : o.data) paths.push_back(ResolveDataPath(d));
+  std::vector<NamedPath> inputs = {{"--prior file", o.estimator.prior_file}};
+  for (const std::string& p : paths) inputs.push_back({"input data file", p});
+  CheckOutputPaths({{"--trace", o.trace}, {"--plot", o.plot}, {"--save", o.save}}, inputs);
   if (!o.plot.empty()) CheckPlotFileName(o.plot);
   const io::CsvOptions csv{.missing_as_nan = o.missing, .delimiter = o.csv.delimiter};
-  // Standard input, a pipe, a device or a .mat file is read once, into memory; a regular file is first checked by its
-  // header and length, and streamed when long. Records up to kInMemoryRows rows are read whole, for the
+  // Several experiments (several files, or an experiment column) are read into one table in memory.
+  const bool experiments = paths.size() > 1 || !o.experiment_column.empty();
+  std::vector<workflow::Experiment> experiment_list;
+  std::optional<io::DataTable> once;
+  if (experiments) {
+    std::vector<io::DataTable> tables;
+    for (const std::string& p : paths) tables.push_back(io::ReadDataFile(p, csv));
+    once = workflow::ConcatenateExperiments(std::move(tables), o.experiment_column, &experiment_list);
+  }
+  const std::string path = experiments ? once->source : paths.front();
+  // Standard input, a pipe, a device or a .mat file is read once, into memory; a regular file is first checked by
+  // its header and length, and streamed when long. Records up to kInMemoryRows rows are read whole, for the
   // time column's check, the residual analysis and plots; longer ones stream through the estimator in
   // constant memory (without them).
-  std::optional<io::DataTable> once;
-  if (!io::CanReadTwice(path) || io::IsMatFile(path)) once = io::ReadDataFile(path, csv);
+  if (!once && (!io::CanReadTwice(path) || io::IsMatFile(path))) once = io::ReadDataFile(path, csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
   const bool streamed = !once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
                         workflow::CountCsvDataRows(path) > kInMemoryRows;
   if (!streamed && !once) once = io::ReadDataFile(path, csv);
   std::optional<workflow::TimeCheck> time;
-  if (once) {
+  if (once && !experiments) {  // a time column restarts in each experiment
     time = workflow::CheckTimeColumn(*once, source->used_columns());
     if (time && o.missing && !time->gaps.empty()) once = workflow::FillTimeGaps(*once, *time);
   }
@@ -216,6 +244,15 @@ void RunFit(const FitCommandOptions& o) {
   const long estimation_rows = once ? workflow::CheckRecordLength(once->num_rows(), *source, length_check, path)
                                     : workflow::CheckCsvRecordLength(path, csv, *source, length_check);
   workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
+  // Progress on stderr after 2 s: rows of the estimation part, per pass (a pass starts again at its first row).
+  Progress progress("fit");
+  // The state lives out here: the options, and with them this function, are copied for each pass.
+  int pass = 1, last = -1;
+  plan.options.on_row = [&progress, &pass, &last, estimation_rows, passes = o.passes](int row) {
+    if (row <= last) ++pass;
+    last = row;
+    progress.Report(row + 1, estimation_rows, "estimation rows", passes > 1 ? pass : 0);
+  };
   // The trace and the plot go to temporary files, renamed onto their names only after the whole fit has
   // succeeded (cli/output_file.h): a fit that fails, e.g. on a bad row late in a streamed record, leaves
   // every existing file as it is. The report is printed after the renames, so a failed write leaves
@@ -256,9 +293,12 @@ void RunFit(const FitCommandOptions& o) {
   }
   workflow::RecordFit fit = workflow::FitTable(std::move(*once), *source, plan, kResidualLags);
   fit.result.time = time;
+  if (experiments) fit.experiments = experiment_list;
   if (!o.validate.empty()) {
     const std::string validation_path = ResolveDataPath(o.validate);
-    workflow::ValidateOn(fit, io::ReadDataFile(validation_path, csv), validation_path, request.model, kResidualLags);
+    io::DataTable record = io::ReadDataFile(validation_path, csv);
+    if (!o.experiment_column.empty()) workflow::LabelExperiments(record, o.experiment_column);
+    workflow::ValidateOn(fit, std::move(record), validation_path, request.model, kResidualLags);
   }
   if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
   if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
@@ -266,9 +306,10 @@ void RunFit(const FitCommandOptions& o) {
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   if (o.json) {
     const auto means = workflow::DetrendMeans(fit);
-    std::cout << workflow::FitJson(fit.result, path, o.split, o.detrend, residuals, &means).dump(2) << "\n";
+    std::cout << workflow::FitJson(fit.result, path, o.split, o.detrend, residuals, &means, &fit.experiments).dump(2)
+              << "\n";
   } else {
-    PrintReport(fit.result, path, o, workflow::DetrendMeans(fit));
+    PrintReport(fit.result, path, o, workflow::DetrendMeans(fit), fit.experiments);
     if (residuals) PrintResiduals(*residuals);
   }
 }
@@ -278,7 +319,12 @@ void RunFit(const FitCommandOptions& o) {
 void AddFitCommand(CLI::App& app) {
   auto o = std::make_shared<FitCommandOptions>();
   CLI::App* fit = app.add_subcommand("fit", "Fit a model to recorded data with a recursive estimator");
-  fit->add_option("DATA", o->data, "CSV file with a header, or a bundled dataset's name (e.g. dryer)")->required();
+  fit->add_option("DATA", o->data,
+                  "CSV file with a header, or a bundled dataset's name (e.g. dryer); several: one experiment each")
+      ->required();
+  fit->add_option("--experiment-column", o->experiment_column,
+                  "Column labelling the experiment: each run of one label is an experiment, and the regressors "
+                  "restart at each");
   o->structure.AddTo(*fit, /*require_output=*/false);
   o->estimator.AddTo(*fit);
   fit->add_option("--split", o->split, "Fraction of rows used for estimation; 1 = estimate and validate on all")
@@ -308,7 +354,7 @@ void AddFitCommand(CLI::App& app) {
   auto* split_option = fit->get_option("--split");
   fit->callback([o, split_option] {
     // Without structure options a bundled record takes its suggested structure and split, as in compare.
-    const std::optional<DatasetInfo> dataset = FindDataset(o->data);
+    const std::optional<DatasetInfo> dataset = FindDataset(o->data.front());
     if (dataset && !o->structure.Given()) {
       o->structure = o->structure.WithDefaultsFrom(dataset->structure);
       if (split_option->count() == 0) o->split = dataset->split;

@@ -13,12 +13,13 @@
 
 #include <fmt/format.h>
 
-#include "common/error.h"
-#include "studies/mems/mems_study.h"
 #include "cli/commands.h"
 #include "cli/gnuplot.h"
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
+#include "cli/progress.h"
+#include "common/error.h"
+#include "studies/mems/mems_study.h"
 
 namespace ident::cli {
 namespace {
@@ -83,7 +84,11 @@ void RunMems(const MemsCommandOptions& o) {
   if (!o.trace.empty()) trace_file.emplace(o.trace, "--trace file");
   if (!o.plot.empty()) plot_file.emplace(o.plot, "--plot file");
   std::vector<MemsStudyResult> results;
-  for (size_t i = 0; i < o.t_targets.size(); ++i) results.push_back(RunMemsStudy(study_options(i)));
+  Progress progress("mems");  // on stderr after 2 s: the studies (one per --t-mean value)
+  for (size_t i = 0; i < o.t_targets.size(); ++i) {
+    results.push_back(RunMemsStudy(study_options(i)));
+    progress.Report(static_cast<long>(i + 1), static_cast<long>(o.t_targets.size()), "studies");
+  }
   // Fig. 9 analogue.
   std::ostringstream report;
   std::string grid_sizes;

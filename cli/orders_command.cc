@@ -11,6 +11,7 @@
 #include "cli/commands.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
+#include "cli/progress.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/io/mat_file.h"
@@ -77,6 +78,7 @@ void RunOrders(const OrdersOptions& o) {
   options.split = o.split;
   options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
   const auto [estimation, validation] = workflow::PrepareData(table, *source, options);
+  Progress progress("orders");  // on stderr after 2 s: the rows, then the structures
   workflow::OrderSelection r;
   if (with_noise_model) {
     workflow::FitRequest request;
@@ -89,7 +91,8 @@ void RunOrders(const OrdersOptions& o) {
     r = workflow::SelectPolynomialOrders(io::ReadDataFile(path, o.csv), path, polynomial, request, o.criterion);
   } else {
     r = workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
-                               table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion);
+                               table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion,
+                               [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
   }
   if (o.json) {
     nlohmann::ordered_json j;

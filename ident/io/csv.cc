@@ -513,6 +513,10 @@ int DataTable::ColumnIndex(std::string_view name) const {
   ThrowUnknownColumn(source, name, names);
 }
 
+bool DataTable::StartsExperiment(int row) const {
+  return std::binary_search(experiment_starts.begin(), experiment_starts.end(), row);
+}
+
 namespace {
 
 DataTable ReadAll(CsvReader& reader) {

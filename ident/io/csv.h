@@ -152,10 +152,14 @@ struct DataTable {
   // Where rows sit in the file: (row, line) wherever a row is not on the line after the previous row's
   // (the first row, and rows after comments or blank lines). Empty for a table not read from text.
   std::vector<std::pair<int, long>> row_lines;
+  // 0-based rows at which a further experiment starts (ascending, each in (0, rows)): the walkers of
+  // ident/workflow restart the regressor history there, so no regressor straddles two experiments.
+  std::vector<int> experiment_starts;
 
   int num_rows() const { return static_cast<int>(values.rows()); }
   // The 1-based line of a 0-based row in its file; 0 when unknown.
   long Line(int row) const;
+  bool StartsExperiment(int row) const;
   // Throws DataError "<source>: no column 'q' (columns: t, u, y)".
   int ColumnIndex(std::string_view name) const;
   Eigen::VectorXd Column(std::string_view name) const { return values.col(ColumnIndex(name)); }

@@ -32,7 +32,14 @@ class DynamicSource : public DataSource {
     used.push_back(output_);
     return used;
   }
-  void Reset() override { regressor_.Reset(); }
+  void Reset() override {
+    regressor_.Reset();
+    cleaned_before_ = 0;
+  }
+  void Restart() override {
+    cleaned_before_ += regressor_.cleaner().cleaned();
+    regressor_.Reset();
+  }
   bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) override {
     for (std::size_t i = 0; i < inputs_.size(); ++i) u_(static_cast<Eigen::Index>(i)) = row(inputs_[i]);
     return regressor_.Next(u_, z);
@@ -41,7 +48,7 @@ class DynamicSource : public DataSource {
   double PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged) override {
     return regressor_.PushCheckedOutput(y, y_hat, scale, flagged, judged);
   }
-  long cleaned() const override { return regressor_.cleaner().cleaned(); }
+  long cleaned() const override { return cleaned_before_ + regressor_.cleaner().cleaned(); }
   void EndCleaningWarmUp() override { regressor_.EndCleaningWarmUp(); }
 
  protected:
@@ -55,6 +62,7 @@ class DynamicSource : public DataSource {
   std::vector<int> inputs_;
   R regressor_;
   Eigen::VectorXd u_;
+  long cleaned_before_ = 0;  // cleaned in the experiments before the current one
 };
 
 class ArxSource final : public DynamicSource<models::ArxRegressor> {

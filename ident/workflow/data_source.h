@@ -6,8 +6,9 @@
 //                  also needs the estimate (SetEstimate / TrackEstimate) to form its residuals.
 //   StaticSource   static regression y = θ'x (+ intercept) from named columns.
 //
-// Both walk one segment of rows at a time: Reset() at the segment start, then per row
-// Regressor(row, z) (true if a regression happens at this row) followed by PushOutput(y).
+// Both walk one segment of rows at a time: Reset() at the segment start (Restart() at each further
+// experiment's first row), then per row Regressor(row, z) (true if a regression happens at this row)
+// followed by PushOutput(y).
 #pragma once
 
 #include <memory>
@@ -36,6 +37,9 @@ class DataSource {
   virtual int output_column() const = 0;
   virtual std::vector<int> used_columns() const = 0;  // every column the model reads
   virtual void Reset() = 0;
+  // A further experiment starts (io::DataTable::experiment_starts): the regressor history restarts as at
+  // Reset(), so the experiment's first t0 rows only fill it; the estimate and cleaned() carry on.
+  virtual void Restart() { Reset(); }
   virtual bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) = 0;
   virtual void PushOutput(double y) = 0;
   // During estimation: stores y, or (ARX with cleaning on) its cleaned value when the estimator

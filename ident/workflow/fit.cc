@@ -122,6 +122,7 @@ FitScores Score(const io::DataTable& data, Segment segment, DataSource& source, 
   Scoring scoring(source, theta, segment.first);
   Eigen::VectorXd row(data.values.cols());
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
+    if (r > segment.first && data.StartsExperiment(r)) scoring.Restart();
     row = data.values.row(r).transpose();
     scoring.Row(row);
   }
@@ -152,6 +153,7 @@ Eigen::VectorXd EstimationMeanSquares(const io::DataTable& prepared, Segment est
   MeanSquares squares(source);
   Eigen::VectorXd row(prepared.values.cols());
   for (int r = estimation.first; r < estimation.first + estimation.count; ++r) {
+    if (r > estimation.first && prepared.StartsExperiment(r)) squares.Restart();
     row = prepared.values.row(r).transpose();
     squares.Add(row);
   }

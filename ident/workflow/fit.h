@@ -52,6 +52,8 @@ struct FitOptions {
   // If set: called after every accepted update with the (0-based) row, the step (weight β(t), ν(t), prediction
   // error) and the estimator (e.g. for parameter plots).
   std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)> on_update;
+  // If set: called with the (0-based) row before each row of every pass over the estimation part (progress).
+  std::function<void(int row)> on_row;
 };
 
 struct FitScores {

@@ -1,6 +1,7 @@
 #include "ident/workflow/fit_record.h"
 
 #include <cmath>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -87,6 +88,12 @@ nlohmann::ordered_json ResidualJson(const ResidualAnalysis& a) {
   nlohmann::ordered_json j;
   j["samples"] = a.samples;
   j["band"] = a.band;
+  j["applies"] = a.applies;
+  if (!a.applies) {  // a static regression: no correlations over lags (residual_analysis.h)
+    for (const char* key : {"autocorrelation", "cross_correlation", "q_auto", "q_auto_limit", "white", "independent"})
+      j[key] = nullptr;
+    return j;
+  }
   j["autocorrelation"] = a.autocorrelation;
   auto& cross = j["cross_correlation"] = nlohmann::ordered_json::object();
   for (std::size_t i = 0; i < a.input_names.size(); ++i) cross[a.input_names[i]] = a.cross_correlation[i];
@@ -131,6 +138,13 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
 
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags) {
   RecordFit fit;
+  fit.experiments = WholeRecord(table, "1");
+  for (std::size_t i = 0; i < table.experiment_starts.size(); ++i) {
+    const int start = table.experiment_starts[i];
+    fit.experiments.back().count = start - fit.experiments.back().first;
+    fit.experiments.back().name = std::to_string(i + 1);
+    fit.experiments.push_back({.name = std::to_string(i + 2), .first = start, .count = table.num_rows() - start});
+  }
   fit.prepared = std::move(table);
   std::vector<std::pair<int, double>> means;
   std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options, &means);
@@ -169,7 +183,8 @@ void ValidateOn(RecordFit& fit, io::DataTable record, const std::string& name, c
 
 nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,
                                const std::string& detrend, const ResidualAnalysis* residuals,
-                               const std::vector<std::pair<std::string, double>>* means) {
+                               const std::vector<std::pair<std::string, double>>* means,
+                               const std::vector<Experiment>* experiments) {
   nlohmann::ordered_json j = FitJsonWithoutResiduals(result, data, split, detrend);
   if (means) {
     auto& object = j["detrend_means"] = nlohmann::ordered_json::object();
@@ -178,6 +193,12 @@ nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data,
     j["detrend_means"] = nullptr;
   }
   j["residual_analysis"] = residuals ? ResidualJson(*residuals) : nlohmann::ordered_json();
+  j["experiments"] = nullptr;
+  if (experiments) {
+    auto& list = j["experiments"] = nlohmann::ordered_json::array();
+    for (const Experiment& e : *experiments)
+      list.push_back({{"name", e.name}, {"rows", {e.first + 1, e.first + e.count}}});
+  }
   return j;
 }
 

@@ -23,6 +23,7 @@
 
 #include "ident/io/csv.h"
 #include "ident/workflow/estimator_spec.h"
+#include "ident/workflow/experiments.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/model_spec.h"
 #include "ident/workflow/residual_analysis.h"
@@ -60,6 +61,9 @@ struct RecordFit {
   io::DataTable prepared;  // the split and detrended table
   Segment estimation, validation;
   std::vector<std::pair<std::string, double>> detrend_means;  // (column, mean subtracted); empty: none
+  // The experiments of the table (ident/workflow/experiments.h), named "1", "2", … from its
+  // experiment_starts (callers that know better names set them).
+  std::vector<Experiment> experiments;
   // When residual_lags > 0 and the validation part has more than residual_lags + 1 samples.
   std::optional<ResidualAnalysis> residuals;
 };
@@ -88,10 +92,12 @@ void ValidateOn(RecordFit& fit, io::DataTable record, const std::string& name, c
 // theta_std, noise_std, fit_percent, rms, simulation_diverged_at, samples_estimation, samples_validation,
 // updates, rejected, cleaned, lock_in, nu, Dy, split, detrend, time_gaps ([{row, t_before, t_after, missing,
 // filled}]; null when no time column was checked, workflow/time_column.h), detrend_means ({column: mean}; null when
-// `means` is null, as for a streamed record), residual_analysis (null when not computed). Non-finite numbers
-// are null.
+// `means` is null, as for a streamed record), residual_analysis (null when not computed), experiments
+// ([{name, rows: [first, last]}], 1-based rows of the fitted table; null when `experiments` is null).
+// Non-finite numbers are null.
 nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data, double split,
                                const std::string& detrend, const ResidualAnalysis* residuals,
-                               const std::vector<std::pair<std::string, double>>* means);
+                               const std::vector<std::pair<std::string, double>>* means,
+                               const std::vector<Experiment>* experiments = nullptr);
 
 }  // namespace ident::workflow

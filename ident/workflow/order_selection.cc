@@ -70,7 +70,8 @@ double CriterionValue(const StructureScore& s, const std::string& criterion) {
 }
 
 OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, Segment validation, int output,
-                            int input, const OrderGrid& grid, const std::string& criterion) {
+                            int input, const OrderGrid& grid, const std::string& criterion,
+                            const std::function<void(long done, long total, const char* unit)>& progress) {
   IDENT_REQUIRE(
       criterion == "aic" || criterion == "bic" || criterion == "fpe" || criterion == "mdl" || criterion == "validation",
       "--criterion '{}': need aic, bic, fpe, mdl or validation", criterion);
@@ -90,7 +91,9 @@ OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, S
   Eigen::VectorXd w(m);
   OrderSelection result;
   result.criterion = criterion;
+  const long rows = estimation.count + validation.count;
   for (int r = estimation.first + t0; r < estimation.first + estimation.count; ++r) {
+    if (progress) progress(r - estimation.first + 1, rows, "rows");
     if (!Lagged(prepared, r, output, input, layout, w)) continue;
     G.selfadjointView<Eigen::Lower>().rankUpdate(w);
     ++result.samples;
@@ -100,6 +103,7 @@ OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, S
   // H_yy − 2θ'H_zy + θ'H_zz θ, whatever the number of samples.
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
   for (int r = validation.first + t0; r < validation.first + validation.count; ++r) {
+    if (progress) progress(estimation.count + r - validation.first + 1, rows, "rows");
     if (!Lagged(prepared, r, output, input, layout, w)) continue;
     H.selfadjointView<Eigen::Lower>().rankUpdate(w);
     ++result.validation_samples;
@@ -111,6 +115,8 @@ OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, S
   IDENT_REQUIRE(result.samples > d_max + 1,
                 "{}: {} usable estimation samples are too few for up to {} parameters (na {} + nb {})", prepared.source,
                 result.samples, d_max, grid.na_max, grid.nb_max);
+  const long structures = static_cast<long>(grid.nk_max - grid.nk_min + 1) * (grid.na_max - grid.na_min + 1) *
+                          (grid.nb_max - grid.nb_min + 1);
   for (int nk = grid.nk_min; nk <= grid.nk_max; ++nk) {
     for (int na = grid.na_min; na <= grid.na_max; ++na) {
       for (int nb = grid.nb_min; nb <= grid.nb_max; ++nb) {
@@ -150,6 +156,7 @@ OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, S
           s.validation_loss = std::max(0.0, sum) / result.validation_samples;
         }
         result.structures.push_back(std::move(s));
+        if (progress) progress(static_cast<long>(result.structures.size()), structures, "structures");
       }
     }
   }

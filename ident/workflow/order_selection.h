@@ -14,6 +14,7 @@
 // Cost: O(N m²) for G and H (m = 1 + na_max + nb_max + nk_max − nk_min), then O(ρ³) per structure.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,9 +51,11 @@ struct OrderSelection {
 
 // "aic", "bic", "fpe", "mdl" or "validation" (needs split < 1). `output` and `input` are column indices of
 // the prepared (split and detrended) table. Throws InvalidArgument for a bad grid or criterion, too few
-// samples, or regressors that do not determine a structure (a singular block).
+// samples, or regressors that do not determine a structure (a singular block). `progress`, if set, is told
+// (done, total, unit) as the rows ("rows") and then the structures ("structures") are worked through.
 OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, Segment validation, int output,
-                            int input, const OrderGrid& grid, const std::string& criterion);
+                            int input, const OrderGrid& grid, const std::string& criterion,
+                            const std::function<void(long done, long total, const char* unit)>& progress = {});
 
 // The value of `criterion` for one structure (lower is better).
 double CriterionValue(const StructureScore& s, const std::string& criterion);

@@ -15,6 +15,7 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
   source.Reset();
   source.SetEstimate(theta);
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
+    if (r > segment.first && data.StartsExperiment(r)) source.Restart();
     row = data.values.row(r).transpose();
     const double y = row(source.output_column());
     p.rows.push_back(r + 1);
@@ -25,7 +26,12 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
   if (!source.dynamic()) return p;
   source.Reset();
   const int t0 = source.first_regression_index();
+  int experiment_first = segment.first;  // the simulation restarts from each experiment's own outputs
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
+    if (r > segment.first && data.StartsExperiment(r)) {
+      source.Restart();
+      experiment_first = r;
+    }
     row = data.values.row(r).transpose();
     if (source.Regressor(row, z)) {
       const double y_hat = theta.dot(z);
@@ -33,7 +39,7 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
       source.PushOutput(y_hat);
     } else {
       p.simulation.push_back(kNone);
-      source.PushOutput(r - segment.first < t0 ? row(source.output_column()) : kNone);
+      source.PushOutput(r - experiment_first < t0 ? row(source.output_column()) : kNone);
     }
   }
   return p;

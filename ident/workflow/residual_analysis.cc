@@ -106,6 +106,7 @@ bool ResidualAnalysis::Independent() const {
 }
 
 std::string ResidualAnalysis::Verdict() const {
+  if (!applies) return "verdict: none (a static regression's rows need not be a time series)";
   std::string whiteness =
       White() ? "residuals look white" : "residuals are NOT white (the noise model misses dynamics)";
   std::string independence = Independent() ? "independent of the input"
@@ -126,6 +127,7 @@ ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, Da
   source.Reset();
   source.SetEstimate(theta);
   for (int r = segment.first; r < segment.first + segment.count; ++r) {
+    if (r > segment.first && data.StartsExperiment(r)) source.Restart();
     row = data.values.row(r).transpose();
     const double y = row(source.output_column());
     bool inputs_finite = true;
@@ -141,6 +143,8 @@ ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, Da
   IDENT_REQUIRE(a.samples > max_lag + 1, "{}: {} residuals are too few for correlations up to lag {}", data.source,
                 a.samples, max_lag);
   a.band = 2.58 / std::sqrt(static_cast<double>(a.samples));
+  a.applies = source.dynamic();
+  if (!a.applies) return a;
   Centre(e);  // in place: a record's residuals and inputs are large
   a.autocorrelation = CentredAutocorrelation(e, max_lag);
   for (std::size_t i = 0; i < input_columns.size(); ++i) {

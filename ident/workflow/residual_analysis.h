@@ -8,6 +8,9 @@
 // uses the portmanteau statistics over all lags, each χ²-distributed under the null hypothesis:
 //   Q_ee = N Σ_{τ=1..L} r_ee(τ)² ~ χ²(L),   Q_eu = N Σ_{τ=0..L} r_eu(τ)² ~ χ²(L+1)     (Ljung §16.6)
 // and rejects at the 1 % level (Q above the 99 % quantile, from Boost.Math).
+// Both tests ask about lags in time: they apply to dynamic structures (ARX, ARMAX, OE, BJ) only. For a
+// static regression the rows need not be a time series, and the analysis holds the residual count alone
+// (applies false, no correlations).
 //
 // Example:
 //   ResidualAnalysis a = AnalyseResiduals(table, validation, *source, theta, 20);
@@ -26,6 +29,7 @@
 namespace ident::workflow {
 
 struct ResidualAnalysis {
+  bool applies = true;                                 // the rows are a time series (dynamic structure)
   int samples = 0;                                     // N
   double band = 0;                                     // 2.58/√N
   std::vector<double> autocorrelation;                 // r_ee(1..L)

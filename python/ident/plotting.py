@@ -27,7 +27,11 @@ def plot_fit(result, fig=None):
 
     ax = axes[0, 1]
     analysis = result.residual_analysis
-    if analysis:
+    if analysis and not analysis.get("applies", True):
+        ax.text(0.5, 0.5, "no residual correlations: a static regression's rows need not be a time series",
+                ha="center", va="center", wrap=True)
+        ax.set_axis_off()
+    elif analysis:
         band = analysis["band"]
         lags = np.arange(1, len(analysis["autocorrelation"]) + 1)
         ax.stem(lags, analysis["autocorrelation"], basefmt=" ", label="r_ee(τ)")

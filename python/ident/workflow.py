@@ -136,7 +136,7 @@ class FitResult:
 
 def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rls", *, regressors=None,
         intercept=None, nc=None, nd=None, nf=None, split=None, passes=1, detrend=None, missing=False,
-        history=False, residual_lags=20, **options):
+        history=False, residual_lags=20, experiment_column=None, **options):
     """Fits a model to a record with one estimator, as ``ident fit`` does.
 
     Structure: ``output`` with ``inputs``, ``na``, ``nb``, ``nk`` (ARX/FIR; with ``nc``: ARMAX, with
@@ -148,6 +148,8 @@ def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rl
     lock_in_window, lock_in_threshold, lock_in_restart, history_limit, clean_regressors (bool), clean_clip, clean_gross,
     clean_below. ``history=True`` keeps every update's weight, ν, θ̂ and its standard errors (for plot()).
     ``residual_lags``: lags of the residual analysis of the validation part (0: none, residual_analysis None).
+    ``experiment_column``: a column labelling the experiment; each run of one label is an experiment, and
+    the regressors restart at each (``ident fit --experiment-column``).
     """
     columns, values, name, bundled = _table(data, missing)
     kwargs = dict(output=output, inputs=inputs, na=na, nb=nb, nk=nk, regressors=regressors, intercept=intercept)
@@ -157,10 +159,12 @@ def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rl
     split = _default_split(split, bundled, given)
     model.update(options)
     model["estimator"] = estimator
+    experiments = experiment_column or ""
     raw = _ident.fit(columns, values, name, split, int(passes), detrend or "", bool(history), int(residual_lags),
-                     model)
+                     model, experiments)
     structure = {k: v for k, v in model.items() if k in _STRUCTURE_KEYS}
-    return FitResult(raw, lambda theta: _ident.predict(columns, values, name, split, detrend or "", theta, structure))
+    return FitResult(raw, lambda theta: _ident.predict(columns, values, name, split, detrend or "", theta, structure,
+                                                       experiments))
 
 
 class CompareResult(pd.DataFrame):

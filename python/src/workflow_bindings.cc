@@ -21,6 +21,7 @@
 #include "ident/io/csv.h"
 #include "ident/smoothing/map_smoother.h"
 #include "ident/workflow/compare_record.h"
+#include "ident/workflow/experiments.h"
 #include "ident/workflow/fit_record.h"
 #include "ident/workflow/predictions.h"
 #include "ident/workflow/smoothing_model.h"
@@ -132,7 +133,8 @@ py::array_t<double> Matrix(const std::vector<double>& flat, std::size_t columns)
 }
 
 py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, const std::string& name, double split,
-             int passes, const std::string& detrend, bool history, int residual_lags, const py::dict& kw) {
+             int passes, const std::string& detrend, bool history, int residual_lags, const py::dict& kw,
+             const std::string& experiment_column) {
   const Options o = ReadOptions(kw);
   workflow::FitRequest request;
   request.model = o.model;
@@ -143,10 +145,13 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
   IDENT_REQUIRE(residual_lags >= 0, "residual_lags = {}; need 0 (no residual analysis) or more", residual_lags);
   request.residual_lags = residual_lags;
   io::DataTable table = Table(columns, std::move(values), name);
+  std::vector<workflow::Experiment> experiments;
+  if (!experiment_column.empty()) experiments = workflow::LabelExperiments(table, experiment_column);
   std::unique_ptr<workflow::DataSource> source = request.model.MakeSource(table.names, name);
   const int rho = source->num_parameters();
   // The time column is checked and its gaps reported as `ident fit` does (filled there with --missing).
-  const std::optional<workflow::TimeCheck> time = workflow::CheckTimeColumn(table, source->used_columns());
+  const std::optional<workflow::TimeCheck> time =
+      experiments.empty() ? workflow::CheckTimeColumn(table, source->used_columns()) : std::nullopt;
   workflow::FitPlan plan = workflow::PlanFit(request, rho, workflow::EstimationRows(table.num_rows(), request.split));
   History h;
   if (history)
@@ -168,10 +173,12 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
     fit = workflow::FitTable(std::move(table), *source, plan, request.residual_lags);
   }
   fit.result.time = time;
+  if (!experiments.empty()) fit.experiments = experiments;
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   py::dict out;
   const auto means = workflow::DetrendMeans(fit);
-  out["json"] = workflow::FitJson(fit.result, name, split, request.ResolvedDetrend(), residuals, &means).dump();
+  out["json"] =
+      workflow::FitJson(fit.result, name, split, request.ResolvedDetrend(), residuals, &means, &fit.experiments).dump();
   if (history) {
     py::dict d;
     d["row"] = py::array_t<double>(static_cast<py::ssize_t>(h.row.size()), h.row.data());
@@ -188,13 +195,15 @@ py::dict Fit(const std::vector<std::string>& columns, Eigen::MatrixXd values, co
 
 // The validation part's measured, one-step and simulated outputs of θ, on the table prepared as Fit prepares it.
 py::dict Predict(const std::vector<std::string>& columns, Eigen::MatrixXd values, const std::string& name, double split,
-                 const std::string& detrend, const Eigen::VectorXd& theta, const py::dict& kw) {
+                 const std::string& detrend, const Eigen::VectorXd& theta, const py::dict& kw,
+                 const std::string& experiment_column) {
   const Options o = ReadOptions(kw);
   workflow::FitRequest request;
   request.model = o.model;
   request.split = split;
   request.detrend = detrend;
   io::DataTable table = Table(columns, std::move(values), name);
+  if (!experiment_column.empty()) workflow::LabelExperiments(table, experiment_column);
   std::unique_ptr<workflow::DataSource> source = request.model.MakeSource(table.names, name);
   IDENT_REQUIRE(theta.size() == source->num_parameters(), "theta has {} entries; the model has {} parameters",
                 theta.size(), source->num_parameters());
@@ -290,9 +299,10 @@ py::dict LogConcave(const std::vector<double>& samples) {
 
 void RegisterWorkflow(py::module_& m) {
   m.def("fit", &Fit, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("split"), py::arg("passes"),
-        py::arg("detrend"), py::arg("history"), py::arg("residual_lags"), py::arg("options"));
+        py::arg("detrend"), py::arg("history"), py::arg("residual_lags"), py::arg("options"),
+        py::arg("experiment_column") = "");
   m.def("predict", &Predict, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("split"),
-        py::arg("detrend"), py::arg("theta"), py::arg("options"));
+        py::arg("detrend"), py::arg("theta"), py::arg("options"), py::arg("experiment_column") = "");
   m.def("compare", &Compare, py::arg("columns"), py::arg("values"), py::arg("name"), py::arg("estimators"),
         py::arg("outliers"), py::arg("trials"), py::arg("jobs"), py::arg("passes"), py::arg("split"),
         py::arg("detrend"), py::arg("options"));

@@ -71,6 +71,7 @@ class Estimation {
         min_information_(options.min_regressor_information),
         decision_(options.decision),
         on_update_(options.on_update),
+        on_row_(options.on_row),
         z_(source.num_parameters()),
         z_measured_(source.num_parameters()),
         ZtZ_(Eigen::MatrixXd::Zero(source.num_parameters(), source.num_parameters())),
@@ -91,6 +92,7 @@ class Estimation {
   // `r` is the 0-based row index in the record (the trace prints r + 1). Returns the estimator's step, or
   // nothing when no regression happens at this row (the regressor's first rows).
   std::optional<StepReport> Row(const Eigen::VectorXd& row, int r) {
+    if (on_row_) on_row_(r);
     const double y = row(source_.output_column());
     bool flagged = false;
     double y_hat = std::nan(""), scale = std::nan("");
@@ -141,6 +143,13 @@ class Estimation {
     }
     source_.PushCheckedOutput(y, y_hat, scale, flagged, judged_);
     return step;
+  }
+
+  // A further experiment starts at the next row: its regressors restart (DataSource::Restart); a cleaner
+  // whose estimator has made its robust start judges by the model at once.
+  void Restart() {
+    source_.Restart();
+    if (!in_startup_) source_.EndCleaningWarmUp();
   }
 
   // The end of the pass: a start-up that still waits starts from every sample seen. Identifiability:
@@ -196,6 +205,7 @@ class Estimation {
   double min_information_;
   OutlierDecision decision_;
   std::function<void(int row, const StepReport& step, const AnyRegressionEstimator&)> on_update_;
+  std::function<void(int row)> on_row_;
   Eigen::VectorXd z_, z_measured_;
   Eigen::MatrixXd ZtZ_;
   Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)
@@ -243,6 +253,14 @@ class Scoring {
     simulation_source_->SetEstimate(theta_);
   }
 
+  // A further experiment starts at the next row: one-step regressors and the simulation restart from its
+  // own first t0 measured outputs.
+  void Restart() {
+    one_step_source_->Restart();
+    simulation_source_->Restart();
+    experiment_row_ = 0;
+  }
+
   void Row(const Eigen::VectorXd& row) {
     const double y = row(one_step_source_->output_column());
     if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {
@@ -260,10 +278,11 @@ class Scoring {
         if (std::isfinite(y) && std::isfinite(yhat)) simulation_.Add(y, yhat);
         simulation_source_->PushOutput(yhat);
       } else {
-        simulation_source_->PushOutput(row_ < t0_ ? y : std::nan(""));
+        simulation_source_->PushOutput(experiment_row_ < t0_ ? y : std::nan(""));
       }
     }
     ++row_;
+    ++experiment_row_;
   }
 
   FitScores Finish(const std::string& name) const {
@@ -298,7 +317,8 @@ class Scoring {
   std::unique_ptr<DataSource> one_step_source_, simulation_source_;
   Eigen::VectorXd theta_, z_;
   int t0_;
-  int row_ = 0;
+  int row_ = 0;             // row in the segment
+  int experiment_row_ = 0;  // row in the segment's current experiment
   FitAccumulator one_step_, simulation_;
   double y_scale_ = 0;                         // largest measured |y| so far
   double one_step_size_ = 0;                   // largest |one-step ŷ|
@@ -356,6 +376,7 @@ inline std::pair<int, int> EstimateRows(const io::DataTable& data, Segment segme
     Estimation estimation(source, estimator, o);
     Eigen::VectorXd row(data.values.cols());
     for (int r = segment.first; r < segment.first + segment.count; ++r) {
+      if (r > segment.first && data.StartsExperiment(r)) estimation.Restart();
       row = data.values.row(r).transpose();
       estimation.Row(row, r);
     }
@@ -395,6 +416,7 @@ class MeanSquares {
       : source_(source), z_(source.num_parameters()), sum_(Eigen::VectorXd::Zero(source.num_parameters() + 1)) {
     source_.Reset();
   }
+  void Restart() { source_.Restart(); }  // a further experiment starts at the next row
   void Add(const Eigen::VectorXd& row) {
     const double y = row(source_.output_column());
     if (source_.Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {

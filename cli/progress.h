@@ -1,0 +1,34 @@
+// Progress of a long command on stderr: nothing during its first 2 s (a short run prints nothing), then
+// one line per 10 % of the work — rewritten in place on a terminal, one line each in a log or a pipe.
+//
+//   Progress progress("fit");
+//   progress.Report(done, total, "rows", 2);   // "ident fit: pass 2: 40 % (400 of 1000 rows)"
+#pragma once
+
+#include <chrono>
+#include <string>
+
+namespace ident::cli {
+
+class Progress {
+ public:
+  explicit Progress(std::string command);
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
+  // `done` of `total` units (`unit` names them) of pass `pass` (0: the work has no passes); a new pass or
+  // unit starts its tenths afresh. Cheap when nothing is printed (called once per row of a fit).
+  void Report(long done, long total, const char* unit, int pass = 0);
+
+ private:
+  std::string command_;
+  std::chrono::steady_clock::time_point start_;
+  bool terminal_;
+  int pass_ = 0;
+  std::string unit_;
+  int reported_ = 0;        // tenths of the current stage reported
+  bool open_line_ = false;  // a terminal line without its newline yet
+};
+
+}  // namespace ident::cli
