@@ -248,8 +248,9 @@ void RunFit(const FitCommandOptions& o) {
   ParameterHistory history;
   if (!o.plot.empty()) {
     history.theta.resize(static_cast<std::size_t>(source->num_parameters()));
-    plan.options.on_update = [&history](int row, const StepReport&, const AnyRegressionEstimator& e) {
+    plan.options.on_update = [&history](int row, const StepReport& step, const AnyRegressionEstimator& e) {
       history.t.push_back(row + 1);
+      history.weight.push_back(step.nu * step.weight);
       const Eigen::VectorXd theta = e.parameters();
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
@@ -260,7 +261,7 @@ void RunFit(const FitCommandOptions& o) {
     const std::string validation_path = ResolveDataPath(o.validate);
     workflow::ValidateOn(fit, io::ReadDataFile(validation_path, csv), validation_path, request.model, kResidualLags);
   }
-  if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
+  if (plot) PlotFit(*plot, fit, *source, history);
   if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
   commit_outputs();
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
@@ -295,8 +296,9 @@ void AddFitCommand(CLI::App& app) {
                 "with missing samples");
   fit->add_option("--trace", o->trace, "Write one CSV row per update: t,nu,beta,pred_err,theta1..,Dy");
   fit->add_option("--plot", o->plot,
-                  "Draw measured vs one-step and simulated output (validation) and the parameter trajectories "
-                  "into FILE.svg or FILE.png (needs gnuplot)");
+                  "Draw measured vs one-step and simulated output (validation, data units), the parameter "
+                  "trajectories, the robust weights and the residual correlations into FILE.svg or FILE.png "
+                  "(needs gnuplot)");
   fit->add_option("--validate", o->validate,
                   "Validate on this separate record (CSV or bundled name) instead of the rest of DATA; "
                   "--split then defaults to 1");
