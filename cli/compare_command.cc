@@ -99,10 +99,10 @@ void PlotCompare(OutputFile& out, const workflow::CompareResult& r, const workfl
           : fmt::format("no outliers, {} trial{}", trials, trials == 1 ? "" : "s");
   const PlotPanel fit = CompareScorePanel(
       r, fmt::format("{}: one-step validation fit per trial ({})", r.structure, setting), "one-step fit %",
-      &workflow::EstimatorScore::one_step_per_trial, r.reference.one_step, "clean-data least squares");
+      &workflow::EstimatorScore::one_step_per_trial, r.reference.one_step, "clean-data LS");
   const PlotPanel distance = CompareScorePanel(
       r, "distance to the clean-data least-squares estimate, ||θ̂ − θ_LS|| / ||θ_LS||, per trial", "θ distance",
-      &workflow::EstimatorScore::theta_distance_per_trial, 0.0, "0: the clean-data estimate");
+      &workflow::EstimatorScore::theta_distance_per_trial, 0.0, "0 = clean-data LS");
   RenderPlot(out, {fit, distance}, PlotSize{.width = 1000, .height_per_panel = 360});
 }
 

@@ -38,7 +38,7 @@ PlotPanel OutputPanel(const workflow::RecordFit& fit, workflow::DataSource& sour
   const bool dynamic = source.dynamic();
   panel.series.push_back({"measured", rows, physical(p.measured),
                           dynamic ? "lines lw 3.5 lc rgb '#8c8c8c'" : "points pt 7 ps 1.4 lc rgb '#606060'"});
-  panel.series.push_back({fmt::format("one-step prediction (fit {})", FitPercent(fit.result.validation.one_step)),
+  panel.series.push_back({fmt::format("one-step (fit {})", FitPercent(fit.result.validation.one_step)),
                           rows, physical(p.one_step),
                           dynamic ? "lines lw 1.2 lc rgb '#0050c0'" : "linespoints lw 1.2 pt 6 ps 1.2 lc rgb '#0050c0'"});
   if (dynamic) {
@@ -53,7 +53,7 @@ PlotPanel ParameterPanel(const workflow::RecordFit& fit, workflow::DataSource& s
   const int rho = source.num_parameters();
   const std::size_t updates = h.t.size();
   const std::size_t start = StartUpUpdates(fit, updates, rho);
-  PlotPanel panel{fmt::format("estimation: parameters θ̂(t), y range after the start-up ({} updates)", start), "row",
+  PlotPanel panel{fmt::format("estimation: parameter trajectories θ̂(t), y range after the start-up ({} updates)", start), "row",
                   "estimate", {}};
   if (updates > 0) panel.xrange = PlotRange{h.t.front() - 0.5, h.t.back() + 0.5};
   const std::vector<std::string> names = source.parameter_names();
