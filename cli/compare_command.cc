@@ -79,7 +79,7 @@ PlotPanel CompareScorePanel(const workflow::CompareResult& r, std::string title,
     }
     if (points.y.empty()) continue;
     if (points.y.size() >= 5) {
-      panel.series.push_back({first_box ? "box: quartiles and median" : "",
+      panel.series.push_back({first_box ? "box: quartiles, median" : "",
                               std::vector<double>(points.y.size(), x0), points.y, "boxplot lw 1.2 lc rgb 'black'"});
       first_box = false;
     }
