@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -48,20 +49,61 @@ struct CompareCommandOptions {
   std::string plot;
 };
 
-// One-step validation fit per trial seed, one line per estimator, and the clean LS level.
-void PlotCompare(OutputFile& out, const workflow::CompareResult& r, const workflow::OutlierSpec& spec) {
-  PlotPanel panel{fmt::format("{}: one-step validation fit per outlier seed", r.structure), "seed", "fit %", {}};
-  std::vector<double> seeds;
-  const std::size_t trials = r.scores.empty() ? 0 : r.scores[0].one_step_per_trial.size();
-  for (std::size_t i = 0; i < trials; ++i) seeds.push_back(static_cast<double>(spec.seed + i));
-  if (trials == 1) seeds.push_back(static_cast<double>(spec.seed) + 1);  // a visible segment for one trial
-  panel.series.push_back({"clean-data least squares", seeds, std::vector<double>(seeds.size(), r.reference.one_step)});
-  for (const workflow::EstimatorScore& s : r.scores) {
-    std::vector<double> fit = s.one_step_per_trial;
-    if (trials == 1) fit.push_back(fit[0]);
-    panel.series.push_back({s.estimator, seeds, fit});
+// One panel per score (one-step fit %, θ distance): per estimator the trials' values as points spread
+// sideways (a strip plot) and, from 5 trials on, their box plot (quartiles, median, whiskers to the last
+// values within 1.5 interquartile ranges).
+PlotPanel CompareScorePanel(const workflow::CompareResult& r, std::string title, std::string ylabel,
+                            std::vector<double> workflow::EstimatorScore::*per_trial, std::optional<double> reference,
+                            const std::string& reference_title) {
+  PlotPanel panel{std::move(title), "", std::move(ylabel), {}};
+  const double n = static_cast<double>(r.scores.size());
+  panel.xrange = PlotRange{0.4, n + 0.6};
+  if (reference) panel.series.push_back({reference_title, {0.4, n + 0.6}, {*reference, *reference}, "lines lw 1.5 dt 2 lc rgb 'black'"});
+  bool first_box = true;
+  double low = reference.value_or(std::numeric_limits<double>::infinity());
+  double high = reference.value_or(-std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < r.scores.size(); ++i) {
+    const workflow::EstimatorScore& s = r.scores[i];
+    const double x0 = static_cast<double>(i + 1);
+    panel.xtics.emplace_back(x0, s.estimator);
+    const std::vector<double>& values = s.*per_trial;
+    PlotSeries points{"", {}, {}, fmt::format("points pt 7 ps {} lc {}", values.size() < 5 ? 1.6 : 0.7, i + 1)};
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      if (!std::isfinite(values[k])) continue;
+      // Golden-ratio offsets spread the points evenly over ±0.15 without randomness.
+      const double frac = std::fmod(0.6180339887498949 * static_cast<double>(k), 1.0);
+      points.x.push_back(values.size() > 1 ? x0 + 0.3 * (frac - 0.5) : x0);
+      points.y.push_back(values[k]);
+      low = std::min(low, values[k]);
+      high = std::max(high, values[k]);
+    }
+    if (points.y.empty()) continue;
+    if (points.y.size() >= 5) {
+      panel.series.push_back({first_box ? "box: quartiles, median" : "",
+                              std::vector<double>(points.y.size(), x0), points.y, "boxplot lw 1.2 lc rgb 'black'"});
+      first_box = false;
+    }
+    panel.series.push_back(std::move(points));
   }
-  RenderPlot(out, {panel});
+  if (low <= high) {  // a margin, so that no point sits on the frame
+    const double margin = std::max(0.08 * (high - low), 1e-3 * std::max(1.0, std::abs(high)));
+    panel.yrange = PlotRange{low - margin, high + margin};
+  }
+  return panel;
+}
+
+void PlotCompare(OutputFile& out, const workflow::CompareResult& r, const workflow::OutlierSpec& spec, int trials) {
+  const std::string setting =
+      r.outliers_per_trial > 0
+          ? fmt::format("{} outliers of ±{:g}σ, {} trial{}", r.outliers_per_trial, spec.size, trials, trials == 1 ? "" : "s")
+          : fmt::format("no outliers, {} trial{}", trials, trials == 1 ? "" : "s");
+  const PlotPanel fit = CompareScorePanel(
+      r, fmt::format("{}: one-step validation fit per trial ({})", r.structure, setting), "one-step fit %",
+      &workflow::EstimatorScore::one_step_per_trial, r.reference.one_step, "clean-data LS");
+  const PlotPanel distance = CompareScorePanel(
+      r, "distance to the clean-data least-squares estimate, ||θ̂ − θ_LS|| / ||θ_LS||, per trial", "θ distance",
+      &workflow::EstimatorScore::theta_distance_per_trial, 0.0, "0 = clean-data LS");
+  RenderPlot(out, {fit, distance}, PlotSize{.width = 1000, .height_per_panel = 360});
 }
 
 void PrintCsv(const workflow::CompareResult& r) {
@@ -175,7 +217,7 @@ void RunCompare(CompareCommandOptions& o) {
   const workflow::CompareResult result = workflow::CompareRecord(io::ReadDataFile(path, o.read), path, request);
   const std::string name = dataset ? dataset->name : path;
   if (plot) {
-    PlotCompare(*plot, result, spec);
+    PlotCompare(*plot, result, spec, o.trials);
     plot->Commit();
   }
   if (o.json)
@@ -212,7 +254,7 @@ void AddCompareCommand(CLI::App& app) {
   cmd->add_option("--split", o->split, "Fraction of rows used for estimation (default: the dataset's, else 0.5)");
   cmd->add_option("--detrend", o->detrend, "Subtract the estimation-part means (mean) or not (none)")
       ->check(CLI::IsMember({"mean", "none"}));
-  cmd->add_option("--plot", o->plot, "Draw the one-step fit per trial and estimator into FILE.svg or FILE.png");
+  cmd->add_option("--plot", o->plot, "Draw the one-step fit % and θ distance of every trial per estimator into FILE.svg or FILE.png (needs gnuplot)");
   auto* json = cmd->add_flag("--json", o->json, "Print one JSON object (schema in docs/reference/cli.md)");
   cmd->add_flag("--csv", o->csv, "Print one CSV row per estimator")->excludes(json);
   AddDelimiterOption(*cmd, o->read);

@@ -285,8 +285,9 @@ void RunFit(const FitCommandOptions& o) {
   ParameterHistory history;
   if (!o.plot.empty()) {
     history.theta.resize(static_cast<std::size_t>(source->num_parameters()));
-    plan.options.on_update = [&history](int row, const StepReport&, const AnyRegressionEstimator& e) {
+    plan.options.on_update = [&history](int row, const StepReport& step, const AnyRegressionEstimator& e) {
       history.t.push_back(row + 1);
+      history.weight.push_back(step.nu * step.weight);
       const Eigen::VectorXd theta = e.parameters();
       for (int i = 0; i < theta.size(); ++i) history.theta[static_cast<std::size_t>(i)].push_back(theta(i));
     };
@@ -300,7 +301,7 @@ void RunFit(const FitCommandOptions& o) {
     if (!o.experiment_column.empty()) workflow::LabelExperiments(record, o.experiment_column);
     workflow::ValidateOn(fit, std::move(record), validation_path, request.model, kResidualLags);
   }
-  if (plot) PlotFit(*plot, fit.prepared, fit.validation, *source, fit.result.theta, history);
+  if (plot) PlotFit(*plot, fit, *source, history);
   if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
   commit_outputs();
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
@@ -341,8 +342,9 @@ void AddFitCommand(CLI::App& app) {
                 "with missing samples");
   fit->add_option("--trace", o->trace, "Write one CSV row per update: t,nu,beta,pred_err,theta1..,Dy");
   fit->add_option("--plot", o->plot,
-                  "Draw measured vs one-step and simulated output (validation) and the parameter trajectories "
-                  "into FILE.svg or FILE.png (needs gnuplot)");
+                  "Draw measured vs one-step and simulated output (validation, data units), the parameter "
+                  "trajectories, the robust weights and the residual correlations into FILE.svg or FILE.png "
+                  "(needs gnuplot)");
   fit->add_option("--validate", o->validate,
                   "Validate on this separate record (CSV or bundled name) instead of the rest of DATA; "
                   "--split then defaults to 1");

@@ -104,20 +104,37 @@ void RenderPlot(OutputFile& out, const std::vector<PlotPanel>& panels, PlotSize 
   ScratchDirectory scratch;
   std::string script = fmt::format("set terminal {}\nset output {}\nset multiplot layout {},1\n", terminal,
                                    Quoted(fs::absolute(out.temp_path()).string()), panels.size());
-  script += "set grid\nset key outside right top\nset style data lines\n";
+  script += "set termoption noenhanced\nset grid\nset style data lines\n";
+  script += fmt::format("set lmargin at screen {}\nset rmargin at screen {}\n", size.left, size.right);
+  script += fmt::format("set key at screen {}, graph 1 left top Left reverse\n", size.right + 0.02);
+  script += "set style boxplot nooutliers\nset style fill empty\nset boxwidth 0.4\n";
   for (std::size_t p = 0; p < panels.size(); ++p) {
     const PlotPanel& panel = panels[p];
     IDENT_REQUIRE(!panel.series.empty(), "plot '{}': panel {} has no series", path, p + 1);
-    script += fmt::format("set title {}\nset xlabel {}\nset ylabel {}\nplot ", Quoted(panel.title),
-                          Quoted(panel.xlabel), Quoted(panel.ylabel));
+    script += fmt::format("set title {}\nset xlabel {}\nset ylabel {}\n", Quoted(panel.title), Quoted(panel.xlabel),
+                          Quoted(panel.ylabel));
+    script += panel.xrange ? fmt::format("set xrange [{:.17g}:{:.17g}]\n", panel.xrange->low, panel.xrange->high)
+                           : "set xrange [*:*]\n";
+    script += panel.yrange ? fmt::format("set yrange [{:.17g}:{:.17g}]\n", panel.yrange->low, panel.yrange->high)
+                           : "set yrange [*:*]\n";
+    if (panel.xtics.empty()) {
+      script += "set xtics autofreq\n";
+    } else {
+      script += "set xtics (";
+      for (std::size_t i = 0; i < panel.xtics.size(); ++i)
+        script += fmt::format("{}{} {:.17g}", i ? ", " : "", Quoted(panel.xtics[i].second), panel.xtics[i].first);
+      script += ")\n";
+    }
+    script += "plot ";
     for (std::size_t k = 0; k < panel.series.size(); ++k) {
       const PlotSeries& s = panel.series[k];
       IDENT_REQUIRE(s.x.size() == s.y.size() && !s.x.empty(), "plot '{}': series '{}' has {} x and {} y values", path,
                     s.title, s.x.size(), s.y.size());
       const fs::path data = scratch.path() / fmt::format("p{}s{}.dat", p, k);
       WriteSeries(data, s);
-      script +=
-          fmt::format("{}{} using 1:2 title {} lw 1.5", k == 0 ? "" : ", ", Quoted(data.string()), Quoted(s.title));
+      script += fmt::format("{}{} using 1:2 {} with {}", k == 0 ? "" : ", ", Quoted(data.string()),
+                            s.title.empty() ? "notitle" : "title " + Quoted(s.title),
+                            s.style.empty() ? "lines lw 1.5" : s.style);
     }
     script += "\n";
   }

@@ -224,12 +224,14 @@ struct TrialRun {
 // One estimator's results over the trials, added in trial order (so that any number of threads gives the
 // same sums).
 struct Tally {
-  std::vector<double> one_step, simulation, distance, ns, cleaned, one_step_per_trial;
+  std::vector<double> one_step, simulation, distance, ns, cleaned, one_step_per_trial, distance_per_trial;
   Eigen::VectorXd theta_sum;
   std::string kind, failure;
   int passes = 1, failed = 0;
 
-  Tally(int rho, int trials) : one_step_per_trial(static_cast<std::size_t>(trials), std::nan("")) {
+  Tally(int rho, int trials)
+      : one_step_per_trial(static_cast<std::size_t>(trials), std::nan("")),
+        distance_per_trial(static_cast<std::size_t>(trials), std::nan("")) {
     theta_sum = Eigen::VectorXd::Zero(rho);
   }
 
@@ -246,6 +248,7 @@ struct Tally {
     one_step_per_trial[static_cast<std::size_t>(trial)] = run.scores.one_step;
     if (run.scores.simulation) simulation.push_back(*run.scores.simulation);
     distance.push_back(run.distance);
+    distance_per_trial[static_cast<std::size_t>(trial)] = run.distance;
   }
 
   EstimatorScore Summary(const std::string& label, int trials) const {
@@ -260,6 +263,7 @@ struct Tally {
     score.failure = failure;
     score.one_step = Spread::Of(one_step);
     score.one_step_per_trial = one_step_per_trial;
+    score.theta_distance_per_trial = distance_per_trial;
     score.has_simulation = !simulation.empty();
     score.simulation = Spread::Of(simulation);
     score.theta_distance = Spread::Of(distance);

@@ -69,7 +69,8 @@ struct EstimatorScore {
   int passes = 1;         // passes over the estimation part that ran (FitOptions::passes)
   Eigen::VectorXd theta;  // mean over trials
   Spread one_step, simulation, theta_distance;
-  std::vector<double> one_step_per_trial;
+  std::vector<double> one_step_per_trial;        // NaN for a failed trial
+  std::vector<double> theta_distance_per_trial;  // NaN for a failed trial
   bool has_simulation = false;
   double ns_per_update = 0;  // median over the first 5 trials of each one's median timed replay
   double cleaned = 0;        // mean number of outputs cleaned in the regressors

@@ -10,6 +10,8 @@
 #include "common/error.h"
 #include "ident/regression/estimator_registry.h"
 #include "ident/workflow/compare.h"
+#include "ident/workflow/compare_record.h"
+#include "ident/io/mat_file.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 
@@ -307,6 +309,32 @@ TEST(CompareCommand, UsageErrorsExitTwo) {
   EXPECT_EQ(RunCli("compare dryer --clean-regressors maybe").exit_code, 2);
   EXPECT_EQ(RunCli("compare dryer --trials x").exit_code, 2);
   EXPECT_EQ(RunCli("compare --help").exit_code, 0);
+}
+
+TEST(CompareRecord, PerTrialScoresAreThoseOfTheSingleTrialRuns) {
+  // Trial k of a 3-trial comparison corrupts the record with seed 1 + k: its per-trial one-step fit and
+  // θ distance (what compare --plot draws) equal those of a separate 1-trial run with that seed.
+  workflow::CompareRequest request;
+  request.model.output = "y";
+  request.model.inputs = {"u"};
+  request.model.nk = {3};
+  request.estimators = {"rls", "cauchy"};
+  request.trials = 3;
+  const io::DataTable table = io::ReadDataFile(DatasetPath("dryer.csv"));
+  const workflow::CompareResult all = workflow::CompareRecord(table, "dryer", request);
+  for (std::uint64_t k = 0; k < 3; ++k) {
+    workflow::CompareRequest one = request;
+    one.trials = 1;
+    one.outliers.seed = request.outliers.seed + k;
+    const workflow::CompareResult single = workflow::CompareRecord(table, "dryer", one);
+    for (const workflow::EstimatorScore& s : all.scores)
+      for (const workflow::EstimatorScore& t : single.scores)
+        if (s.estimator == t.estimator) {
+          ASSERT_EQ(s.theta_distance_per_trial.size(), 3u);
+          EXPECT_NEAR(s.one_step_per_trial[k], t.one_step.mean, 1e-9) << s.estimator << " trial " << k;
+          EXPECT_NEAR(s.theta_distance_per_trial[k], t.theta_distance.mean, 1e-12) << s.estimator << " trial " << k;
+        }
+  }
 }
 
 }  // namespace
