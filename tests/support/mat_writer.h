@@ -25,8 +25,11 @@ inline void WriteMatFile(const std::string& path, mat_ft version, const std::vec
   if (mat == nullptr) throw std::runtime_error("cannot create " + path);
   for (const MatVariable& v : variables) {
     std::vector<std::size_t> dims = v.dims;
-    std::vector<std::int32_t> ints(v.values.begin(), v.values.end());
-    std::vector<char> chars(v.values.begin(), v.values.end());
+    // Converted only for their own kind: a double variable may hold values beyond int's range.
+    std::vector<std::int32_t> ints;
+    std::vector<char> chars;
+    if (v.kind == MatVariable::kInt32) ints.assign(v.values.begin(), v.values.end());
+    if (v.kind == MatVariable::kChar) chars.assign(v.values.begin(), v.values.end());
     std::vector<double> re = v.values, im(v.values.size(), 0.5);
     mat_complex_split_t split{re.data(), im.data()};
     matvar_t* var = nullptr;
