@@ -235,7 +235,9 @@ TEST(PolynomialFit, KStepPredictionsRunTheNoiseModelWithZeroFutureInnovations) {
     for (int i = 0; i < count; ++i) {
       if (std::isnan(far.values(i, 5))) continue;
       EXPECT_NEAR(far.values(i, 4), far.values(i, 5), 1e-9) << structure << " " << i;
-      if (structure == "--nf 2") EXPECT_NEAR(two.values(i, 4), two.values(i, 5), 1e-9) << i;
+      if (structure == "--nf 2") {
+        EXPECT_NEAR(two.values(i, 4), two.values(i, 5), 1e-9) << i;
+      }
     }
   }
 }

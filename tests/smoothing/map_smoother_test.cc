@@ -293,8 +293,9 @@ TEST(MapSmoother, ReportsAnInfeasibleProblem) {
   const MapSmootherResult r = SolveMapSmoother(p);
   EXPECT_NE(r.status, MapSmootherStatus::kConverged) << r.message;
   EXPECT_EQ(r.primal, models::kInfinity);
-  if (r.status == MapSmootherStatus::kInfeasible)  // the evidence: where the multipliers diverge
+  if (r.status == MapSmootherStatus::kInfeasible) {  // the evidence: where the multipliers diverge
     EXPECT_NE(r.message.find("at t = "), std::string::npos) << r.message;
+  }
 }
 
 TEST(MapSmoother, RejectsMisSizedProblemsNamingTheField) {
