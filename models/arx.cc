@@ -66,7 +66,7 @@ void ArxRegressor::Reset() {
   for (auto& p : past_u_) p.setZero();
   samples_ = 0;
   outputs_ = 0;
-  last_cleaned_ = false;
+  last_cleaned_ = last_screened_ = false;
   cleaner_.Reset();
 }
 
@@ -102,11 +102,18 @@ void ArxRegressor::PushOutput(double y) {
 
 double ArxRegressor::PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged) {
   const long cleaned_before = cleaner_.cleaned();
+  const bool screening = cleaner_.in_warm_up();
   const double stored = cleaner_.Clean(y, y_hat, scale, flagged, judged);
   PushOutput(stored);
   last_measured_ = y;
   last_cleaned_ = cleaner_.cleaned() > cleaned_before;
+  last_screened_ = last_cleaned_ && screening;
   return stored;
+}
+
+std::optional<bool> ArxRegressor::MeasuredIsNearer(double y) const {
+  if (!last_cleaned_ || !last_screened_ || structure_.na() == 0) return std::nullopt;
+  return std::abs(y - last_measured_) < std::abs(y - past_y_(0));
 }
 
 bool ArxRegressor::MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const {
@@ -126,7 +133,7 @@ void ArxRegressor::RestoreMeasured() {
   if (!last_cleaned_) return;
   past_y_(0) = last_measured_;
   cleaner_.Restore(last_measured_);
-  last_cleaned_ = false;
+  last_cleaned_ = last_screened_ = false;
 }
 
 std::vector<std::string> StaticRegression::ParameterNames() const {

@@ -13,6 +13,7 @@
 //   for (t...) { if (reg.Next(u.row(t), z)) est.Update(y(t), z); reg.PushOutput(y(t)); }
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,6 +80,10 @@ class ArxRegressor {
   // calls RestoreMeasured(), which puts the measured y(t−1) back for every later regressor.
   bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const;
   void RestoreMeasured();
+  // The same question while no model judges (y(t−1) was cleaned by the warm-up's model-free screen, (4)
+  // of models/output_cleaner.h): the screen's own predictor, the last stored value, answers it — true if
+  // y(t) lies nearer the measured y(t−1) than the cleaned one. nullopt when y(t−1) was not cleaned so.
+  std::optional<bool> MeasuredIsNearer(double y) const;
   // The estimator's predictions are trustworthy from now on: ends the cleaner's model-free warm-up.
   void EndCleaningWarmUp() { cleaner_.EndWarmUp(); }
   const ArxStructure& structure() const { return structure_; }
@@ -89,6 +94,7 @@ class ArxRegressor {
   Eigen::VectorXd past_y_;               // past_y_(k) = y(t−1−k), k < na (as stored: maybe cleaned)
   double last_measured_ = 0;             // the measured y(t−1)
   bool last_cleaned_ = false;            // past_y_(0) is a cleaned value
+  bool last_screened_ = false;           // ... cleaned by the model-free warm-up screen
   std::vector<Eigen::VectorXd> past_u_;  // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
   long samples_ = 0;                     // samples pushed with Next()
   long outputs_ = 0;

@@ -67,6 +67,8 @@ class OutputCleaner {
   // The model is trustworthy from now on (the estimator has made its robust start): the model-free
   // warm-up (4) ends here if it has not already.
   void EndWarmUp() { warm_up_end_ = std::min(warm_up_end_, seen_); }
+  // The next Clean() screens model-free (4).
+  bool in_warm_up() const { return seen_ < warm_up_end_; }
   // The last stored value was cleaned, but the next sample showed the measured y to be right (an
   // innovation, which the dynamics carry on, not an additive outlier): y is accepted as measured and
   // the sample no longer counts as cleaned.

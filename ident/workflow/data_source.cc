@@ -75,6 +75,7 @@ class ArxSource final : public DynamicSource<models::ArxRegressor> {
     return regressor().MeasuredRegressor(z_measured);
   }
   void RestoreMeasured() override { regressor().RestoreMeasured(); }
+  std::optional<bool> MeasuredIsNearer(double y) const override { return regressor().MeasuredIsNearer(y); }
 };
 
 class PolynomialSource final : public DynamicSource<models::PseudoLinearRegressor> {

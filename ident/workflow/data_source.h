@@ -12,6 +12,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,9 @@ class DataSource {
   // the last output was cleaned, the regressor with the measured value instead, and a way to keep it.
   virtual bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> /*z_measured*/) const { return false; }
   virtual void RestoreMeasured() {}
+  // When the last output was cleaned by the model-free warm-up screen, that screen's answer to the same
+  // question (models/arx.h ArxRegressor::MeasuredIsNearer); nullopt: the model's predictions decide.
+  virtual std::optional<bool> MeasuredIsNearer(double /*y*/) const { return std::nullopt; }
   // The estimator has made its robust start: cleaning judges by its predictions from now on.
   virtual void EndCleaningWarmUp() {}
   // ARMAX/OE/BJ: the regressor holds the model's own past residuals and noise-free outputs, which depend

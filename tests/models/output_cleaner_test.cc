@@ -185,6 +185,39 @@ TEST(ArxRegressorCleaning, MeasuredRegressorAndRestoreAfterACleanedOutput) {
   EXPECT_EQ(z, Eigen::Vector3d(-4.0, -50.0, 0.5));  // the measurement, not the cleaned 3
 }
 
+// During the warm-up no model judges: an output the model-free screen cleaned is told an additive outlier
+// (the next output returns to the cleaned level) or a step (it stays at the measured one) by the
+// screen's own predictor, the last stored value; after the warm-up the model's predictions decide.
+TEST(ArxRegressorCleaning, TheWarmUpScreenTellsAnAdditiveOutlierFromAStep) {
+  const models::ArxStructure arx(1, {1}, {1});  // z = [−y(t−1), u(t−1)]
+  Eigen::VectorXd u(1), z(2), zm(2);
+  u(0) = 0.0;
+  for (const double next : {1.1, 49.0}) {  // back near 1 (additive), or staying near 50 (a step)
+    models::ArxRegressor r(arx, {.enabled = true, .warm_up = 20});
+    for (double y : {1.0, 1.2, 0.9, 1.1, 1.0, 0.8, 1.0}) {  // differences with robust scale ~0.3
+      r.Next(u, z);
+      r.PushCheckedOutput(y, std::nan(""), 1.0, false);
+    }
+    r.Next(u, z);
+    EXPECT_DOUBLE_EQ(r.PushCheckedOutput(50.0, std::nan(""), 1.0, false), 1.0);  // screened: the last value
+    r.Next(u, z);
+    ASSERT_TRUE(r.MeasuredRegressor(zm));
+    ASSERT_TRUE(r.MeasuredIsNearer(next).has_value());
+    EXPECT_EQ(*r.MeasuredIsNearer(next), next > 25) << next;
+  }
+  // After the warm-up a cleaning is the model's: no model-free verdict.
+  models::ArxRegressor r(arx, {.enabled = true, .warm_up = 2, .gross = 0});
+  for (double y : {1.0, 1.2, 0.9}) {
+    r.Next(u, z);
+    r.PushCheckedOutput(y, 1.0, 0.1, false);
+  }
+  r.Next(u, z);
+  r.PushCheckedOutput(50.0, 1.0, 0.1, true);
+  r.Next(u, z);
+  ASSERT_TRUE(r.MeasuredRegressor(zm));
+  EXPECT_FALSE(r.MeasuredIsNearer(1.0).has_value());
+}
+
 TEST(OutlierDecision, FlagsSmallRelativeWeightsOnlyOnUpdatedSteps) {
   const OutlierDecision d;                                          // 0.2
   EXPECT_FALSE(d.Flags({StepStatus::kUpdated, 0.01, 100.0, 0.0}));  // νβ = 1 (RLS)

@@ -98,9 +98,10 @@ class Estimation {
     double y_hat = std::nan(""), scale = std::nan("");
     std::optional<StepReport> step;
     if (source_.Regressor(row, z_)) {
-      // y(t−1) was cleaned: keep the reading of it (additive outlier or innovation) that predicts y(t) better.
-      if (source_.MeasuredRegressor(z_measured_) &&
-          std::abs(y - estimator_.Predict(z_measured_)) < std::abs(y - estimator_.Predict(z_))) {
+      // y(t−1) was cleaned: keep the reading of it (additive outlier or innovation) that predicts y(t) better,
+      // by the model's predictions, or by the warm-up screen's own predictor if the screen cleaned it (a
+      // start-up's provisional estimate is no model: it would restore the outlier).
+      if (source_.MeasuredRegressor(z_measured_) && KeepMeasured(y)) {
         source_.RestoreMeasured();
         z_ = z_measured_;
       }
@@ -199,6 +200,11 @@ class Estimation {
   }
 
  private:
+  bool KeepMeasured(double y) const {
+    if (const std::optional<bool> nearer = source_.MeasuredIsNearer(y)) return *nearer;
+    return std::abs(y - estimator_.Predict(z_measured_)) < std::abs(y - estimator_.Predict(z_));
+  }
+
   DataSource& source_;
   AnyRegressionEstimator& estimator_;
   std::FILE* trace_;
