@@ -121,8 +121,10 @@ class Estimation {
       flagged = decision_.Flags(report);
       // Every prediction ŷ goes to the cleaner (its gross-error test compares |y − ŷ| with the robust
       // scale of all recent prediction errors); a flagged output is rebuilt from ŷ and the noise scale.
+      // An estimator that gives no verdicts has its outputs stored as measured: no scale is asked of it (a
+      // batch estimator would solve all samples for it).
       y_hat = y - report.prediction_error;
-      scale = estimator_.noise_std();
+      if (judged_) scale = estimator_.noise_std();
       if (report.updated()) {
         ++updates_;
         ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);

@@ -1,0 +1,66 @@
+// A batch estimator in the recursive workflow: it solves all stored samples whenever a read-out follows
+// new samples (ident/regression/batch_regression.h), so the estimation loop must not read it out per row.
+// Counted with a decorator: read-outs that follow an update are solves.
+#include <memory>
+
+#include <gtest/gtest.h>
+
+#include "ident/io/csv.h"
+#include "ident/regression/estimator_registry.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
+#include "tests/support/test_data.h"
+
+namespace ident {
+namespace {
+
+class SolveCounter final : public AnyRegressionEstimator {
+ public:
+  explicit SolveCounter(std::unique_ptr<AnyRegressionEstimator> inner) : inner_(std::move(inner)) {}
+  std::string name() const override { return inner_->name(); }
+  StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) override {
+    fresh_ = true;
+    ++updates;
+    return inner_->Update(y, z);
+  }
+  int num_parameters() const override { return inner_->num_parameters(); }
+  Eigen::VectorXd parameters() const override { return Read(), inner_->parameters(); }
+  Eigen::MatrixXd covariance() const override { return Read(), inner_->covariance(); }
+  double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const override { return Read(), inner_->Predict(z); }
+  double nu() const override { return inner_->nu(); }
+  double Dy() const override { return Read(), inner_->Dy(); }
+  double noise_std() const override { return Read(), inner_->noise_std(); }
+  void Reset() override { inner_->Reset(); }
+  std::string kind() const override { return inner_->kind(); }
+  bool judges_outliers() const override { return inner_->judges_outliers(); }
+
+  int updates = 0;
+  mutable int solves = 0;
+
+ private:
+  void Read() const {
+    solves += fresh_;
+    fresh_ = false;
+  }
+  std::unique_ptr<AnyRegressionEstimator> inner_;
+  mutable bool fresh_ = false;
+};
+
+TEST(BatchEstimatorInTheWorkflow, IsSolvedOncePerFitNotOncePerRow) {
+  const std::string path = testing::DatasetPath("dryer.csv");
+  for (const char* name : {"cauchy-ml", "huber"}) {
+    auto source = workflow::MakeArxSource(io::CsvReader(path).names(), "y", {"u"}, models::ArxStructure(2, {2}, {3}),
+                                          path, {.enabled = true});
+    EstimatorSettings settings;
+    settings.name = name;
+    SolveCounter estimator(MakeRegressionEstimator(settings, source->num_parameters()));
+    ASSERT_EQ(estimator.kind(), "batch");
+    const workflow::FitResult fit = workflow::Fit(io::ReadCsv(path), *source, estimator, {});
+    EXPECT_EQ(estimator.updates, 496) << name;  // rows 4..500 of the estimation half
+    EXPECT_LE(estimator.solves, 2) << name;
+    EXPECT_GT(fit.validation.one_step, 90) << name;  // the fit itself is unchanged by how often it is read
+  }
+}
+
+}  // namespace
+}  // namespace ident
