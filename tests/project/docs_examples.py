@@ -41,7 +41,8 @@ Z = np.random.default_rng(1).normal(size=(200, 4))
 Y = Z @ np.array([0.5, -1.0, 0.2, 0.3])
 A, Q, c, r = np.array([[1.0, 0.1], [0.0, 1.0]]), 0.01 * np.eye(2), np.array([1.0, 0.0]), 0.04
 B, x0, P0 = np.array([[0.0], [0.1]]), np.zeros(2), np.eye(2)
-model = ident.SmoothingModel.from_json_file("{root}/tests/data/smoothing/random_walk_model.json")
+model = open("{root}/examples/duality/tracking_huber.json", encoding="utf-8").read()
+measurements = np.loadtxt("{root}/examples/duality/tracking.csv", delimiter=",", skiprows=1, usecols=-1)
 x = np.random.default_rng(2).laplace(size=200)
 """
 
