@@ -101,11 +101,11 @@ double LogIntegral(double nu, const Eigen::MatrixXd& V, const LogShapeFn& log_sh
     return std::isfinite(v) ? std::exp(v) : 0.0;
   };
   // At most 7 halvings of the step per level (Boost's default is 15). The criterion is relative, so the inner
-  // integrals at far-tail outer nodes, whose values are negligible against the peak, refine to the cap: with
-  // 12 an evaluation took 1.9e9 integrand calls and 97 s at ρ = 2, with 7 it takes 1.4e7 and 0.9 s, and the
-  // same values to 1e−15 at ρ = 1 and 2 (tests/approx/numerical_step_test.cc checks them against the closed
-  // forms). 7 halvings are a step of 1/128 in the double-exponential variable: enough for the smooth,
-  // centred and scaled integrand below.
+  // integrals at far-tail outer nodes, whose values are negligible against the peak, refine to the cap, and
+  // every further halving doubles their integrand calls without changing the result
+  // (tests/approx/numerical_step_test.cc checks it against the closed forms at ρ = 1 and 2).
+  // 7 halvings are a step of 1/128 in the double-exponential variable: enough for the smooth, centred and
+  // scaled integrand below.
   boost::math::quadrature::sinh_sinh<double> q(7);
   const double tol = 1e-11;
   auto inner = [&](double sigma) {

@@ -1,5 +1,5 @@
-// A generic, purely numerical one-sided maximin step for the (ν, V) classes, for ρ ≤ 2 (slow: ρ = 1 ≈ 0.3 s,
-// ρ = 2 ≈ 1 min per step, ≈ 0.7 s per evaluated β).
+// A generic, purely numerical one-sided maximin step for the (ν, V) classes, for ρ ≤ 2 (slow: every evaluated
+// β is a minimisation and a nested quadrature; a reference for the tests of the closed-form steps).
 //
 // Given any noise model log m(h | Θ, ω) and any class shape log s(ν, V; Θ, ω) (w.r.t. ω^{−δ/2}dΘdω),
 // the step searches the rank-one family V(β) = (1−β)V + βhh', ν ← ν+1 [spec §3], and for each β computes

@@ -18,9 +18,9 @@
 // SolveWeightReference() is the algorithm of spec §5 as printed: split [β0, β_hi] at the real roots of
 // P', find every sign change (+ → −) of P on the monotone pieces by safeguarded Newton (bisection
 // whenever a step leaves the bracket, stop when |Δβ| ≤ 4e−16·β), and return the candidate with the
-// largest log H0. SolveWeight() returns the same maximin root faster — it is the estimators' hot path
-// (about 2× faster; 1.05–2.1 instead of 3.6–9.6 iterations on the estimators' inputs for ρ = 2…32,
-// bench/weight_benchmark.cc):
+// largest log H0. SolveWeight() returns the same maximin root in fewer iterations — it is the estimators'
+// hot path, and bench/weight_benchmark.cc times the two against each other. What makes it faster:
+//
 //   * a bound on P' over [0, β_hi] or, failing that, a sign test on P' and P'' at the bracket ends (no
 //     square root) proves in the usual case that P decreases on [β0, β_hi], so the root is unique and
 //     log H0 is never evaluated; otherwise the pieces of spec §5 are formed and compared exactly as in

@@ -55,7 +55,7 @@ double LogUpperOrthantProbability(double h, double k, double rho) {
   if (k == -kPlusInfinity) return LogNormalTail(h);
   const double s = std::sqrt((1 - rho) * (1 + rho));
   // P(X > h, Y > k) = Φ2(−h, −k; ρ): Owen's T closed form where it keeps 1e-10 relative accuracy
-  // (a few µs instead of ~300 µs of adaptive quadrature); the log-space quadrature below for the tails.
+  // (far cheaper than adaptive quadrature); the log-space quadrature below for the tails.
   if (h != 0 && k != 0) {
     const double p = OwenBivariateCdf(-h, -k, rho, s);
     if (p >= kClosedFormFloor && p <= 1) return std::log(p);

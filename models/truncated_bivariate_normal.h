@@ -7,7 +7,7 @@
 //                                      Owen's T closed form (Boost.Math owens_t) when P ≥ 1e-5, else
 //                                      LogUpperOrthantProbabilityByQuadrature: adaptive Gauss–Kronrod
 //                                      quadrature of φ(y) Q((h − ρy)/√(1−ρ²)) over y > k, scaled at the
-//                                      mode (accurate far into the tails; ~100× slower)
+//                                      mode (accurate far into the tails; much slower)
 //   TruncatedBivariateNormalMoments    N(μ, Σ) restricted to {side_i (s_i − b_i) > 0, i = 1, 2}
 //                                      (side_i = ±1, b_i may be −∞·side_i for "no bound"): log mass, mean,
 //                                      covariance. The region is an intersection of half-planes, so the

@@ -230,8 +230,8 @@ class ActiveSet {
           break;
         }
         if (kept.size() == kn.size() || ++iterations >= o_.max_iterations) {
-          // No knot dropped: NaN convexities at scales double cannot resolve (a fuzz finding, samples
-          // from 6e-322 to 2.5e260, looped here for ever). FitLogConcaveMle's KKT check refuses the result.
+          // No knot dropped: NaN convexities at scales double cannot resolve (samples from 6e-322 to
+          // 2.5e260) would loop here for ever. FitLogConcaveMle's KKT check refuses the result.
           stalled = true;
           break;
         }

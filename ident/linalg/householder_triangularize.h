@@ -6,9 +6,9 @@
 // makeHouseholderInPlace and applyHouseholderOnTheLeft, so R is bit-identical to
 // Eigen::HouseholderQR::matrixQR()'s upper triangle for matrices of fewer than 48 columns (HouseholderQR runs
 // exactly this loop there). Why not HouseholderQR itself: its compute() also instantiates the blocked
-// algorithm and its matrix-product kernels for every fixed size, which never run below 48 columns but cost
-// about 40 s of compile time per fixed size (measured: 80 s for the 4×2 and 3×3 pre-arrays of
-// BasicKalmanFilter<2>, 35 s with this loop for those and the dynamic size together; gcc 12, -O3).
+// algorithm and its matrix-product kernels for every fixed size, which never run below 48 columns but
+// dominate the compile time of every translation unit that instantiates a fixed size. This loop
+// instantiates only the unblocked algorithm.
 //
 // Preconditions: workspace has at least a.cols() entries. Allocation-free, noexcept.
 #pragma once

@@ -1,9 +1,9 @@
 // WorkArena: one zero-initialised block of memory that a solver carves into its work arrays.
 //
-// Why: on the virtual machines this toolkit is measured on, the first touch of every 4 KiB page costs
-// several microseconds (a fresh 8 MB of small pages took 27-36 ms of CPU, the same 8 MB with transparent
-// huge pages 0.6-0.9 ms). A solver whose work arrays are a few MB (the MAP smoother at T = 10^4) spends
-// more time in page faults than in arithmetic unless its arrays share one block mapped with huge pages.
+// Why: the first touch of every 4 KiB page is a page fault, which is dear on virtual machines; one 2 MiB
+// huge page replaces 512 of them. A solver whose work arrays are a few MB (the MAP smoother at T = 10^4)
+// spends more time in page faults than in arithmetic unless its arrays share one block mapped with huge
+// pages.
 // Blocks of at least kHugePageThreshold bytes are mapped 2 MiB-aligned with MADV_HUGEPAGE (Linux; the
 // kernel may ignore the advice, which only costs speed); smaller ones come from the ordinary heap.
 //

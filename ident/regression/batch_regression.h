@@ -26,8 +26,8 @@
 //            cost no accuracy; Θ̃ above is β. Random subsets come from std::mt19937_64 with a fixed seed
 //            and a rejection-sampled index (no std distribution), so they are the same on every platform.
 //   Cost:    Huber O(nρ²) per iteration. Cauchy O(nρ²) per EM or Newton step, about
-//            (starts × screening_iterations + polished × iterations) steps; n = 500, ρ = 4 with the
-//            default options: about 5 ms on a 2-core x86-64 (tests/regression/batch_regression_test.cc, "Runtime").
+//            (starts × screening_iterations + polished × iterations) steps; the time of a fit
+//            is in bench/batch_regression_benchmark.cc.
 //
 // BatchRegressionEstimator wraps either behind the RegressionEstimator concept
 // (ident/regression/regression_estimator.h): Update() stores the sample, the read-outs solve the whole batch lazily

@@ -57,8 +57,8 @@ struct Term {
 // Terms without finite bounds ("constant": quadratic penalties) carry no multipliers: their R3 = B r - b - M u
 // is linear and stays 0 from a start with R3 = 0, so u = K^-1 (B r - b) is kept implicitly and only the
 // terms with bounds (active_) have coordinate arrays and enter the Newton right-hand sides. The work arrays
-// share one WorkArena block (huge pages for large T: first touches of small pages cost more than the
-// arithmetic on virtual machines).
+// share one WorkArena block (huge pages for large T:
+// ident/linalg/work_arena.h).
 template <int kN>
 class Solver {
  public:
