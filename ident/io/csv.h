@@ -119,16 +119,21 @@ class CsvReader {
   double ParseCell(std::string_view cell, int column) const;
   // A cell the fast path of ParseCell does not take: '+'-signed, empty, NaN/Inf or bad (throws DataError).
   double ParseUncommonCell(std::string_view cell, int column) const;
-  // Reads the next line (LF, CRLF or CR ended) into buffer_ and counts it; false at the end of the input.
+  // Reads the next line (LF, CRLF or CR ended) into text_ and counts it; false at the end of the input.
   bool ReadLine();
+  // The offset in chunk_ of the first LF or CR at or after chunk_pos_, chunk_end_ if none.
+  std::size_t LineEnd();
   // Refills chunk_ from the stream; false at its end.
   bool Fill();
 
   std::unique_ptr<std::istream> in_;
   std::vector<std::string> names_;
+  // The line ReadLine() read: a view into chunk_, or into buffer_ for a line that spans two chunks.
+  std::string_view text_;
   std::string buffer_;
   std::vector<char> chunk_;
   std::size_t chunk_pos_ = 0, chunk_end_ = 0;
+  std::size_t next_cr_ = 0;  // offset in chunk_ of the next CR at or after chunk_pos_ (chunk_end_: none)
   bool skip_lf_ = false;  // the last line ended in CR: a following LF belongs to it
   long line_ = 0;
   long rows_ = 0;
@@ -137,9 +142,9 @@ class CsvReader {
   char separator_ = ',';  // of delimiter_; 0 for whitespace runs
   bool generated_names_ = false;
   // Lines read ahead while the header was read and not yet returned by Next(): the first line of a file
-  // without a header (header_, at header_line_) and the first data line (buffer_, at held_line_).
+  // without a header (header_, at header_line_) and the first data line (held_row_, at held_line_).
   bool header_is_row_ = false, held_ = false;
-  std::string header_;
+  std::string header_, held_row_;
   long header_line_ = 0, held_line_ = 0;
 };
 
