@@ -453,7 +453,30 @@ double CsvReader::ParseUncommonCell(std::string_view cell, int column) const {
   return value;  // '+' followed by a finite number
 }
 
+bool CsvReader::ParsePlainRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) const {
+  // Each cell converted from where the previous one ended: the number must end at the separator (or the
+  // line's end) and be finite. Anything else (spaces, '+', an empty, bad or non-finite cell, a wrong
+  // number of fields) is left to ParseRow's general walk, which reads the same cells to the same values.
+  const char* p = text.data();
+  const char* const end = p + text.size();
+  const int n = num_columns();
+  for (int column = 0; column < n; ++column) {
+    double value = 0;
+    const auto [ptr, ec] = std::from_chars(p, end, value);
+    if (ec != std::errc() || ptr == p || !std::isfinite(value)) return false;
+    if (ptr == end) {
+      if (column + 1 != n) return false;
+    } else if (*ptr != separator_ || column + 1 == n) {
+      return false;
+    }
+    row(column) = value;
+    p = ptr + 1;
+  }
+  return true;
+}
+
 void CsvReader::ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) {
+  if (separator_ != 0 && ParsePlainRow(text, row)) return;
   // Parse in place without allocating: walk the fields.
   const int n = num_columns();
   int column = 0;

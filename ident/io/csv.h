@@ -116,6 +116,9 @@ class CsvReader {
   void ChooseDelimiter(std::string_view header, const std::string_view* data);
   // Parses one data line into `row`; throws DataError naming line_.
   void ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row);
+  // The common row: num_columns() finite numbers, each ended by the separator, no spaces and no '+'. False
+  // (`row` partly written) for any other line.
+  bool ParsePlainRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) const;
   double ParseCell(std::string_view cell, int column) const;
   // A cell the fast path of ParseCell does not take: '+'-signed, empty, NaN/Inf or bad (throws DataError).
   double ParseUncommonCell(std::string_view cell, int column) const;

@@ -146,6 +146,19 @@ FitResult FitPrepared(const io::DataTable& prepared, Segment estimation, Segment
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                      AnyRegressionEstimator& estimator, const FitOptions& options);
 
+// The rows of a CSV file to be streamed: its number of columns and data rows, and their (estimation,
+// validation) split.
+struct CsvLayout {
+  int columns = 0;
+  long rows = 0;
+  Segment estimation, validation;
+};
+
+// CheckCsvRecordLength's checks, returning the layout; `data_lines` is CountCsvDataRows(path) when the caller
+// has it (negative: counted here).
+CsvLayout CheckCsvLayout(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options, long data_lines = -1);
+
 // Number of data rows of a CSV file: the lines that are neither blank nor comments, minus one (the header).
 // Reads the file in blocks without parsing numbers. Throws DataError if it cannot be read.
 long CountCsvDataRows(const std::string& path);
