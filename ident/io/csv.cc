@@ -1,6 +1,7 @@
 #include "ident/io/csv.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -225,6 +226,7 @@ CsvReader::CsvReader(const std::string& path, const CsvOptions& options) : path_
     throw DataError(fmt::format("cannot read '{}': it is a directory", path));
   in_ = std::make_unique<std::ifstream>(path, std::ios::in | std::ios::binary);
   if (!*in_) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  internal::CountCsvFileOpened();
   ReadHeader();
 }
 
@@ -586,6 +588,13 @@ DataTable ReadAll(CsvReader& reader) {
 }
 
 }  // namespace
+
+namespace {
+std::atomic<long> csv_files_opened{0};
+}  // namespace
+
+long CsvFilesOpened() { return csv_files_opened.load(); }
+void internal::CountCsvFileOpened() { ++csv_files_opened; }
 
 bool CanReadTwice(const std::string& path) {
   std::error_code ec;

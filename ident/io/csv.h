@@ -178,6 +178,13 @@ DataTable ReadCsv(const std::string& path, const CsvOptions& options = {});
 // Parses CSV text held in memory; `source` names it in messages. Throws DataError.
 DataTable ParseCsv(std::string_view text, const std::string& source, const CsvOptions& options = {});
 
+// The files opened for reading by CsvReader and by the row counts of ident/workflow in this process (a test's
+// measure of how often a workflow reads a file).
+long CsvFilesOpened();
+namespace internal {
+void CountCsvFileOpened();  // called by each such opening
+}  // namespace internal
+
 // "<source>: no column 'q' (columns: t, u, y)" (shared by CsvReader and DataTable); at most 20
 // names are listed, then the number of columns.
 [[noreturn]] void ThrowUnknownColumn(const std::string& source, std::string_view name,

@@ -9,8 +9,11 @@
 // output after the first t0 measured samples.
 //
 // Streaming (FitCsvFile), memory independent of the number of rows:
-//   pass 1  count the data rows (non-blank lines after the header; no number parsing)
+//   pass 1  count the data rows (non-blank lines after the header; no number parsing; CheckCsvLayout
+//           takes a count the caller has made)
 //   pass 2  detrend "mean": the estimation-part means of the used columns (reads ⌊split·N⌋ rows)
+//   (pass 2b, fit_record.h's FitCsvFile for RLS's data-scaled prior: the mean squares of y and the
+//           regressors over the estimation part, detrended)
 //   pass 3  estimate on rows 1..⌊split·N⌋, then score on the rest in the same pass (split < 1);
 //           with split = 1 a fourth pass scores the whole record.
 // It gives the same numbers as Fit(ReadCsv(path)) up to rounding in the fit-% sums.

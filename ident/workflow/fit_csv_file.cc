@@ -29,6 +29,7 @@ using internal::Summarise;
 long CountCsvDataRows(const std::string& path) {
   std::ifstream in(path, std::ios::in | std::ios::binary);
   if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  io::internal::CountCsvFileOpened();
   // A line ends at LF or CR (CRLF: an empty line between them, not counted) and counts if it has a
   // character other than ' ' and '\t' and the first such is not '#' (the reader skips the others: blank
   // lines and comments). Past a line's first such character, memchr finds its end.
