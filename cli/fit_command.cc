@@ -223,8 +223,9 @@ void RunFit(const FitCommandOptions& o) {
   if (!once && (!io::CanReadTwice(path) || io::IsMatFile(path))) once = io::ReadDataFile(path, csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
-  const bool streamed = !once && o.plot.empty() && o.save.empty() && o.validate.empty() &&
-                        workflow::CountCsvDataRows(path) > kInMemoryRows;
+  const bool may_stream = !once && o.plot.empty() && o.save.empty() && o.validate.empty();
+  const long data_lines = may_stream ? workflow::CountCsvDataRows(path) : 0;
+  const bool streamed = may_stream && data_lines > kInMemoryRows;
   if (!streamed && !once) once = io::ReadDataFile(path, csv);
   std::optional<workflow::TimeCheck> time;
   if (once && !experiments) {  // a time column restarts in each experiment
@@ -241,8 +242,10 @@ void RunFit(const FitCommandOptions& o) {
   // The record's length first: building an estimator costs O(rho^3) for large orders.
   workflow::FitOptions length_check;
   length_check.split = o.split;
-  const long estimation_rows = once ? workflow::CheckRecordLength(once->num_rows(), *source, length_check, path)
-                                    : workflow::CheckCsvRecordLength(path, csv, *source, length_check);
+  std::optional<workflow::CsvLayout> layout;
+  if (!once) layout = workflow::CheckCsvLayout(path, csv, *source, length_check, data_lines);
+  const long estimation_rows =
+      once ? workflow::CheckRecordLength(once->num_rows(), *source, length_check, path) : layout->estimation.count;
   workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
   // Progress on stderr after 2 s: rows of the estimation part, per pass (a pass starts again at its first row).
   Progress progress("fit");
@@ -271,8 +274,7 @@ void RunFit(const FitCommandOptions& o) {
       if (*f) (*f)->Commit();
   };
   if (streamed) {
-    if (plan.scaled_prior) plan.UseScaledPrior(workflow::CsvEstimationMeanSquares(path, csv, *source, plan.options));
-    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, *plan.estimator, plan.options);
+    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, plan, *layout);
     commit_outputs();
     if (o.json) {
       std::cout << workflow::FitJson(result, path, o.split, o.detrend, nullptr, nullptr).dump(2) << "\n";

@@ -1,6 +1,7 @@
 #include "ident/io/csv.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -152,7 +153,7 @@ bool NeedsDataLine(std::string_view header, Delimiter given) {
 
 constexpr std::size_t kShownBytes = 32;     // of a cell or name echoed in a message
 constexpr std::size_t kListedColumns = 20;  // names listed by ThrowUnknownColumn
-constexpr std::size_t kChunkBytes = 1 << 16;
+constexpr std::size_t kChunkBytes = 1 << 18;
 
 // The bytes of `s` as a message shows them (no quotes): control bytes as \xNN, at most kShownBytes of
 // them (cut at a UTF-8 character boundary) and "..." if there are more.
@@ -225,6 +226,7 @@ CsvReader::CsvReader(const std::string& path, const CsvOptions& options) : path_
     throw DataError(fmt::format("cannot read '{}': it is a directory", path));
   in_ = std::make_unique<std::ifstream>(path, std::ios::in | std::ios::binary);
   if (!*in_) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  internal::CountCsvFileOpened();
   ReadHeader();
 }
 
@@ -251,12 +253,24 @@ bool CsvReader::Fill() {
     return false;
   }
   chunk_end_ = static_cast<std::size_t>(got);
+  next_cr_ = 0;
   return true;
 }
 
+std::size_t CsvReader::LineEnd() {
+  // The first LF or CR at or after chunk_pos_ (chunk_end_ if none): memchr for each, with the position of
+  // the next CR kept from one line to the next (a chunk without CR costs one scan for them).
+  const char* const data = chunk_.data();
+  if (next_cr_ < chunk_pos_ || (next_cr_ == chunk_pos_ && next_cr_ < chunk_end_ && data[next_cr_] != '\r')) {
+    const void* cr = std::memchr(data + chunk_pos_, '\r', chunk_end_ - chunk_pos_);
+    next_cr_ = cr ? static_cast<std::size_t>(static_cast<const char*>(cr) - data) : chunk_end_;
+  }
+  const void* lf = std::memchr(data + chunk_pos_, '\n', next_cr_ - chunk_pos_);
+  return lf ? static_cast<std::size_t>(static_cast<const char*>(lf) - data) : next_cr_;
+}
+
 bool CsvReader::ReadLine() {
-  buffer_.clear();
-  bool started = false;  // a byte of the line (or its end) was read
+  bool carried = false;  // the line began in an earlier chunk: its bytes so far are in buffer_
   while (chunk_pos_ < chunk_end_ || Fill()) {
     if (skip_lf_) {
       skip_lf_ = false;
@@ -265,23 +279,32 @@ bool CsvReader::ReadLine() {
         continue;
       }
     }
-    started = true;
-    const char* const begin = chunk_.data() + chunk_pos_;
-    const char* const end = chunk_.data() + chunk_end_;
-    const char* const stop = std::find_if(begin, end, [](char c) { return c == '\n' || c == '\r'; });
-    const auto take = static_cast<std::size_t>(stop - begin);
-    if (buffer_.size() + take > kMaxCsvLineBytes)
+    const std::size_t stop = LineEnd();
+    const std::size_t take = stop - chunk_pos_;
+    const std::size_t before = carried ? buffer_.size() : 0;
+    if (before + take > kMaxCsvLineBytes)
       throw DataError(fmt::format("{}:{}: line longer than {} bytes", path_, line_ + 1, kMaxCsvLineBytes));
-    buffer_.append(begin, take);
-    chunk_pos_ += take;
-    if (stop != end) {
-      skip_lf_ = *stop == '\r';
-      ++chunk_pos_;
-      ++line_;
-      return true;
+    const char* const begin = chunk_.data() + chunk_pos_;
+    if (stop == chunk_end_) {  // the line goes on in the next chunk
+      if (!carried) buffer_.clear();
+      buffer_.append(begin, take);
+      carried = true;
+      chunk_pos_ = stop;
+      continue;
     }
+    if (carried) {
+      buffer_.append(begin, take);
+      text_ = buffer_;
+    } else {
+      text_ = std::string_view(begin, take);  // in place: valid until the next ReadLine()
+    }
+    skip_lf_ = chunk_[stop] == '\r';
+    chunk_pos_ = stop + 1;
+    ++line_;
+    return true;
   }
-  if (!started) return false;
+  if (!carried) return false;
+  text_ = buffer_;
   ++line_;  // the last line, without a line end
   return true;
 }
@@ -291,26 +314,27 @@ void CsvReader::ReadHeader() {
   // Header: the first line that is neither blank nor a comment.
   bool got_header = false;
   while (ReadLine()) {
-    if (line_ == 1 && buffer_.starts_with("\xEF\xBB\xBF")) buffer_.erase(0, 3);
-    if (!IsBlank(buffer_) && !IsComment(buffer_)) {
+    if (line_ == 1 && text_.starts_with("\xEF\xBB\xBF")) text_.remove_prefix(3);
+    if (!IsBlank(text_) && !IsComment(text_)) {
       got_header = true;
       break;
     }
   }
   if (!got_header) throw DataError(fmt::format("{}: the file is empty", path));
-  header_.swap(buffer_);
+  header_.assign(text_);
   header_line_ = line_;
   // The first data line, read ahead for the delimiter when the header does not decide it, and held for
   // Next().
   const bool read_ahead = NeedsDataLine(header_, options_.delimiter);
   while (read_ahead && ReadLine()) {
-    if (!IsBlank(buffer_) && !IsComment(buffer_)) {
+    if (!IsBlank(text_) && !IsComment(text_)) {
+      held_row_.assign(text_);
       held_ = true;
       held_line_ = line_;
       break;
     }
   }
-  const std::string_view data_line(buffer_);
+  const std::string_view data_line(held_row_);
   ChooseDelimiter(header_, held_ ? &data_line : nullptr);
   std::vector<std::string_view> fields;
   Split(header_, separator_, fields);
@@ -381,7 +405,8 @@ int CsvReader::ColumnIndex(std::string_view name) const {
 
 [[gnu::always_inline]] inline double CsvReader::ParseCell(std::string_view cell, int column) const {
   // The common case inline; every problem is diagnosed by ThrowBadCell.
-  if (!cell.empty() && cell.front() != '+' && cell.find('\0') == std::string_view::npos) {
+  // A cell with a NUL byte does not convert to its end (from_chars stops there).
+  if (!cell.empty() && cell.front() != '+') {
     double value = 0;
     const auto [ptr, ec] = std::from_chars(cell.data(), cell.data() + cell.size(), value);
     if (ec == std::errc() && ptr == cell.data() + cell.size()) {
@@ -430,7 +455,30 @@ double CsvReader::ParseUncommonCell(std::string_view cell, int column) const {
   return value;  // '+' followed by a finite number
 }
 
+bool CsvReader::ParsePlainRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) const {
+  // Each cell converted from where the previous one ended: the number must end at the separator (or the
+  // line's end) and be finite. Anything else (spaces, '+', an empty, bad or non-finite cell, a wrong
+  // number of fields) is left to ParseRow's general walk, which reads the same cells to the same values.
+  const char* p = text.data();
+  const char* const end = p + text.size();
+  const int n = num_columns();
+  for (int column = 0; column < n; ++column) {
+    double value = 0;
+    const auto [ptr, ec] = std::from_chars(p, end, value);
+    if (ec != std::errc() || ptr == p || !std::isfinite(value)) return false;
+    if (ptr == end) {
+      if (column + 1 != n) return false;
+    } else if (*ptr != separator_ || column + 1 == n) {
+      return false;
+    }
+    row(column) = value;
+    p = ptr + 1;
+  }
+  return true;
+}
+
 void CsvReader::ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) {
+  if (separator_ != 0 && ParsePlainRow(text, row)) return;
   // Parse in place without allocating: walk the fields.
   const int n = num_columns();
   int column = 0;
@@ -478,20 +526,20 @@ bool CsvReader::Next(Eigen::Ref<Eigen::VectorXd> row) {
     } else {
       held_ = false;
       line_ = held_line_;
-      ParseRow(buffer_, row);
+      ParseRow(held_row_, row);
     }
     ++rows_;
     return true;
   }
   while (ReadLine()) {
-    if (IsBlank(buffer_)) {
+    if (IsBlank(text_)) {
       if (rows_ > 0 && blank_line_ == 0) blank_line_ = line_;
       continue;
     }
-    if (IsComment(buffer_)) continue;
+    if (IsComment(text_)) continue;
     if (blank_line_ != 0)
       throw DataError(fmt::format("{}:{}: blank line inside the data (a gap in the record?)", path_, blank_line_));
-    ParseRow(buffer_, row);
+    ParseRow(text_, row);
     ++rows_;
     return true;
   }
@@ -540,6 +588,13 @@ DataTable ReadAll(CsvReader& reader) {
 }
 
 }  // namespace
+
+namespace {
+std::atomic<long> csv_files_opened{0};
+}  // namespace
+
+long CsvFilesOpened() { return csv_files_opened.load(); }
+void internal::CountCsvFileOpened() { ++csv_files_opened; }
 
 bool CanReadTwice(const std::string& path) {
   std::error_code ec;

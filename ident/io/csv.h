@@ -116,19 +116,27 @@ class CsvReader {
   void ChooseDelimiter(std::string_view header, const std::string_view* data);
   // Parses one data line into `row`; throws DataError naming line_.
   void ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row);
+  // The common row: num_columns() finite numbers, each ended by the separator, no spaces and no '+'. False
+  // (`row` partly written) for any other line.
+  bool ParsePlainRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) const;
   double ParseCell(std::string_view cell, int column) const;
   // A cell the fast path of ParseCell does not take: '+'-signed, empty, NaN/Inf or bad (throws DataError).
   double ParseUncommonCell(std::string_view cell, int column) const;
-  // Reads the next line (LF, CRLF or CR ended) into buffer_ and counts it; false at the end of the input.
+  // Reads the next line (LF, CRLF or CR ended) into text_ and counts it; false at the end of the input.
   bool ReadLine();
+  // The offset in chunk_ of the first LF or CR at or after chunk_pos_, chunk_end_ if none.
+  std::size_t LineEnd();
   // Refills chunk_ from the stream; false at its end.
   bool Fill();
 
   std::unique_ptr<std::istream> in_;
   std::vector<std::string> names_;
+  // The line ReadLine() read: a view into chunk_, or into buffer_ for a line that spans two chunks.
+  std::string_view text_;
   std::string buffer_;
   std::vector<char> chunk_;
   std::size_t chunk_pos_ = 0, chunk_end_ = 0;
+  std::size_t next_cr_ = 0;  // offset in chunk_ of the next CR at or after chunk_pos_ (chunk_end_: none)
   bool skip_lf_ = false;  // the last line ended in CR: a following LF belongs to it
   long line_ = 0;
   long rows_ = 0;
@@ -137,9 +145,9 @@ class CsvReader {
   char separator_ = ',';  // of delimiter_; 0 for whitespace runs
   bool generated_names_ = false;
   // Lines read ahead while the header was read and not yet returned by Next(): the first line of a file
-  // without a header (header_, at header_line_) and the first data line (buffer_, at held_line_).
+  // without a header (header_, at header_line_) and the first data line (held_row_, at held_line_).
   bool header_is_row_ = false, held_ = false;
-  std::string header_;
+  std::string header_, held_row_;
   long header_line_ = 0, held_line_ = 0;
 };
 
@@ -169,6 +177,13 @@ struct DataTable {
 DataTable ReadCsv(const std::string& path, const CsvOptions& options = {});
 // Parses CSV text held in memory; `source` names it in messages. Throws DataError.
 DataTable ParseCsv(std::string_view text, const std::string& source, const CsvOptions& options = {});
+
+// The files opened for reading by CsvReader and by the row counts of ident/workflow in this process (a test's
+// measure of how often a workflow reads a file).
+long CsvFilesOpened();
+namespace internal {
+void CountCsvFileOpened();  // called by each such opening
+}  // namespace internal
 
 // "<source>: no column 'q' (columns: t, u, y)" (shared by CsvReader and DataTable); at most 20
 // names are listed, then the number of columns.

@@ -9,8 +9,11 @@
 // output after the first t0 measured samples.
 //
 // Streaming (FitCsvFile), memory independent of the number of rows:
-//   pass 1  count the data rows (non-blank lines after the header; no number parsing)
+//   pass 1  count the data rows (non-blank lines after the header; no number parsing; CheckCsvLayout
+//           takes a count the caller has made)
 //   pass 2  detrend "mean": the estimation-part means of the used columns (reads ⌊split·N⌋ rows)
+//   (pass 2b, fit_record.h's FitCsvFile for RLS's data-scaled prior: the mean squares of y and the
+//           regressors over the estimation part, detrended)
 //   pass 3  estimate on rows 1..⌊split·N⌋, then score on the rest in the same pass (split < 1);
 //           with split = 1 a fourth pass scores the whole record.
 // It gives the same numbers as Fit(ReadCsv(path)) up to rounding in the fit-% sums.
@@ -145,6 +148,19 @@ FitResult FitPrepared(const io::DataTable& prepared, Segment estimation, Segment
 // Throws DataError for unreadable/bad data (file:line:column), InvalidArgument as Fit does.
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                      AnyRegressionEstimator& estimator, const FitOptions& options);
+
+// The rows of a CSV file to be streamed: its number of columns and data rows, and their (estimation,
+// validation) split.
+struct CsvLayout {
+  int columns = 0;
+  long rows = 0;
+  Segment estimation, validation;
+};
+
+// CheckCsvRecordLength's checks, returning the layout; `data_lines` is CountCsvDataRows(path) when the caller
+// has it (negative: counted here).
+CsvLayout CheckCsvLayout(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options, long data_lines = -1);
 
 // Number of data rows of a CSV file: the lines that are neither blank nor comments, minus one (the header).
 // Reads the file in blocks without parsing numbers. Throws DataError if it cannot be read.

@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.h"
+#include "ident/workflow/fit_record.h"
 #include "ident/workflow/internal/fit_steps.h"
 
 namespace ident::workflow {
@@ -28,23 +29,37 @@ using internal::Summarise;
 long CountCsvDataRows(const std::string& path) {
   std::ifstream in(path, std::ios::in | std::ios::binary);
   if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  io::internal::CountCsvFileOpened();
   // A line ends at LF or CR (CRLF: an empty line between them, not counted) and counts if it has a
   // character other than ' ' and '\t' and the first such is not '#' (the reader skips the others: blank
-  // lines and comments).
-  std::vector<char> block(1 << 16);
+  // lines and comments). Past a line's first such character, memchr finds its end.
+  std::vector<char> block(1 << 20);
   long lines = 0;
   enum { kBlank, kContent, kComment } state = kBlank;  // of the current line so far
   while (in) {
     in.read(block.data(), static_cast<std::streamsize>(block.size()));
-    const char* const end = block.data() + in.gcount();
-    for (const char* p = block.data(); p < end; ++p) {
-      const char c = *p;
-      if (c == '\n' || c == '\r') {
-        lines += state == kContent;
-        state = kBlank;
-      } else if (state == kBlank && c != ' ' && c != '\t') {
+    const char* p = block.data();
+    const char* const end = p + in.gcount();
+    const char* next_cr = nullptr;  // the first CR at or after p (end: none); null: not searched yet
+    while (p < end) {
+      if (state == kBlank) {
+        const char c = *p;
+        if (c == ' ' || c == '\t' || c == '\n' || c == '\r') {
+          ++p;
+          continue;
+        }
         state = c == '#' ? kComment : kContent;
       }
+      if (next_cr == nullptr || next_cr < p) {
+        next_cr = static_cast<const char*>(std::memchr(p, '\r', static_cast<std::size_t>(end - p)));
+        if (next_cr == nullptr) next_cr = end;
+      }
+      const char* lf = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(next_cr - p)));
+      const char* const line_end = lf ? lf : next_cr;
+      if (line_end == end) break;  // the line goes on in the next block
+      lines += state == kContent;
+      state = kBlank;
+      p = line_end + 1;
     }
   }
   if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
@@ -54,18 +69,15 @@ long CountCsvDataRows(const std::string& path) {
 
 namespace {
 
-// The rows of a CSV file: the header's reader, the number of data rows and the (estimation, validation) split.
-struct CsvLayout {
-  int columns = 0;
-  long rows = 0;
-  Segment estimation, validation;
-};
+// The layout of a CSV file from its header and its data lines (`data_lines`: CountCsvDataRows(path), counted
+// here if negative).
 CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                 const FitOptions& options) {
+                 const FitOptions& options, long data_lines = -1) {
   io::CsvReader header(path, csv);
   CsvLayout layout;
   layout.columns = header.num_columns();
-  layout.rows = CountCsvDataRows(path) + (header.generated_names() ? 1 : 0);  // no header: its line is a row
+  if (data_lines < 0) data_lines = CountCsvDataRows(path);
+  layout.rows = data_lines + (header.generated_names() ? 1 : 0);  // no header: its line is a row
   if (layout.rows == 0) {
     Eigen::VectorXd row(layout.columns);
     header.Next(row);  // throws "no data rows after the header"
@@ -106,16 +118,13 @@ auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) 
   }
 }
 
+// Passes 3 and 4 of FitCsvFile (fit.h), given the layout (pass 1) and the detrending offsets (pass 2).
 FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
-                        AnyRegressionEstimator& estimator, const FitOptions& options) {
-  // Pass 1: the header, then the number of rows (the rows are parsed and checked by the passes below).
-  const CsvLayout layout = LayOut(path, csv, source, options);
+                        AnyRegressionEstimator& estimator, const FitOptions& options, const CsvLayout& layout,
+                        const Eigen::VectorXd& offset) {
   const long rows = layout.rows;
   const Segment estimation = layout.estimation, validation = layout.validation;  // captured below (clang 14)
   Eigen::VectorXd row(layout.columns);
-
-  // Pass 2: detrending offsets (estimation-part means of the used columns, NaN = missing skipped).
-  const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, estimation);
 
   // Pass 3: estimate on the estimation part; with split < 1 score the rest in the same pass. With
   // options.passes > 1 the passes before the last read the estimation part only.
@@ -185,9 +194,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
 }
 
 Eigen::VectorXd StreamMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
-                                  const FitOptions& options) {
-  const CsvLayout layout = LayOut(path, csv, source, options);
-  const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation);
+                                  const CsvLayout& layout, const Eigen::VectorXd& offset) {
   MeanSquares squares(source);
   io::CsvReader reader(path, csv);
   Eigen::VectorXd row(layout.columns);
@@ -202,12 +209,34 @@ Eigen::VectorXd StreamMeanSquares(const std::string& path, const io::CsvOptions&
 
 Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                                          const FitOptions& options) {
-  return DataErrorsFirst(path, csv, [&] { return StreamMeanSquares(path, csv, source, options); });
+  return DataErrorsFirst(path, csv, [&] {
+    const CsvLayout layout = LayOut(path, csv, source, options);
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation);
+    return StreamMeanSquares(path, csv, source, layout, offset);
+  });
 }
 
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                      AnyRegressionEstimator& estimator, const FitOptions& options) {
-  return DataErrorsFirst(path, csv, [&] { return StreamCsvFile(path, csv, source, estimator, options); });
+  return DataErrorsFirst(path, csv, [&] {
+    const CsvLayout layout = LayOut(path, csv, source, options);
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation);
+    return StreamCsvFile(path, csv, source, estimator, options, layout, offset);
+  });
+}
+
+CsvLayout CheckCsvLayout(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                         const FitOptions& options, long data_lines) {
+  return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options, data_lines); });
+}
+
+FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
+                     const CsvLayout& layout) {
+  return DataErrorsFirst(path, csv, [&] {
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, plan.options, layout.estimation);
+    if (plan.scaled_prior) plan.UseScaledPrior(StreamMeanSquares(path, csv, source, layout, offset));
+    return StreamCsvFile(path, csv, source, *plan.estimator, plan.options, layout, offset);
+  });
 }
 
 int CheckRecordLength(long rows, const DataSource& source, const FitOptions& options, const std::string& name) {

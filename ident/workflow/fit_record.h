@@ -71,6 +71,11 @@ struct RecordFit {
 // In memory. `plan.options.on_update` and `.trace`, if set, see every update.
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags = 20);
 
+// FitTable's fit of a CSV file, streamed (FitCsvFile of fit.h) with `layout` from CheckCsvLayout: the
+// detrending means are computed once for the data-scaled prior (plan.scaled_prior) and the fit.
+FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
+                     const CsvLayout& layout);
+
 // `name` is the record's name in messages (a path, "DataFrame", …).
 RecordFit FitRecord(io::DataTable table, const std::string& name, const FitRequest& request);
 
