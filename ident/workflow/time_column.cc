@@ -103,4 +103,19 @@ io::DataTable FillTimeGaps(const io::DataTable& table, TimeCheck& check) {
   return out;
 }
 
+std::optional<TimeCheck> CheckRecordTime(io::DataTable& table, const std::vector<int>& used_columns, bool fill) {
+  std::optional<TimeCheck> time = CheckTimeColumn(table, used_columns);
+  if (time && fill && !time->gaps.empty()) table = FillTimeGaps(table, *time);
+  return time;
+}
+
+nlohmann::ordered_json TimeGapsJson(const std::optional<TimeCheck>& time) {
+  if (!time) return nullptr;
+  nlohmann::ordered_json gaps = nlohmann::ordered_json::array();
+  for (const TimeGap& g : time->gaps)
+    gaps.push_back(
+        {{"row", g.row}, {"t_before", g.t_before}, {"t_after", g.t_after}, {"missing", g.missing}, {"filled", g.filled}});
+  return gaps;
+}
+
 }  // namespace ident::workflow

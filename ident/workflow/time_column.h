@@ -6,11 +6,15 @@
 //
 //   CheckTimeColumn   finds the column, checks it increases, lists its gaps
 //   FillTimeGaps      inserts each gap's missing rows
+//   CheckRecordTime   both, as the commands that read a record in memory do
+//   TimeGapsJson      the reports' `time_gaps` key
 #pragma once
 
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "ident/io/csv.h"
 
@@ -40,5 +44,11 @@ std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::
 // Inserts each gap's missing rows (time t_before + k * median step, NaN elsewhere), setting
 // TimeGap::filled. Throws DataError when the gaps hold more missing rows than the record has rows.
 io::DataTable FillTimeGaps(const io::DataTable& table, TimeCheck& check);
+
+// CheckTimeColumn, then, when `fill` (--missing) and there are gaps, FillTimeGaps in place.
+std::optional<TimeCheck> CheckRecordTime(io::DataTable& table, const std::vector<int>& used_columns, bool fill);
+
+// [{row, t_before, t_after, missing, filled}], or null when no time column was checked (`time` null).
+nlohmann::ordered_json TimeGapsJson(const std::optional<TimeCheck>& time);
 
 }  // namespace ident::workflow
