@@ -1,4 +1,4 @@
-// ident stream [DATA] --output y (--input u [--na --nb --nk] | --regressors x1,x2 [--intercept])
+// ident stream [DATA] [--experiment-column NAME] --output y (--input u [--na --nb --nk] | --regressors x1,x2 [--intercept])
 //              [--estimator NAME ...] [--missing] [--flush-every N]
 // Reads CSV rows as they arrive (standard input, a pipe, a FIFO or a file) and prints one JSON line per
 // row: {"t": row, "theta": [...], "weight": β, "nu": ν, "status": "..."} (ident/workflow/stream.h).
@@ -15,6 +15,7 @@
 #include "cli/commands.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
+#include "cli/experiment_records.h"
 #include "cli/structure_options.h"
 #include "common/error.h"
 #include "ident/io/arriving_input.h"
@@ -27,6 +28,7 @@ namespace {
 
 struct StreamCommandOptions {
   std::string data = io::kStandardInput;
+  std::string experiment_column;
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
   bool missing = false;
@@ -76,6 +78,10 @@ void RunStream(const StreamCommandOptions& o) {
   const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
   const std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
   workflow::StreamEstimation stream(*source, *estimator, decision);
+  // Each change of the experiment column's label starts a further experiment: the regressors restart.
+  const int label_column =
+      o.experiment_column.empty() ? -1 : reader.ColumnIndex(o.experiment_column);
+  double label = 0;
   Eigen::VectorXd row(reader.num_columns());
   fmt::memory_buffer line;
   long unflushed = 0;
@@ -90,6 +96,13 @@ void RunStream(const StreamCommandOptions& o) {
           std::isdigit(static_cast<unsigned char>(what[located.size()])))
         throw DataError(fmt::format("{} (data row {})", what, stream.rows() + 1));
       throw;
+    }
+    if (label_column >= 0) {
+      if (std::isnan(row(label_column)))
+        throw DataError(fmt::format("{}: data row {}: the experiment column '{}' is missing", reader.path(),
+                                    stream.rows() + 1, o.experiment_column));
+      if (stream.rows() > 0 && row(label_column) != label) stream.Restart();
+      label = row(label_column);
     }
     const workflow::StreamStep step = stream.Row(row);
     WriteLine(line, step, estimator->parameters());
@@ -116,6 +129,7 @@ void AddStreamCommand(CLI::App& app) {
       "stream", "Estimate on CSV rows as they arrive; print one JSON line per row (theta, weight, status)");
   stream->add_option("DATA", o->data, "CSV with a header: '-' (standard input, the default), a FIFO or a file")
       ->capture_default_str();
+  AddExperimentColumnOption(*stream, o->experiment_column);
   o->structure.AddTo(*stream);
   o->estimator.AddTo(*stream);
   stream->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");

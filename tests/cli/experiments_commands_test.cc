@@ -207,6 +207,34 @@ TEST_F(ExperimentCommands, PredictRestartsTheRegressorsAndTheKStepRecursionAtEac
   EXPECT_EQ(cells[4], "2");
 }
 
+std::vector<nlohmann::json> JsonLines(const std::string& out) {
+  std::vector<nlohmann::json> lines;
+  std::istringstream in(out);
+  for (std::string line; std::getline(in, line);) lines.push_back(nlohmann::json::parse(line));
+  return lines;
+}
+
+// ident stream --experiment-column restarts the regressors where the label changes: RLS ends at least squares on
+// each experiment's own regressors, the Cauchy estimator at ident fit's estimate on the same experiments.
+TEST_F(ExperimentCommands, StreamRestartsTheRegressorsWhereTheLabelChanges) {
+  const CliResult rls = RunCli("stream " + labelled + kArx221 + " --estimator rls --experiment-column run");
+  ASSERT_EQ(rls.exit_code, 0) << rls.err;
+  const std::vector<nlohmann::json> lines = JsonLines(rls.out);
+  ASSERT_EQ(lines.size(), 550u);
+  for (std::size_t row : {1u, 2u, 301u, 302u}) EXPECT_EQ(lines[row - 1]["status"], "start-up") << row;
+  EXPECT_EQ(lines[302]["status"], "ok");
+  const PieceFit ls = PieceLeastSquares(records, 2, 2, 1, 2);
+  const std::vector<double> theta = lines.back()["theta"];
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(theta[static_cast<std::size_t>(i)], ls.theta(i), 1e-8) << i;
+
+  const std::string cauchy = kArx221 + " --estimator cauchy --experiment-column run";
+  const CliResult streamed = RunCli("stream " + labelled + cauchy);
+  ASSERT_EQ(streamed.exit_code, 0) << streamed.err;
+  const nlohmann::json fit = CommandJson("fit " + labelled + cauchy + " --split 1 --detrend none --json");
+  EXPECT_EQ(JsonLines(streamed.out).back()["theta"], fit["theta"]);
+  ExpectCliError("stream " + labelled + kArx221 + " --experiment-column runs", "no column 'runs'");
+}
+
 // FNV-1a, 64 bits (offset basis 14695981039346656037, prime 1099511628211), as 16 hex digits.
 std::string HandFnv1a64(const std::string& bytes) {
   std::uint64_t h = 14695981039346656037ull;
