@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <system_error>
 
 #include <fmt/format.h>
@@ -22,6 +23,7 @@
 #include "ident/io/csv.h"
 #include "ident/regression/estimator_registry.h"
 #include "ident/workflow/stream.h"
+#include "ident/workflow/time_column.h"
 
 namespace ident::cli {
 namespace {
@@ -79,12 +81,24 @@ void RunStream(const StreamCommandOptions& o) {
   const std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
   workflow::StreamEstimation stream(*source, *estimator, decision);
   // Each change of the experiment column's label starts a further experiment: the regressors restart.
-  const int label_column =
-      o.experiment_column.empty() ? -1 : reader.ColumnIndex(o.experiment_column);
+  const int label_column = o.experiment_column.empty() ? -1 : reader.ColumnIndex(o.experiment_column);
   double label = 0;
+  // The time column of a single experiment (a time column restarts in each), checked as rows arrive
+  // (workflow::ArrivingTimeCheck); --missing fills a gap with its missing rows, as ident fit does.
+  const int time_column = label_column < 0 ? workflow::TimeColumnIndex(reader.names(), source->used_columns()) : -1;
+  workflow::ArrivingTimeCheck time_check;
   Eigen::VectorXd row(reader.num_columns());
   fmt::memory_buffer line;
   long unflushed = 0;
+  auto emit = [&](const Eigen::VectorXd& values) {
+    const workflow::StreamStep step = stream.Row(values);
+    WriteLine(line, step, estimator->parameters());
+    if (o.flush_every > 0 && ++unflushed >= o.flush_every) {
+      std::fflush(stdout);
+      unflushed = 0;
+    }
+    CheckStandardOutput();
+  };
   while (true) {
     try {
       if (!reader.Next(row)) break;
@@ -104,13 +118,26 @@ void RunStream(const StreamCommandOptions& o) {
       if (stream.rows() > 0 && row(label_column) != label) stream.Restart();
       label = row(label_column);
     }
-    const workflow::StreamStep step = stream.Row(row);
-    WriteLine(line, step, estimator->parameters());
-    if (o.flush_every > 0 && ++unflushed >= o.flush_every) {
-      std::fflush(stdout);
-      unflushed = 0;
+    if (time_column >= 0) {
+      const std::string& name = reader.names()[static_cast<std::size_t>(time_column)];
+      const std::optional<workflow::TimeGap> gap = time_check.Next(row(time_column), reader.rows_read(), name,
+                                                                   fmt::format("{}:{}", reader.path(), reader.line()));
+      if (gap && o.missing) {
+        Eigen::VectorXd missing = Eigen::VectorXd::Constant(row.size(), std::nan(""));
+        for (long k = 1; k <= gap->missing; ++k) {
+          missing(time_column) = gap->t_before + static_cast<double>(k) * time_check.median_step();
+          emit(missing);
+        }
+      } else if (gap) {
+        std::fflush(stdout);
+        fmt::print(stderr,
+                   "ident stream: time column '{}': gap at data row {} ({} -> {}, {} samples missing; --missing fills "
+                   "them as missing samples)\n",
+                   name, gap->row, gap->t_before, gap->t_after, gap->missing);
+        std::fflush(stderr);
+      }
     }
-    CheckStandardOutput();
+    emit(row);
   }
   if (stream.Finish()) {
     const workflow::StreamStep end{

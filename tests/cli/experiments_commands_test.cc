@@ -27,7 +27,7 @@ struct PieceFit {
 
 // z(t) = (−y(t−1) … −y(t−na), u(t−nk) … u(t−nk−nb+1)) for t = t0 … n−1 of each piece alone.
 void PieceRegressors(const std::vector<ExperimentRecord>& pieces, int na, int nb, int nk, int t0, Eigen::MatrixXd& Z,
-                   Eigen::VectorXd& Y) {
+                     Eigen::VectorXd& Y) {
   std::vector<Eigen::VectorXd> rows;
   std::vector<double> ys;
   for (const ExperimentRecord& p : pieces)
@@ -59,7 +59,7 @@ PieceFit PieceLeastSquares(const std::vector<ExperimentRecord>& pieces, int na, 
 
 // Mean square of the one-step residuals of θ over the pieces (rows t ≥ t0 of each).
 double PieceLoss(const std::vector<ExperimentRecord>& pieces, int na, int nb, int nk, int t0,
-               const Eigen::VectorXd& theta) {
+                 const Eigen::VectorXd& theta) {
   Eigen::MatrixXd Z;
   Eigen::VectorXd Y;
   PieceRegressors(pieces, na, nb, nk, t0, Z, Y);
@@ -171,9 +171,9 @@ TEST_F(ExperimentCommands, CompareReferenceIsLeastSquaresOfTheExperimentsOwnRegr
 // predict on the two experiments: one-step and 2-step predictions built by hand per experiment from the saved θ.
 TEST_F(ExperimentCommands, PredictRestartsTheRegressorsAndTheKStepRecursionAtEachExperiment) {
   const std::string model = TempDir() + "/cmd_model.json";
-  ASSERT_EQ(RunCli("fit " + a + " " + b + kArx221 + " --split 1 --detrend none --estimator rls --save " + model)
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      RunCli("fit " + a + " " + b + kArx221 + " --split 1 --detrend none --estimator rls --save " + model).exit_code,
+      0);
   const std::vector<double> th = nlohmann::json::parse(ReadFile(model))["theta"];
   const nlohmann::json j = CommandJson("predict " + model + " " + a + " " + b + " --horizon 2 --json");
   ExpectTwoExperiments(j, a, b);
@@ -274,7 +274,8 @@ class TimeGapCommands : public ::testing::Test {
   std::string path = WriteFile("gap.csv", [this] {
     std::string text = "t,u,y\n";
     for (std::size_t i = 0; i < all.y.size(); ++i)
-      if (i < 200 || i >= 203) text += fmt::format("{:.1f},{:.17g},{:.17g}\n", 0.1 * static_cast<double>(i), all.u[i], all.y[i]);
+      if (i < 200 || i >= 203)
+        text += fmt::format("{:.1f},{:.17g},{:.17g}\n", 0.1 * static_cast<double>(i), all.u[i], all.y[i]);
     return text;
   }());
 };
@@ -324,6 +325,35 @@ TEST_F(TimeGapCommands, CompareAndPredictReportTheGapAndFillItUnderMissing) {
   ASSERT_EQ(csv.exit_code, 0) << csv.err;
   EXPECT_NE(csv.err.find("time column 't': 1 gap"), std::string::npos) << csv.err;
   EXPECT_EQ(csv.out.rfind("row,y,one_step,residual\n", 0), 0u);
+}
+
+// ident stream compares each step with the median of the recent ones: the gap is reported on stderr, or filled
+// under --missing, after which RLS ends at least squares on the two pieces alone.
+TEST_F(TimeGapCommands, StreamReportsTheGapAndFillsItUnderMissing) {
+  const std::string arx = kArx221 + " --estimator rls";
+  const CliResult reported = RunCli("stream " + path + arx);
+  ASSERT_EQ(reported.exit_code, 0) << reported.err;
+  EXPECT_EQ(JsonLines(reported.out).size(), 400u);
+  EXPECT_NE(reported.err.find("time column 't': gap at data row 201 (19.9 -> 20.3, 3 samples missing"),
+            std::string::npos)
+      << reported.err;
+  const CliResult filled = RunCli("stream " + path + arx + " --missing");
+  ASSERT_EQ(filled.exit_code, 0) << filled.err;
+  EXPECT_EQ(filled.err, "");
+  const std::vector<nlohmann::json> lines = JsonLines(filled.out);
+  ASSERT_EQ(lines.size(), 403u);
+  // The three filled rows and the two whose regressors reach back into them have no update.
+  for (std::size_t row = 201; row <= 205; ++row) EXPECT_EQ(lines[row - 1]["status"], "missing") << row;
+  EXPECT_EQ(lines[205]["status"], "ok");
+  const PieceFit ls = PieceLeastSquares(pieces, 2, 2, 1, 2);
+  const std::vector<double> theta = lines.back()["theta"];
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(theta[static_cast<std::size_t>(i)], ls.theta(i), 1e-8) << i;
+
+  const std::string back = WriteFile("back_t.csv", "t,u,y\n0,1,2\n1,2,3\n0.5,3,4\n");
+  const CliResult error = RunCli("stream " + back + arx);
+  EXPECT_EQ(error.exit_code, 1);
+  EXPECT_NE(error.err.find("back_t.csv:4: time column 't' does not increase: 0.5 after 1"), std::string::npos)
+      << error.err;
 }
 
 }  // namespace
