@@ -1,4 +1,4 @@
-// ident compare DATA [--estimators rls,cauchy,student:3] [--outliers RATE:SIZE[:SEED]] [--trials N]
+// ident compare DATA... [--experiment-column NAME] [--estimators rls,cauchy,student:3] [--outliers RATE:SIZE[:SEED]] [--trials N]
 //               [structure options] [estimator options] [--split F] [--detrend mean|none] [--json|--csv]
 // Without structure options a bundled dataset uses its suggested structure and split (datasets/index.json).
 #include <unistd.h>
@@ -21,10 +21,12 @@
 #include "cli/csv_options.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
+#include "cli/experiment_records.h"
 #include "cli/gnuplot.h"
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
 #include "cli/structure_options.h"
+#include "cli/time_gaps.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/io/mat_file.h"
@@ -34,7 +36,9 @@ namespace ident::cli {
 namespace {
 
 struct CompareCommandOptions {
-  std::string data;
+  std::vector<std::string> data;  // one record, or one file per experiment
+  std::string experiment_column;
+  bool missing = false;
   io::CsvOptions read;  // --delimiter
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
@@ -129,9 +133,17 @@ std::string Cell(const workflow::Spread& s, int trials, const char* format) {
 }
 
 void PrintTable(const workflow::CompareResult& r, const std::string& name, const workflow::OutlierSpec& spec,
-                int trials, const std::string& cleaning) {
+                int trials, const std::string& cleaning, bool missing) {
   fmt::print("{}: {}, estimation rows {}-{}, validation rows {}-{}\n", name, r.structure, r.estimation.first + 1,
              r.estimation.first + r.estimation.count, r.validation.first + 1, r.validation.first + r.validation.count);
+  if (r.experiments.size() > 1) {
+    fmt::print("{} experiments (regressors restart at each):", r.experiments.size());
+    for (std::size_t i = 0; i < r.experiments.size(); ++i)
+      fmt::print("{} {} rows {}-{}", i ? "," : "", r.experiments[i].name, r.experiments[i].first + 1,
+                 r.experiments[i].first + r.experiments[i].count);
+    fmt::print("\n");
+  }
+  if (r.time) PrintTimeGaps(stdout, *r.time, missing);
   if (r.outliers_per_trial > 0)
     fmt::print(
         "outliers: {} of the {} estimation samples ({:g} %) moved by ±{:g}σ (σ = {:.4g}, the clean LS residual "
@@ -185,17 +197,22 @@ std::function<void(int, int)> ProgressLines() {
 }
 
 void RunCompare(CompareCommandOptions& o) {
-  const std::string path = ResolveDataPath(o.data);
-  const std::optional<DatasetInfo> dataset = FindDataset(o.data);
+  std::vector<std::string> paths;
+  std::vector<NamedPath> inputs = {{"--prior file", o.estimator.prior_file}};
+  for (const std::string& d : o.data) {
+    paths.push_back(ResolveDataPath(d));
+    inputs.push_back({"input data file", paths.back()});
+  }
+  const std::optional<DatasetInfo> dataset = FindDataset(o.data.front());
   IDENT_REQUIRE(dataset.has_value() || o.structure.Given(),
                 "'{}' is not a bundled dataset with a suggested structure; give --output and --input (or --regressors)",
-                o.data);
+                o.data.front());
   const StructureCliOptions structure = dataset ? o.structure.WithDefaultsFrom(dataset->structure) : o.structure;
   const double split = o.split.value_or(dataset && !o.structure.Given() ? dataset->split : 0.5);
   IDENT_REQUIRE(!structure.output.empty(), "give --output (the output column)");
   const std::string detrend = !o.detrend.empty() ? o.detrend : structure.intercept ? "none" : "mean";
   const workflow::OutlierSpec spec = workflow::OutlierSpec::Parse(o.outliers);
-  CheckOutputPaths({{"--plot", o.plot}}, {{"input data file", path}, {"--prior file", o.estimator.prior_file}});
+  CheckOutputPaths({{"--plot", o.plot}}, inputs);
   std::optional<OutputFile> plot;  // renamed onto --plot only when the comparison and the plot succeed
   if (!o.plot.empty()) {
     CheckPlotFileName(o.plot);
@@ -214,8 +231,19 @@ void RunCompare(CompareCommandOptions& o) {
   request.split = split;
   request.detrend = detrend;
   request.progress = isatty(STDERR_FILENO) ? std::function<void(int, int)>(ProgressBar) : ProgressLines();
-  const workflow::CompareResult result = workflow::CompareRecord(io::ReadDataFile(path, o.read), path, request);
-  const std::string name = dataset ? dataset->name : path;
+  // Several experiments (several files, an experiment column) in one table, as ident fit reads them; the time
+  // column of a single record is checked (its gaps filled with --missing).
+  ExperimentRecords records = ReadExperimentRecords(
+      paths, o.experiment_column, {.missing_as_nan = o.missing, .delimiter = o.read.delimiter});
+  const std::string path = records.several ? records.name : paths.front();
+  std::optional<workflow::TimeCheck> time;
+  if (!records.several)
+    time = workflow::CheckRecordTime(records.table, structure.MakeSource(records.table.names, path)->used_columns(),
+                                     o.missing);
+  workflow::CompareResult result = workflow::CompareRecord(std::move(records.table), path, request);
+  if (records.several) result.experiments = records.experiments;
+  result.time = time;
+  const std::string name = dataset && !records.several ? dataset->name : path;
   if (plot) {
     PlotCompare(*plot, result, spec, o.trials);
     plot->Commit();
@@ -225,7 +253,7 @@ void RunCompare(CompareCommandOptions& o) {
   else if (o.csv)
     PrintCsv(result);
   else
-    PrintTable(result, name, spec, o.trials, structure.clean_regressors);
+    PrintTable(result, name, spec, o.trials, structure.clean_regressors, o.missing);
 }
 
 }  // namespace
@@ -234,7 +262,13 @@ void AddCompareCommand(CLI::App& app) {
   auto o = std::make_shared<CompareCommandOptions>();
   CLI::App* cmd = app.add_subcommand(
       "compare", "Compare estimators on a record with injected outliers, scored on its clean validation part");
-  cmd->add_option("DATA", o->data, "CSV file with a header, or a bundled dataset's name (e.g. dryer)")->required();
+  cmd->add_option("DATA", o->data,
+                  "CSV file with a header, or a bundled dataset's name (e.g. dryer); several: one experiment each")
+      ->required();
+  AddExperimentColumnOption(*cmd, o->experiment_column);
+  cmd->add_flag("--missing", o->missing,
+                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
+                "with missing samples");
   cmd->add_option("--estimators", o->estimators,
                   fmt::format("Comma-separated estimators ({}; dof as 'student:3')",
                               fmt::join(RegressionEstimatorNames(), ", ")))

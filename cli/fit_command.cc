@@ -13,12 +13,14 @@
 #include "cli/csv_options.h"
 #include "cli/dataset_index.h"
 #include "cli/estimator_options.h"
+#include "cli/experiment_records.h"
 #include "cli/fit_plot.h"
 #include "cli/gnuplot.h"
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
 #include "cli/progress.h"
 #include "cli/structure_options.h"
+#include "cli/time_gaps.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/io/mat_file.h"
@@ -53,7 +55,8 @@ struct FitCommandOptions {
 
 // The model file of --save (ident/workflow/saved_model.h).
 workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow::FitRequest& request,
-                                 const std::string& path, const AnyRegressionEstimator& estimator) {
+                                 const std::string& path, const std::vector<ExperimentFile>& files,
+                                 const AnyRegressionEstimator& estimator) {
   workflow::SavedModel m;
   m.model = request.model;
   m.structure_name = fit.result.structure;
@@ -69,8 +72,10 @@ workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow:
   m.passes = fit.result.passes;
   m.data_path = path;
   m.data_rows = fit.prepared.num_rows();
-  // Standard input is gone; several files have no one checksum.
-  m.data_checksum = fit.experiments.size() == 1 && io::CanReadTwice(path) ? workflow::FileChecksum(path) : "";
+  // Standard input is gone; several files have no one checksum (each file's is in data_files).
+  auto checksum = [](const std::string& file) { return io::CanReadTwice(file) ? workflow::FileChecksum(file) : ""; };
+  m.data_checksum = files.size() == 1 ? checksum(files.front().path) : "";
+  for (const ExperimentFile& f : files) m.data_files.push_back({.path = f.path, .checksum = checksum(f.path), .rows = f.rows});
   m.split = request.split;
   m.validation = fit.validation;
   m.validation_scores = fit.result.validation;
@@ -107,23 +112,6 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
   fmt::print("  {}\n", a.Verdict());
 }
 
-// One line: the time column's gaps, the first kShownGaps of them with their rows and times.
-void PrintTimeGaps(const workflow::TimeCheck& time, bool filled) {
-  constexpr std::size_t kShownGaps = 5;
-  long missing = 0;
-  for (const workflow::TimeGap& g : time.gaps) missing += g.missing;
-  std::string shown;
-  for (std::size_t i = 0; i < time.gaps.size() && i < kShownGaps; ++i) {
-    const workflow::TimeGap& g = time.gaps[i];
-    shown += fmt::format("{}row {} ({} -> {})", i ? ", " : "", g.row, g.t_before, g.t_after);
-  }
-  if (time.gaps.size() > kShownGaps) shown += ", ...";
-  fmt::print("time column '{}': {} gap{} (steps above {} x the median step {:.6g}; {} samples missing{}): {}\n",
-             time.column, time.gaps.size(), time.gaps.size() == 1 ? "" : "s", workflow::kTimeGapFactor,
-             time.median_step, missing,
-             filled ? ", filled as missing samples" : "; --missing fills them as missing samples", shown);
-}
-
 void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o,
                  const std::vector<std::pair<std::string, double>>& means = {},
                  const std::vector<workflow::Experiment>& experiments = {}) {
@@ -148,7 +136,7 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
                  experiments[i].first + experiments[i].count);
   }
   fmt::print("\n");
-  if (r.time && !r.time->gaps.empty()) PrintTimeGaps(*r.time, o.missing);
+  if (r.time) PrintTimeGaps(stdout, *r.time, o.missing);
   fmt::print("\n  {:<12} {:>14} {:>12}\n", "parameter", "estimate", "std");
   for (int i = 0; i < r.theta.size(); ++i)
     fmt::print("  {:<12} {:>14.6g} {:>12.4g}\n", r.parameter_names[i], r.theta(i), r.theta_std(i));
@@ -209,11 +197,13 @@ void RunFit(const FitCommandOptions& o) {
   // Several experiments (several files, or an experiment column) are read into one table in memory.
   const bool experiments = paths.size() > 1 || !o.experiment_column.empty();
   std::vector<workflow::Experiment> experiment_list;
+  std::vector<ExperimentFile> files;
   std::optional<io::DataTable> once;
   if (experiments) {
-    std::vector<io::DataTable> tables;
-    for (const std::string& p : paths) tables.push_back(io::ReadDataFile(p, csv));
-    once = workflow::ConcatenateExperiments(std::move(tables), o.experiment_column, &experiment_list);
+    ExperimentRecords records = ReadExperimentRecords(paths, o.experiment_column, csv);
+    once = std::move(records.table);
+    experiment_list = std::move(records.experiments);
+    files = std::move(records.files);
   }
   const std::string path = experiments ? once->source : paths.front();
   // Standard input, a pipe, a device or a .mat file is read once, into memory; a regular file is first checked by
@@ -228,10 +218,9 @@ void RunFit(const FitCommandOptions& o) {
   const bool streamed = may_stream && data_lines > kInMemoryRows;
   if (!streamed && !once) once = io::ReadDataFile(path, csv);
   std::optional<workflow::TimeCheck> time;
-  if (once && !experiments) {  // a time column restarts in each experiment
-    time = workflow::CheckTimeColumn(*once, source->used_columns());
-    if (time && o.missing && !time->gaps.empty()) once = workflow::FillTimeGaps(*once, *time);
-  }
+  if (!experiments) files = {{path, once ? once->num_rows() : 0}};  // as read, before gaps are filled
+  if (once && !experiments)  // a time column restarts in each experiment
+    time = workflow::CheckRecordTime(*once, source->used_columns(), o.missing);
   workflow::FitRequest request;
   request.model = o.structure;
   request.estimator = o.estimator;
@@ -304,7 +293,7 @@ void RunFit(const FitCommandOptions& o) {
     workflow::ValidateOn(fit, std::move(record), validation_path, request.model, kResidualLags);
   }
   if (plot) PlotFit(*plot, fit, *source, history);
-  if (save) save->Write(ModelToSave(fit, request, path, *plan.estimator).ToJson().dump(1) + "\n");
+  if (save) save->Write(ModelToSave(fit, request, path, files, *plan.estimator).ToJson().dump(1) + "\n");
   commit_outputs();
   const workflow::ResidualAnalysis* residuals = fit.residuals ? &*fit.residuals : nullptr;
   if (o.json) {
@@ -325,9 +314,7 @@ void AddFitCommand(CLI::App& app) {
   fit->add_option("DATA", o->data,
                   "CSV file with a header, or a bundled dataset's name (e.g. dryer); several: one experiment each")
       ->required();
-  fit->add_option("--experiment-column", o->experiment_column,
-                  "Column labelling the experiment: each run of one label is an experiment, and the regressors "
-                  "restart at each");
+  AddExperimentColumnOption(*fit, o->experiment_column);
   o->structure.AddTo(*fit, /*require_output=*/false);
   o->estimator.AddTo(*fit);
   fit->add_option("--split", o->split, "Fraction of rows used for estimation; 1 = estimate and validate on all")

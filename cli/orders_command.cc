@@ -1,17 +1,21 @@
-// ident orders DATA --output y --input u [--na 1:10] [--nb 1:10] [--nk 0:5] [--criterion aic|bic|fpe|mdl|validation]
+// ident orders DATA... [--experiment-column NAME] --output y --input u [--na 1:10] [--nb 1:10] [--nk 0:5] [--criterion aic|bic|fpe|mdl|validation]
 //              [--split 0.5] [--detrend mean|none] [--top N] [--json]
 // ARX order and delay selection (ident/workflow/order_selection.h): every structure of the grid fitted by
 // least squares on the same estimation samples, ranked by the criterion.
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "cli/commands.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
+#include "cli/experiment_records.h"
 #include "cli/progress.h"
+#include "cli/time_gaps.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/io/mat_file.h"
@@ -23,7 +27,9 @@ namespace ident::cli {
 namespace {
 
 struct OrdersOptions {
-  std::string data, output, input;
+  std::vector<std::string> data;  // one record, or one file per experiment
+  std::string experiment_column, output, input;
+  bool missing = false;
   std::string na = "1:5", nb = "1:5", nk = "1:5";
   std::string nc = "0", nd = "0", nf = "0";  // ARMAX/OE/BJ ranges
   std::string recursion = "rplr";
@@ -56,7 +62,8 @@ nlohmann::ordered_json ScoreJson(const workflow::StructureScore& s) {
 }
 
 void RunOrders(const OrdersOptions& o) {
-  const std::string path = ResolveDataPath(o.data);
+  std::vector<std::string> paths;
+  for (const std::string& d : o.data) paths.push_back(ResolveDataPath(d));
   workflow::OrderGrid grid;
   std::tie(grid.na_min, grid.na_max) = workflow::OrderGrid::ParseRange(o.na, "--na");
   std::tie(grid.nb_min, grid.nb_max) = workflow::OrderGrid::ParseRange(o.nb, "--nb");
@@ -69,11 +76,20 @@ void RunOrders(const OrdersOptions& o) {
   std::tie(polynomial.nf_min, polynomial.nf_max) = workflow::OrderGrid::ParseRange(o.nf, "--nf");
   const bool with_noise_model = polynomial.nc_max > 0 || polynomial.nd_max > 0 || polynomial.nf_max > 0;
   IDENT_REQUIRE(o.passes >= 1 && o.passes <= 100, "--passes {}; need 1..100", o.passes);
-  io::DataTable table = io::ReadDataFile(path, o.csv);
+  // Several experiments (several files, an experiment column) in one table, as ident fit reads them: no
+  // regressor straddles two. The time column of a single record is checked (its gaps filled with --missing).
+  ExperimentRecords records =
+      ReadExperimentRecords(paths, o.experiment_column, {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
+  io::DataTable& table = records.table;
+  const std::string path = records.name;
   // The largest structure's source: it reads the output and the input, and splits and detrends them.
   const models::ArxStructure largest(grid.na_max, {grid.nb_max}, {grid.nk_max});
   std::unique_ptr<workflow::DataSource> source =
       workflow::MakeArxSource(table.names, o.output, {o.input}, largest, path);
+  std::optional<workflow::TimeCheck> time;
+  if (!records.several) time = workflow::CheckRecordTime(table, source->used_columns(), o.missing);
+  std::optional<io::DataTable> raw;  // the ARMAX/OE/BJ grid fits each structure from the record as read
+  if (with_noise_model) raw = table;
   workflow::FitOptions options;
   options.split = o.split;
   options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
@@ -88,7 +104,7 @@ void RunOrders(const OrdersOptions& o) {
     request.split = o.split;
     request.passes = o.passes;
     request.detrend = o.detrend;
-    r = workflow::SelectPolynomialOrders(io::ReadDataFile(path, o.csv), path, polynomial, request, o.criterion);
+    r = workflow::SelectPolynomialOrders(*raw, path, polynomial, request, o.criterion);
   } else {
     r = workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
                                table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion,
@@ -100,6 +116,8 @@ void RunOrders(const OrdersOptions& o) {
     j["criterion"] = r.criterion;
     j["samples"] = r.samples;
     j["validation_samples"] = r.validation_samples;
+    j["experiments"] = workflow::ExperimentsJson(records.experiments);
+    j["time_gaps"] = workflow::TimeGapsJson(time);
     j["best"] = ScoreJson(r.structures.front());
     auto& list = j["structures"] = nlohmann::ordered_json::array();
     for (const auto& s : r.structures) list.push_back(ScoreJson(s));
@@ -115,6 +133,14 @@ void RunOrders(const OrdersOptions& o) {
     fmt::print("{}: {} ARX structures (na {}, nb {}, nk {}) fitted by least squares on the same {} samples{}\n", path,
                r.structures.size(), o.na, o.nb, o.nk, r.samples,
                r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
+  if (records.experiments.size() > 1) {
+    fmt::print("{} experiments (regressors restart at each):", records.experiments.size());
+    for (std::size_t i = 0; i < records.experiments.size(); ++i)
+      fmt::print("{} {} rows {}-{}", i ? "," : "", records.experiments[i].name, records.experiments[i].first + 1,
+                 records.experiments[i].first + records.experiments[i].count);
+    fmt::print("\n");
+  }
+  if (time) PrintTimeGaps(stdout, *time, o.missing);
   fmt::print("ranked by {} (lower is better)\n\n", r.criterion);
   fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk",
              with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", "nc", "nd", "nf") : "", "d", "loss", "AIC", "BIC", "FPE",
@@ -129,12 +155,15 @@ void RunOrders(const OrdersOptions& o) {
   }
   if (shown < r.structures.size()) fmt::print("  … {} more (--top, --json)\n", r.structures.size() - shown);
   const auto& best = r.structures.front();
+  const std::string fit_data =
+      fmt::format("{}", fmt::join(o.data, " ")) +
+      (o.experiment_column.empty() ? "" : " --experiment-column " + o.experiment_column);
   if (with_noise_model)
     fmt::print("\nbest by {}: ident fit {} --output {} --input {} --na {} --nb {} --nk {} --nc {} --nd {} --nf {}\n",
-               r.criterion, o.data, o.output, o.input, best.na, best.nb, best.nk, best.nc, best.nd, best.nf);
+               r.criterion, fit_data, o.output, o.input, best.na, best.nb, best.nk, best.nc, best.nd, best.nf);
   else
     fmt::print("\nbest by {}: ARX({},{},{})  (ident fit {} --output {} --input {} --na {} --nb {} --nk {})\n",
-               r.criterion, best.na, best.nb, best.nk, o.data, o.output, o.input, best.na, best.nb, best.nk);
+               r.criterion, best.na, best.nb, best.nk, fit_data, o.output, o.input, best.na, best.nb, best.nk);
 }
 
 }  // namespace
@@ -143,7 +172,13 @@ void AddOrdersCommand(CLI::App& app) {
   auto o = std::make_shared<OrdersOptions>();
   CLI::App* cmd =
       app.add_subcommand("orders", "Select ARX orders and delay: loss and AIC/BIC/FPE/MDL of every structure");
-  cmd->add_option("DATA", o->data, "CSV file with a header, or a bundled dataset's name (e.g. dryer)")->required();
+  cmd->add_option("DATA", o->data,
+                  "CSV file with a header, or a bundled dataset's name (e.g. dryer); several: one experiment each")
+      ->required();
+  AddExperimentColumnOption(*cmd, o->experiment_column);
+  cmd->add_flag("--missing", o->missing,
+                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
+                "with missing samples");
   cmd->add_option("--output", o->output, "Output column y")->required();
   cmd->add_option("--input", o->input, "Input column u (one input)")->required();
   cmd->add_option("--na", o->na, "Range of na, A:B or N")->capture_default_str();

@@ -1,11 +1,15 @@
-// ident predict MODEL.json DATA [--rows A:B] [--horizon K] [--simulate] [--json]
+// ident predict MODEL.json DATA... [--experiment-column NAME] [--rows A:B] [--horizon K] [--simulate] [--json]
 // Predictions of a saved model (ident fit --save, ident/workflow/saved_model.h) on a record with the same
 // columns, in physical units: the model's detrending means are subtracted from the data and added back to
 // the predictions. Scores as ident fit scores its validation part (workflow::Score): on the rows of the
-// fit's validation part this reproduces the fit's figures exactly.
+// fit's validation part this reproduces the fit's figures exactly. Several experiments (several files, an
+// experiment column) are predicted as ident fit scores them: each restarts the regressors and the simulation.
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -13,6 +17,8 @@
 #include "cli/commands.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
+#include "cli/experiment_records.h"
+#include "cli/time_gaps.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/io/mat_file.h"
@@ -25,7 +31,8 @@ namespace ident::cli {
 namespace {
 
 struct PredictOptions {
-  std::string model, data, rows;
+  std::string model, rows, experiment_column;
+  std::vector<std::string> data;  // one record, or one file per experiment
   int horizon = 1;
   bool simulate = false, json = false, missing = false;
   io::CsvOptions csv;
@@ -48,9 +55,16 @@ std::pair<double, double> FitOf(const std::vector<double>& y, const std::vector<
 
 void RunPredict(const PredictOptions& o) {
   const workflow::SavedModel m = workflow::SavedModel::Read(o.model);
-  const std::string path = ResolveDataPath(o.data);
-  io::DataTable table = io::ReadDataFile(path, {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
+  std::vector<std::string> paths;
+  for (const std::string& d : o.data) paths.push_back(ResolveDataPath(d));
+  ExperimentRecords records =
+      ReadExperimentRecords(paths, o.experiment_column, {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
+  io::DataTable& table = records.table;
+  const std::string path = records.name;
   std::unique_ptr<workflow::DataSource> source = m.model.MakeSource(table.names, path);
+  // The time column of a single record (a time column restarts in each experiment); --missing fills its gaps.
+  std::optional<workflow::TimeCheck> time;
+  if (!records.several) time = workflow::CheckRecordTime(table, source->used_columns(), o.missing);
   IDENT_REQUIRE(source->num_parameters() == m.theta.size(), "{}: theta has {} entries; {} needs {}", o.model,
                 m.theta.size(), source->structure(), source->num_parameters());
   IDENT_REQUIRE(o.horizon >= 1, "--horizon {}; need 1 or more", o.horizon);
@@ -108,18 +122,26 @@ void RunPredict(const PredictOptions& o) {
     } else {
       j["k_step"] = nullptr;
     }
+    j["experiments"] = workflow::ExperimentsJson(records.experiments);
+    j["time_gaps"] = workflow::TimeGapsJson(time);
     std::cout << j.dump(2) << "\n";
     return;
   }
-  // One CSV row per row of the segment, in physical units.
-  fmt::print("row,y,one_step,residual{}{}\n", k_step.empty() ? "" : fmt::format(",k{}_step", o.horizon),
-             o.simulate && !p.simulation.empty() ? ",simulation" : "");
+  // One CSV row per row of the segment, in physical units; the time column's gaps on stderr, outside the CSV.
+  if (time) PrintTimeGaps(stderr, *time, o.missing);
+  // With several experiments a last column names each row's.
+  std::vector<std::string> experiment_of;
+  if (records.experiments.size() > 1)
+    for (const workflow::Experiment& e : records.experiments) experiment_of.resize(e.first + e.count, e.name);
+  fmt::print("row,y,one_step,residual{}{}{}\n", k_step.empty() ? "" : fmt::format(",k{}_step", o.horizon),
+             o.simulate && !p.simulation.empty() ? ",simulation" : "", experiment_of.empty() ? "" : ",experiment");
   for (std::size_t i = 0; i < p.rows.size(); ++i) {
     // Shortest round-trip digits; the residual is y − ŷ in the detrended unit (no rounding from the mean).
     const double y = measured(p.rows[i] - 1), y1 = p.one_step[i] + output_mean;
     fmt::print("{},{},{},{}", p.rows[i], y, y1, p.measured[i] - p.one_step[i]);
     if (!k_step.empty()) fmt::print(",{}", k_step[i] + output_mean);
     if (o.simulate && !p.simulation.empty()) fmt::print(",{}", p.simulation[i] + output_mean);
+    if (!experiment_of.empty()) fmt::print(",{}", experiment_of[static_cast<std::size_t>(p.rows[i] - 1)]);
     fmt::print("\n");
   }
 }
@@ -131,12 +153,17 @@ void AddPredictCommand(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("predict", "Predict or simulate with a saved model (ident fit --save) on a record");
   cmd->add_option("MODEL", o->model, "Model file written by ident fit --save")->required();
-  cmd->add_option("DATA", o->data, "CSV file with the model's columns, or a bundled dataset's name")->required();
+  cmd->add_option("DATA", o->data,
+                  "CSV file with the model's columns, or a bundled dataset's name; several: one experiment each")
+      ->required();
+  AddExperimentColumnOption(*cmd, o->experiment_column);
   cmd->add_option("--rows", o->rows, "Rows A:B (1-based) to predict and score; default all");
   cmd->add_option("--horizon", o->horizon, "Also the K-step-ahead prediction (outputs after t-K predicted)")
       ->capture_default_str();
   cmd->add_flag("--simulate", o->simulate, "Also the simulated output (the model's own past outputs)");
-  cmd->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");
+  cmd->add_flag("--missing", o->missing,
+                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
+                "with missing samples");
   cmd->add_flag("--json", o->json, "Print fit % and RMS (one_step, simulation, k_step) as JSON instead of the CSV");
   AddDelimiterOption(*cmd, o->csv);
   cmd->callback([o] { RunPredict(*o); });

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <functional>
 #include <iostream>
 #include <memory>
 
@@ -15,6 +16,7 @@
 
 #include "cli/commands.h"
 #include "cli/csv_options.h"
+#include "cli/progress.h"
 #include "common/error.h"
 #include "ident/smoothing/map_smoother.h"
 #include "ident/workflow/smoothing_model.h"
@@ -35,11 +37,32 @@ std::vector<std::vector<double>> Rows(const Eigen::MatrixXd& m) {  // one row pe
   return rows;
 }
 
+// Progress of the interior-point method on stderr after 2 s: its number of iterations is not known in advance,
+// but its relative KKT residual falls from the first iteration's to the tolerance about geometrically
+// (superlinearly near the end), so the decades it has fallen of those it must fall are the work done.
+std::function<void(int, double)> SmoothProgress(Progress& progress, double tolerance) {
+  return [&progress, tolerance, first = 0.0, total = 1L](int iteration, double kkt) mutable {
+    if (iteration == 0) {
+      first = kkt;
+      const double decades = std::log10(first / tolerance);  // NaN or ±inf for a residual that is not finite
+      total = std::isfinite(decades) ? std::clamp(static_cast<long>(std::ceil(decades)), 1L, 1000L) : 1L;
+    }
+    const double fallen = std::log10(first / kkt);
+    const long done = kkt <= tolerance     ? total
+                      : std::isfinite(fallen) ? std::clamp(static_cast<long>(std::clamp(fallen, 0.0, 1e3)), 0L, total - 1)
+                                              : 0L;
+    progress.Report(done, total, "decades of the KKT residual down to the tolerance");
+  };
+}
+
 void RunSmooth(const SmoothOptions& o) {
   const MapSmootherProblem p = workflow::ReadSmoothProblem(o.model, o.data, o.csv);
+  Progress progress("smooth");
+  MapSmootherOptions options;
+  options.on_iteration = SmoothProgress(progress, options.tolerance);
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
-  const MapSmootherResult r = SolveMapSmoother(p);
+  const MapSmootherResult r = SolveMapSmoother(p, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double cpu_seconds = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   if (r.status != MapSmootherStatus::kConverged)

@@ -1,4 +1,4 @@
-// ident stream [DATA] --output y (--input u [--na --nb --nk] | --regressors x1,x2 [--intercept])
+// ident stream [DATA] [--experiment-column NAME] --output y (--input u [--na --nb --nk] | --regressors x1,x2 [--intercept])
 //              [--estimator NAME ...] [--missing] [--flush-every N]
 // Reads CSV rows as they arrive (standard input, a pipe, a FIFO or a file) and prints one JSON line per
 // row: {"t": row, "theta": [...], "weight": β, "nu": ν, "status": "..."} (ident/workflow/stream.h).
@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <system_error>
 
 #include <fmt/format.h>
@@ -15,18 +16,21 @@
 #include "cli/commands.h"
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
+#include "cli/experiment_records.h"
 #include "cli/structure_options.h"
 #include "common/error.h"
 #include "ident/io/arriving_input.h"
 #include "ident/io/csv.h"
 #include "ident/regression/estimator_registry.h"
 #include "ident/workflow/stream.h"
+#include "ident/workflow/time_column.h"
 
 namespace ident::cli {
 namespace {
 
 struct StreamCommandOptions {
   std::string data = io::kStandardInput;
+  std::string experiment_column;
   StructureCliOptions structure;
   EstimatorCliOptions estimator;
   bool missing = false;
@@ -76,9 +80,25 @@ void RunStream(const StreamCommandOptions& o) {
   const EstimatorSettings settings = o.estimator.Resolve(source->num_parameters());
   const std::unique_ptr<AnyRegressionEstimator> estimator = MakeRegressionEstimator(settings, source->num_parameters());
   workflow::StreamEstimation stream(*source, *estimator, decision);
+  // Each change of the experiment column's label starts a further experiment: the regressors restart.
+  const int label_column = o.experiment_column.empty() ? -1 : reader.ColumnIndex(o.experiment_column);
+  double label = 0;
+  // The time column of a single experiment (a time column restarts in each), checked as rows arrive
+  // (workflow::ArrivingTimeCheck); --missing fills a gap with its missing rows, as ident fit does.
+  const int time_column = label_column < 0 ? workflow::TimeColumnIndex(reader.names(), source->used_columns()) : -1;
+  workflow::ArrivingTimeCheck time_check;
   Eigen::VectorXd row(reader.num_columns());
   fmt::memory_buffer line;
   long unflushed = 0;
+  auto emit = [&](const Eigen::VectorXd& values) {
+    const workflow::StreamStep step = stream.Row(values);
+    WriteLine(line, step, estimator->parameters());
+    if (o.flush_every > 0 && ++unflushed >= o.flush_every) {
+      std::fflush(stdout);
+      unflushed = 0;
+    }
+    CheckStandardOutput();
+  };
   while (true) {
     try {
       if (!reader.Next(row)) break;
@@ -91,13 +111,33 @@ void RunStream(const StreamCommandOptions& o) {
         throw DataError(fmt::format("{} (data row {})", what, stream.rows() + 1));
       throw;
     }
-    const workflow::StreamStep step = stream.Row(row);
-    WriteLine(line, step, estimator->parameters());
-    if (o.flush_every > 0 && ++unflushed >= o.flush_every) {
-      std::fflush(stdout);
-      unflushed = 0;
+    if (label_column >= 0) {
+      if (std::isnan(row(label_column)))
+        throw DataError(fmt::format("{}: data row {}: the experiment column '{}' is missing", reader.path(),
+                                    stream.rows() + 1, o.experiment_column));
+      if (stream.rows() > 0 && row(label_column) != label) stream.Restart();
+      label = row(label_column);
     }
-    CheckStandardOutput();
+    if (time_column >= 0) {
+      const std::string& name = reader.names()[static_cast<std::size_t>(time_column)];
+      const std::optional<workflow::TimeGap> gap = time_check.Next(row(time_column), reader.rows_read(), name,
+                                                                   fmt::format("{}:{}", reader.path(), reader.line()));
+      if (gap && o.missing) {
+        Eigen::VectorXd missing = Eigen::VectorXd::Constant(row.size(), std::nan(""));
+        for (long k = 1; k <= gap->missing; ++k) {
+          missing(time_column) = gap->t_before + static_cast<double>(k) * time_check.median_step();
+          emit(missing);
+        }
+      } else if (gap) {
+        std::fflush(stdout);
+        fmt::print(stderr,
+                   "ident stream: time column '{}': gap at data row {} ({} -> {}, {} samples missing; --missing fills "
+                   "them as missing samples)\n",
+                   name, gap->row, gap->t_before, gap->t_after, gap->missing);
+        std::fflush(stderr);
+      }
+    }
+    emit(row);
   }
   if (stream.Finish()) {
     const workflow::StreamStep end{
@@ -116,6 +156,7 @@ void AddStreamCommand(CLI::App& app) {
       "stream", "Estimate on CSV rows as they arrive; print one JSON line per row (theta, weight, status)");
   stream->add_option("DATA", o->data, "CSV with a header: '-' (standard input, the default), a FIFO or a file")
       ->capture_default_str();
+  AddExperimentColumnOption(*stream, o->experiment_column);
   o->structure.AddTo(*stream);
   o->estimator.AddTo(*stream);
   stream->add_flag("--missing", o->missing, "Treat empty/NaN/Inf cells as missing samples instead of errors");

@@ -30,6 +30,7 @@
 //   // r.x (n x (T+1)), r.primal, r.dual, r.gap, r.max_abs_x_difference
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,9 @@ struct MapSmootherOptions {
   // bound-free (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties,
   // n <= 4. Same iteration and result up to rounding; false forces the general path (tests compare both).
   bool fast_path = true;
+  // If set: called at every iteration (0, 1, …, the final one) with its relative KKT residual, the stopping
+  // test's (compared with `tolerance`; MapSmootherResult::kkt_residual is the final call's), e.g. for progress.
+  std::function<void(int iteration, double kkt_residual)> on_iteration;
   std::string Validate() const;  // "" if valid
 };
 

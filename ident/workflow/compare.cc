@@ -358,6 +358,7 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   for (const auto& s : estimators) MakeRegressionEstimator(s, rho);  // fail fast on a bad name/option
 
   CompareResult result;
+  result.experiments = TableExperiments(data);
   std::tie(result.estimation, result.validation) = PrepareData(data, source, options.fit);
   result.structure = source.structure();
   result.parameter_names = source.parameter_names();

@@ -23,6 +23,7 @@
 
 #include "ident/io/csv.h"
 #include "ident/regression/estimator_registry.h"
+#include "ident/workflow/experiments.h"
 #include "ident/workflow/fit.h"
 
 namespace ident::workflow {
@@ -87,6 +88,10 @@ struct CompareResult {
   FitScores reference;       // its validation scores
   int outliers_per_trial = 0;
   std::vector<EstimatorScore> scores;  // sorted by mean one-step fit, best first
+  // The record's experiments (TableExperiments of the compared table; callers that know better names set
+  // them) and its time column (workflow/time_column.h; null when not checked).
+  std::vector<Experiment> experiments;
+  std::optional<TimeCheck> time;
 };
 
 // Throws InvalidArgument for bad options (including an unknown estimator, before any run starts).

@@ -59,6 +59,8 @@ nlohmann::ordered_json CompareJson(const CompareResult& r, const std::string& pa
     e["failure"] = s.failure.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(s.failure);
     list.push_back(std::move(e));
   }
+  j["experiments"] = ExperimentsJson(r.experiments);
+  j["time_gaps"] = TimeGapsJson(r.time);
   return j;
 }
 

@@ -34,7 +34,8 @@ struct CompareRequest {
 CompareResult CompareRecord(io::DataTable table, const std::string& name, const CompareRequest& request);
 
 // The JSON object of `ident compare --json`: data, structure, parameter_names, estimation_rows,
-// validation_rows, outliers, trials, clean_regressors, reference, estimators. Non-finite numbers are null.
+// validation_rows, outliers, trials, clean_regressors, reference, estimators, experiments ([{name, rows}]),
+// time_gaps (null when no time column was checked). Non-finite numbers are null.
 nlohmann::ordered_json CompareJson(const CompareResult& result, const std::string& data, const OutlierSpec& outliers,
                                    int trials, const std::string& clean_regressors);
 

@@ -70,4 +70,20 @@ io::DataTable ConcatenateExperiments(std::vector<io::DataTable> tables, const st
   return all;
 }
 
+std::vector<Experiment> TableExperiments(const io::DataTable& table) {
+  std::vector<Experiment> experiments = WholeRecord(table, "1");
+  for (std::size_t i = 0; i < table.experiment_starts.size(); ++i) {
+    const int start = table.experiment_starts[i];
+    experiments.back().count = start - experiments.back().first;
+    experiments.push_back({.name = std::to_string(i + 2), .first = start, .count = table.num_rows() - start});
+  }
+  return experiments;
+}
+
+nlohmann::ordered_json ExperimentsJson(const std::vector<Experiment>& experiments) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const Experiment& e : experiments) list.push_back({{"name", e.name}, {"rows", {e.first + 1, e.first + e.count}}});
+  return list;
+}
+
 }  // namespace ident::workflow

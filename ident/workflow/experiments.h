@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "ident/io/csv.h"
 
 namespace ident::workflow {
@@ -32,5 +34,12 @@ std::vector<Experiment> LabelExperiments(io::DataTable& table, const std::string
 // file whose columns differ from the first file's, InvalidArgument for an empty list.
 io::DataTable ConcatenateExperiments(std::vector<io::DataTable> tables, const std::string& column,
                                      std::vector<Experiment>* experiments);
+
+// The experiments io::DataTable::experiment_starts marks, named "1", "2", … (the whole table as "1" when it
+// has none).
+std::vector<Experiment> TableExperiments(const io::DataTable& table);
+
+// The JSON list of the reports' `experiments` key: [{name, rows: [first, last]}], 1-based rows.
+nlohmann::ordered_json ExperimentsJson(const std::vector<Experiment>& experiments);
 
 }  // namespace ident::workflow

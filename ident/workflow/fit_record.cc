@@ -70,17 +70,7 @@ nlohmann::ordered_json FitJsonWithoutResiduals(const FitResult& r, const std::st
   j["Dy"] = r.Dy;
   j["split"] = split;
   j["detrend"] = detrend;
-  if (r.time) {
-    auto& gaps = j["time_gaps"] = nlohmann::ordered_json::array();
-    for (const TimeGap& g : r.time->gaps)
-      gaps.push_back({{"row", g.row},
-                      {"t_before", g.t_before},
-                      {"t_after", g.t_after},
-                      {"missing", g.missing},
-                      {"filled", g.filled}});
-  } else {
-    j["time_gaps"] = nullptr;
-  }
+  j["time_gaps"] = TimeGapsJson(r.time);
   return j;
 }
 
@@ -138,13 +128,7 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
 
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags) {
   RecordFit fit;
-  fit.experiments = WholeRecord(table, "1");
-  for (std::size_t i = 0; i < table.experiment_starts.size(); ++i) {
-    const int start = table.experiment_starts[i];
-    fit.experiments.back().count = start - fit.experiments.back().first;
-    fit.experiments.back().name = std::to_string(i + 1);
-    fit.experiments.push_back({.name = std::to_string(i + 2), .first = start, .count = table.num_rows() - start});
-  }
+  fit.experiments = TableExperiments(table);
   fit.prepared = std::move(table);
   std::vector<std::pair<int, double>> means;
   std::tie(fit.estimation, fit.validation) = PrepareData(fit.prepared, source, plan.options, &means);
@@ -193,12 +177,7 @@ nlohmann::ordered_json FitJson(const FitResult& result, const std::string& data,
     j["detrend_means"] = nullptr;
   }
   j["residual_analysis"] = residuals ? ResidualJson(*residuals) : nlohmann::ordered_json();
-  j["experiments"] = nullptr;
-  if (experiments) {
-    auto& list = j["experiments"] = nlohmann::ordered_json::array();
-    for (const Experiment& e : *experiments)
-      list.push_back({{"name", e.name}, {"rows", {e.first + 1, e.first + e.count}}});
-  }
+  j["experiments"] = experiments ? ExperimentsJson(*experiments) : nlohmann::ordered_json();
   return j;
 }
 

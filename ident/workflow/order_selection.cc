@@ -30,6 +30,17 @@ bool Lagged(const io::DataTable& data, int r, int output, int input, const Layou
   return w.allFinite();
 }
 
+// Calls each(r) for the rows r of the segment at least t0 rows after its start and after the start of r's
+// experiment: the rows whose lags all lie in their own experiment.
+template <class Each>
+void ForRegressionRows(const io::DataTable& data, Segment segment, int t0, Each each) {
+  int first = segment.first;  // the first row of the current experiment within the segment
+  for (int r = segment.first; r < segment.first + segment.count; ++r) {
+    if (r > segment.first && data.StartsExperiment(r)) first = r;
+    if (r - first >= t0) each(r);
+  }
+}
+
 std::vector<int> StructureIndices(const Layout& l, int na, int nb, int nk) {
   std::vector<int> idx;
   for (int i = 1; i <= na; ++i) idx.push_back(l.y_lag(i));
@@ -92,22 +103,22 @@ OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, S
   OrderSelection result;
   result.criterion = criterion;
   const long rows = estimation.count + validation.count;
-  for (int r = estimation.first + t0; r < estimation.first + estimation.count; ++r) {
+  ForRegressionRows(prepared, estimation, t0, [&](int r) {
     if (progress) progress(r - estimation.first + 1, rows, "rows");
-    if (!Lagged(prepared, r, output, input, layout, w)) continue;
+    if (!Lagged(prepared, r, output, input, layout, w)) return;
     G.selfadjointView<Eigen::Lower>().rankUpdate(w);
     ++result.samples;
-  }
+  });
   G = G.selfadjointView<Eigen::Lower>();
   // The validation part's Gram matrix H: a structure's residual sum of squares there is
   // H_yy − 2θ'H_zy + θ'H_zz θ, whatever the number of samples.
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(m, m);
-  for (int r = validation.first + t0; r < validation.first + validation.count; ++r) {
+  ForRegressionRows(prepared, validation, t0, [&](int r) {
     if (progress) progress(estimation.count + r - validation.first + 1, rows, "rows");
-    if (!Lagged(prepared, r, output, input, layout, w)) continue;
+    if (!Lagged(prepared, r, output, input, layout, w)) return;
     H.selfadjointView<Eigen::Lower>().rankUpdate(w);
     ++result.validation_samples;
-  }
+  });
   H = H.selfadjointView<Eigen::Lower>();
 
   const double n = result.samples;

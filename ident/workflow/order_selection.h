@@ -2,7 +2,9 @@
 // criteria of every ARX(na, nb, nk) of a grid, one output and one input.
 //
 // All structures are fitted on the same samples, the rows t ≥ T0 = max(na_max, nk_max + nb_max − 1) of the
-// estimation part whose lagged values are all finite, so that their losses compare. The data enter once:
+// estimation part whose lagged values are all finite, so that their losses compare; in a table of several
+// experiments (io::DataTable::experiment_starts) also the first T0 rows of each experiment only fill the lags,
+// so that no w(t) straddles two experiments. The data enter once:
 // the Gram matrix G = Σ_t w(t) w(t)' of w(t) = [y(t), −y(t−1) … −y(t−na_max), u(t−nk_min) … u(t−nk_max−nb_max+1)]
 // holds every structure's normal equations as a sub-block (the lags of a structure are a subset of w's), and
 // each structure then costs one Cholesky solve of its ρ×ρ block:

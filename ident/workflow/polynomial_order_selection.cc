@@ -12,16 +12,21 @@
 namespace ident::workflow {
 namespace {
 
-// Mean square of y − ŷ over the rows of the segment from `t0` on where both are finite, and their number.
-std::pair<double, int> OneStepLoss(const SegmentPredictions& p, int t0) {
+// Mean square of y − ŷ over the rows of the segment at least `t0` rows after its start and after the start of
+// their experiment where both are finite, and their number.
+std::pair<double, int> OneStepLoss(const SegmentPredictions& p, const io::DataTable& data, int t0) {
   double sum = 0;
   int n = 0;
-  for (std::size_t i = static_cast<std::size_t>(t0); i < p.measured.size(); ++i)
+  std::size_t first = 0;  // the current experiment's first row in the segment
+  for (std::size_t i = 0; i < p.measured.size(); ++i) {
+    if (i > 0 && data.StartsExperiment(p.rows[i] - 1)) first = i;
+    if (i - first < static_cast<std::size_t>(t0)) continue;
     if (std::isfinite(p.one_step[i]) && std::isfinite(p.measured[i])) {
       const double e = p.measured[i] - p.one_step[i];
       sum += e * e;
       ++n;
     }
+  }
   return {n > 0 ? sum / n : std::numeric_limits<double>::quiet_NaN(), n};
 }
 
@@ -76,7 +81,7 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
     request.model = spec;
     const RecordFit fit = FitRecord(table, name, request);
     std::unique_ptr<DataSource> source = spec.MakeSource(fit.prepared.names, name);
-    const auto [loss, n] = OneStepLoss(PredictSegment(fit.prepared, fit.estimation, *source, fit.result.theta), t0);
+    const auto [loss, n] = OneStepLoss(PredictSegment(fit.prepared, fit.estimation, *source, fit.result.theta), fit.prepared, t0);
     StructureScore s;
     s.na = spec.na;
     s.nb = spec.nb[0];
@@ -98,7 +103,7 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
     s.mdl = loss * (1 + d * std::log(static_cast<double>(n)) / n);
     if (fit.validation.count > t0) {
       const auto [validation_loss, m] =
-          OneStepLoss(PredictSegment(fit.prepared, fit.validation, *source, fit.result.theta), t0);
+          OneStepLoss(PredictSegment(fit.prepared, fit.validation, *source, fit.result.theta), fit.prepared, t0);
       s.validation_loss = validation_loss;
       result.validation_samples = m;
     }

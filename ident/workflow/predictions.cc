@@ -5,6 +5,26 @@
 #include <memory>
 
 namespace ident::workflow {
+namespace {
+
+// The segment's experiments (io::DataTable::experiment_starts within it) predicted one at a time by
+// predict(piece), concatenated; an empty vector when the segment holds one experiment only.
+template <class Predict>
+std::vector<double> PerExperiment(const io::DataTable& data, Segment segment, Predict predict) {
+  std::vector<double> out;
+  int first = segment.first;
+  const int end = segment.first + segment.count;
+  for (int r = segment.first + 1; r <= end; ++r)
+    if (r == end || data.StartsExperiment(r)) {
+      if (r == end && first == segment.first) return {};
+      const std::vector<double> piece = predict(Segment{first, r - first});
+      out.insert(out.end(), piece.begin(), piece.end());
+      first = r;
+    }
+  return out;
+}
+
+}  // namespace
 
 SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, DataSource& source,
                                   const Eigen::VectorXd& theta) {
@@ -48,6 +68,10 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
 std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, const models::ArxStructure& arx,
                                   int output_column, const std::vector<int>& input_columns,
                                   const Eigen::VectorXd& theta, int k) {
+  std::vector<double> experiments = PerExperiment(data, segment, [&](Segment piece) {
+    return PredictKSteps(data, piece, arx, output_column, input_columns, theta, k);
+  });
+  if (!experiments.empty()) return experiments;
   constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   const int t0 = arx.first_regression_index();
   const int first = segment.first, end = segment.first + segment.count;
@@ -73,6 +97,9 @@ std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, co
 
 std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, const DataSource& source,
                                   const Eigen::VectorXd& theta, int k) {
+  std::vector<double> experiments =
+      PerExperiment(data, segment, [&](Segment piece) { return PredictKSteps(data, piece, source, theta, k); });
+  if (!experiments.empty()) return experiments;
   constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
   const int first = segment.first, end = segment.first + segment.count;
   std::vector<double> out(static_cast<std::size_t>(segment.count), kNone);

@@ -27,7 +27,8 @@ SegmentPredictions PredictSegment(const io::DataTable& data, Segment segment, Da
 
 // k-step-ahead predictions ŷ(t | t−k) of an ARX model over a segment: the outputs after t−k are the
 // model's own predictions, those up to t−k (and the segment's first t0, which have no regressor) measured.
-// k = 1 is the one-step prediction of PredictSegment. NaN where the segment has no regression.
+// k = 1 is the one-step prediction of PredictSegment. NaN where the segment has no regression. Each experiment
+// of the segment (io::DataTable::experiment_starts) is predicted on its own rows alone (both overloads).
 std::vector<double> PredictKSteps(const io::DataTable& data, Segment segment, const models::ArxStructure& arx,
                                   int output_column, const std::vector<int>& input_columns,
                                   const Eigen::VectorXd& theta, int k);

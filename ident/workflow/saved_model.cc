@@ -105,6 +105,9 @@ OrderedJson SavedModel::ToJson() const {
   j["detrend_means"] = means;
   j["estimator"] = {{"name", estimator}, {"kind", kind}, {"passes", passes}};
   j["data"] = {{"path", data_path}, {"rows", data_rows}, {"fnv1a64", data_checksum}};
+  OrderedJson files = OrderedJson::array();
+  for (const DataFile& f : data_files) files.push_back({{"path", f.path}, {"rows", f.rows}, {"fnv1a64", f.checksum}});
+  j["data"]["files"] = files;
   j["split"] = split;
   j["validation_rows"] = {validation.first + 1, validation.first + validation.count};
   j["fit_percent"] = {
@@ -180,6 +183,14 @@ SavedModel SavedModel::FromJson(const Json& j, const std::string& source) {
   m.data_path = Get<std::string>(d, "path", source);
   m.data_rows = Get<long>(d, "rows", source);
   m.data_checksum = Get<std::string>(d, "fnv1a64", source);
+  if (d.contains("files")) {
+    const Json& files = d["files"];
+    if (!files.is_array()) throw DataError(fmt::format("{}: \"data.files\" is not a list", source));
+    for (const Json& f : files)
+      m.data_files.push_back({.path = Get<std::string>(f, "path", source),
+                              .checksum = Get<std::string>(f, "fnv1a64", source),
+                              .rows = Get<long>(f, "rows", source)});
+  }
   m.split = GetNumber(j, "split", source);
   const auto rows = Get<std::vector<int>>(j, "validation_rows", source);
   if (rows.size() != 2) throw DataError(fmt::format("{}: \"validation_rows\" needs [first, last]", source));

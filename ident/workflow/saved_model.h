@@ -9,7 +9,8 @@
 //   detrend          "mean" or "none"; detrend_means {column: mean subtracted before fitting}
 //   estimator        {"name", "kind", "passes"}
 //   data             {"path", "rows", "fnv1a64": checksum of the file's bytes, 16 hex digits ("" when the
-//                    record came from standard input or a pipe)}
+//                    record came from standard input or a pipe, or from several files), "files": [{"path",
+//                    "rows", "fnv1a64"}] one per file read (several: one per experiment file)}
 //   split, validation_rows [first, last] (1-based), fit_percent and rms of the fit's validation
 // Numbers carry 17 significant digits, so θ and the means read back bit for bit.
 #pragma once
@@ -40,6 +41,11 @@ struct SavedModel {
   int passes = 1;
   std::string data_path, data_checksum;
   long data_rows = 0;
+  struct DataFile {
+    std::string path, checksum;  // checksum "" for standard input or a pipe
+    long rows = 0;
+  };
+  std::vector<DataFile> data_files;  // every file read, in order (empty in a model file without "files")
   double split = 0.5;
   Segment validation;  // 0-based rows of the fit's validation part
   FitScores validation_scores;

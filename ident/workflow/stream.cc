@@ -85,6 +85,11 @@ StreamStep StreamEstimation::Row(const Eigen::VectorXd& row) {
   return step;
 }
 
+void StreamEstimation::Restart() {
+  estimation_->Restart();
+  last_missing_ = -1;  // the missing values of the experiment before are out of reach
+}
+
 bool StreamEstimation::Finish() {
   // As internal::Estimation::Finish, without its identifiability checks (a stream reports every row).
   bool changed = estimator_.FinishStartup();

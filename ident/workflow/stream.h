@@ -62,6 +62,9 @@ class StreamEstimation {
 
   // One data row (all the record's columns; NaN = missing). The estimate afterwards is the estimator's.
   StreamStep Row(const Eigen::VectorXd& row);
+  // A further experiment starts with the next row (`ident stream --experiment-column`): the regressors restart
+  // as `ident fit` restarts them at an experiment (ident/workflow/experiments.h); the estimate carries on.
+  void Restart();
   // The end of the data (see above). True if the estimate changed.
   bool Finish();
   long rows() const { return rows_; }

@@ -10,17 +10,61 @@
 
 namespace ident::workflow {
 
-std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::vector<int>& used_columns) {
-  int column = -1;
+int TimeColumnIndex(const std::vector<std::string>& names, const std::vector<int>& used_columns) {
   for (const char* name : {"t", "time"}) {
-    const auto it = std::find(table.names.begin(), table.names.end(), name);
-    if (it != table.names.end()) {
-      column = static_cast<int>(it - table.names.begin());
-      break;
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it != names.end()) {
+      const int column = static_cast<int>(it - names.begin());
+      return std::find(used_columns.begin(), used_columns.end(), column) != used_columns.end() ? -1 : column;
     }
   }
-  if (column < 0 || std::find(used_columns.begin(), used_columns.end(), column) != used_columns.end())
+  return -1;
+}
+
+std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::string& column,
+                                               const std::string& where) {
+  if (std::isnan(t)) return std::nullopt;  // a missing sample, passed over as CheckTimeColumn does
+  if (!started_) {
+    started_ = true;
+    previous_ = t;
+    taken_ = 1;
     return std::nullopt;
+  }
+  if (!(t > previous_))
+    throw DataError(fmt::format("{}: time column '{}' does not increase: {} after {}", where, column, t, previous_));
+  const double step = t - previous_;
+  std::optional<TimeGap> gap;
+  if (count_ > 0 && step > kTimeGapFactor * median_) {
+    const double samples = std::round(step / median_);
+    if (!(samples - 1 <= static_cast<double>(taken_)))
+      throw DataError(fmt::format(
+          "{}: time column '{}' jumps from {} to {}: the gap misses more samples than the {} rows before it; cut the "
+          "record at its gaps",
+          where, column, previous_, t, taken_));
+    gap = TimeGap{.row = static_cast<int>(std::min<long>(row, std::numeric_limits<int>::max())),
+                  .t_before = previous_,
+                  .t_after = t,
+                  .missing = std::max(1L, static_cast<long>(samples) - 1),
+                  .filled = 0};
+  } else {  // a regular step: into the window of the last kSteps
+    steps_[static_cast<std::size_t>(count_ % kSteps)] = step;
+    ++count_;
+    if (count_ == 2 * kSteps) count_ = kSteps;  // keeps the index cycling without overflow
+    const int held = std::min(count_, kSteps);
+    std::array<double, kSteps> sorted = steps_;
+    std::sort(sorted.begin(), sorted.begin() + held);
+    median_ = held % 2
+                  ? sorted[static_cast<std::size_t>(held / 2)]
+                  : (sorted[static_cast<std::size_t>(held / 2 - 1)] + sorted[static_cast<std::size_t>(held / 2)]) / 2;
+  }
+  previous_ = t;
+  ++taken_;
+  return gap;
+}
+
+std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::vector<int>& used_columns) {
+  const int column = TimeColumnIndex(table.names, used_columns);
+  if (column < 0) return std::nullopt;
   TimeCheck check;
   check.column = table.names[static_cast<std::size_t>(column)];
   const auto t = table.values.col(column);
@@ -101,6 +145,24 @@ io::DataTable FillTimeGaps(const io::DataTable& table, TimeCheck& check) {
   }
   copy_until(table.values.rows());
   return out;
+}
+
+std::optional<TimeCheck> CheckRecordTime(io::DataTable& table, const std::vector<int>& used_columns, bool fill) {
+  std::optional<TimeCheck> time = CheckTimeColumn(table, used_columns);
+  if (time && fill && !time->gaps.empty()) table = FillTimeGaps(table, *time);
+  return time;
+}
+
+nlohmann::ordered_json TimeGapsJson(const std::optional<TimeCheck>& time) {
+  if (!time) return nullptr;
+  nlohmann::ordered_json gaps = nlohmann::ordered_json::array();
+  for (const TimeGap& g : time->gaps)
+    gaps.push_back({{"row", g.row},
+                    {"t_before", g.t_before},
+                    {"t_after", g.t_after},
+                    {"missing", g.missing},
+                    {"filled", g.filled}});
+  return gaps;
 }
 
 }  // namespace ident::workflow

@@ -6,11 +6,17 @@
 //
 //   CheckTimeColumn   finds the column, checks it increases, lists its gaps
 //   FillTimeGaps      inserts each gap's missing rows
+//   CheckRecordTime   both, as the commands that read a record in memory do
+//   TimeGapsJson      the reports' `time_gaps` key
+//   ArrivingTimeCheck the check row by row as rows arrive (ident stream), in constant memory
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "ident/io/csv.h"
 
@@ -40,5 +46,34 @@ std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::
 // Inserts each gap's missing rows (time t_before + k * median step, NaN elsewhere), setting
 // TimeGap::filled. Throws DataError when the gaps hold more missing rows than the record has rows.
 io::DataTable FillTimeGaps(const io::DataTable& table, TimeCheck& check);
+
+// The time column's index in `names` ("t", else "time"), or -1 when there is none or the model reads it.
+int TimeColumnIndex(const std::vector<std::string>& names, const std::vector<int>& used_columns);
+
+// The time column of rows that arrive one at a time: the whole record's median step is not known, so a
+// step is compared with the median of the last kSteps regular steps (all of them while fewer have arrived;
+// the first step has none and is never a gap). Its values must increase, as in CheckTimeColumn.
+class ArrivingTimeCheck {
+ public:
+  static constexpr int kSteps = 21;
+  // The gap that ends at time `t` of 1-based data row `row` (TimeGap::missing = round(step / median) − 1,
+  // at least 1), or null. Throws DataError "<where>: time column 't' does not increase: 4 after 5" (`where`:
+  // "source:line"), and for a gap that misses more samples than rows have arrived before it.
+  std::optional<TimeGap> Next(double t, long row, const std::string& column, const std::string& where);
+  double median_step() const { return median_; }
+
+ private:
+  std::array<double, kSteps> steps_{};
+  int count_ = 0;  // steps held (up to kSteps); the next goes to steps_[count_ % kSteps] once full
+  long taken_ = 0;
+  double previous_ = 0, median_ = 0;
+  bool started_ = false;
+};
+
+// CheckTimeColumn, then, when `fill` (--missing) and there are gaps, FillTimeGaps in place.
+std::optional<TimeCheck> CheckRecordTime(io::DataTable& table, const std::vector<int>& used_columns, bool fill);
+
+// [{row, t_before, t_after, missing, filled}], or null when no time column was checked (`time` null).
+nlohmann::ordered_json TimeGapsJson(const std::optional<TimeCheck>& time);
 
 }  // namespace ident::workflow

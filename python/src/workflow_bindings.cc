@@ -238,11 +238,15 @@ std::string Compare(const std::vector<std::string>& columns, Eigen::MatrixXd val
   request.split = split;
   request.detrend = detrend;
   io::DataTable table = Table(columns, std::move(values), name);
+  // The time column is checked and its gaps reported as `ident compare` does (filled there with --missing).
+  const std::optional<workflow::TimeCheck> time =
+      workflow::CheckTimeColumn(table, request.model.MakeSource(table.names, name)->used_columns());
   workflow::CompareResult result;
   {
     py::gil_scoped_release release;
     result = workflow::CompareRecord(std::move(table), name, request);
   }
+  result.time = time;
   return workflow::CompareJson(result, name, request.outliers, trials, request.model.clean_regressors).dump();
 }
 

@@ -2,6 +2,8 @@
 // golden values), and bad input with exit code 1 and a one-line message.
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <string>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -110,6 +112,10 @@ TEST(SmoothCommand, TextReportListsOneRowPerTime) {
   EXPECT_NE(r.out.find("primal (P)"), std::string::npos);
   EXPECT_NE(r.out.find("dual   (D)"), std::string::npos);
   EXPECT_NE(r.out.find("gap"), std::string::npos);
+  // stderr is not a terminal: at most progress lines (a run longer than 2 s, e.g. under a sanitizer).
+  std::istringstream err(r.err);
+  for (std::string line; std::getline(err, line);)
+    EXPECT_EQ(line.rfind("ident smooth: ", 0), 0u) << "not a progress line: " << line;
 }
 
 TEST(SmoothCommand, BadModelsAndDataExitWithOneLine) {

@@ -191,6 +191,7 @@ class Solver {
                                              r4max / std::max(v_scale * matrix_scale_, r4_floor / o_.tolerance));
       res.kkt_residual = kkt;
       history.push_back(kkt);
+      if (o_.on_iteration) o_.on_iteration(iter, kkt);
       if (kkt <= o_.tolerance) {
         res.status = MapSmootherStatus::kConverged;
         break;

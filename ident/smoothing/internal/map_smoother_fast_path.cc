@@ -161,6 +161,7 @@ class FastSolver {
                               r.r4max / std::max(r.v_scale * matrix_scale_, r4_floor / o_.tolerance));
       res.kkt_residual = kkt;
       history.push_back(kkt);
+      if (o_.on_iteration) o_.on_iteration(iter, kkt);
       if (kkt <= o_.tolerance) {
         res.status = MapSmootherStatus::kConverged;
         break;

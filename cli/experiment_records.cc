@@ -1,0 +1,36 @@
+#include "cli/experiment_records.h"
+
+#include <utility>
+
+#include "common/error.h"
+#include "ident/io/mat_file.h"
+
+namespace ident::cli {
+
+void AddExperimentColumnOption(CLI::App& app, std::string& column) {
+  app.add_option("--experiment-column", column,
+                 "Column labelling the experiment: each run of one label is an experiment, and the regressors "
+                 "restart at each");
+}
+
+ExperimentRecords ReadExperimentRecords(const std::vector<std::string>& paths, const std::string& column,
+                                        const io::CsvOptions& csv) {
+  IDENT_REQUIRE(!paths.empty(), "no data file given");
+  ExperimentRecords r;
+  r.several = paths.size() > 1 || !column.empty();
+  std::vector<io::DataTable> tables;
+  for (const std::string& p : paths) {
+    tables.push_back(io::ReadDataFile(p, csv));
+    r.files.push_back({p, tables.back().num_rows()});
+  }
+  if (r.several) {
+    r.table = workflow::ConcatenateExperiments(std::move(tables), column, &r.experiments);
+  } else {
+    r.table = std::move(tables.front());
+    r.experiments = workflow::TableExperiments(r.table);
+  }
+  r.name = r.several ? r.table.source : paths.front();
+  return r;
+}
+
+}  // namespace ident::cli

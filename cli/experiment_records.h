@@ -1,0 +1,37 @@
+// The records of a command that reads one experiment or several (ident fit, compare, orders, predict):
+// DATA given once or once per experiment, and --experiment-column NAME (ident/workflow/experiments.h).
+// Several experiments are read into one table in memory whose regressors restart at each experiment.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "ident/io/csv.h"
+#include "ident/workflow/experiments.h"
+
+namespace ident::cli {
+
+// Adds --experiment-column to `app`, parsed into `column`.
+void AddExperimentColumnOption(CLI::App& app, std::string& column);
+
+struct ExperimentFile {
+  std::string path;
+  long rows = 0;
+};
+
+struct ExperimentRecords {
+  io::DataTable table;
+  std::vector<workflow::Experiment> experiments;  // one ("1", the whole table) for one record
+  std::vector<ExperimentFile> files;              // in the order given
+  bool several = false;                           // several files or an experiment column
+  std::string name;                               // the path, or "a.csv + b.csv"
+};
+
+// Reads the (resolved) `paths` by io::ReadDataFile: one file as it is, several files (or any with an
+// experiment `column`) by workflow::ConcatenateExperiments. Throws DataError as they do.
+ExperimentRecords ReadExperimentRecords(const std::vector<std::string>& paths, const std::string& column,
+                                        const io::CsvOptions& csv);
+
+}  // namespace ident::cli
