@@ -2,6 +2,7 @@
 //           [--estimator NAME ...] [--split 0.5] [--detrend mean|none] [--missing] [--trace F] [--json]
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -34,6 +35,14 @@ namespace ident::cli {
 namespace {
 
 constexpr long kInMemoryRows = 1'000'000;
+
+// A data row takes at least two bytes (a cell and its line end; the last line's end may be missing), so a
+// file of at most 2·rows bytes holds at most `rows` rows: it is read whole at once, without counting them.
+bool MayHoldMoreRows(const std::string& path, long rows) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  return error || size > 2 * static_cast<std::uintmax_t>(rows);
+}
 constexpr int kResidualLags = 20;
 
 struct FitCommandOptions {
@@ -210,7 +219,8 @@ void RunFit(const FitCommandOptions& o) {
   // its header and length, and streamed when long. Records up to kInMemoryRows rows are read whole, for the
   // time column's check, the residual analysis and plots; longer ones stream through the estimator in
   // constant memory (without them).
-  if (!once && (!io::CanReadTwice(path) || io::IsMatFile(path))) once = io::ReadDataFile(path, csv);
+  if (!once && (!io::CanReadTwice(path) || io::IsMatFile(path) || !MayHoldMoreRows(path, kInMemoryRows)))
+    once = io::ReadDataFile(path, csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
   const bool may_stream = !once && o.plot.empty() && o.save.empty() && o.validate.empty();

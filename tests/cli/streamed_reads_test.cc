@@ -5,10 +5,12 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include "cli/command_line.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/fit_record.h"
@@ -98,6 +100,23 @@ TEST(StreamedReads, OpensTheFileOncePerPassAndEqualsTheInMemoryFit) {
     EXPECT_NEAR(streamed.result.theta(0), -1.5, 0.01);
     EXPECT_NEAR(streamed.result.theta(1), 0.7, 0.01);
   }
+}
+
+// `ident fit` on a regular file too small to hold more rows than are read whole (two bytes per row at
+// least) reads it once, into memory: no row count, no separate look at the header.
+TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
+  const std::string path = testing::WriteFile("in_memory_reads.csv", SimulatedRecord(2'000));
+  std::vector<std::string> words = {"ident", "fit",  path, "--output", "y", "--input", "u",
+                                    "--na",  "2",    "--nb", "2",      "--nk", "1",     "--json"};
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  const long before = io::CsvFilesOpened();
+  ::testing::internal::CaptureStdout();
+  const int code = cli::RunCommandLine(static_cast<int>(argv.size()), argv.data());
+  const std::string out = ::testing::internal::GetCapturedStdout();
+  EXPECT_EQ(code, 0);
+  EXPECT_NE(out.find("\"theta\""), std::string::npos);
+  EXPECT_EQ(io::CsvFilesOpened() - before, 1);
 }
 
 }  // namespace
