@@ -124,9 +124,9 @@ TiltedMoments FineReference(const LogConcaveNoise& f, double a, double v) {
 // to past the outliers, v from the steady state (1e-4) past each rule's switch-over to vague priors.
 TEST(LogConcaveNoise, FastResidualMomentsAgreeWithQuadratureTo1e10) {
   std::vector<double> as, vs;
-  for (double a = 0; a < 12; a += 0.71) as.push_back(a);
+  for (double a = 0; a < 12; a += 1.3) as.push_back(a);
   for (double a : {0.01, 0.05, 15.0, 40.0, 300.0, 2000.0}) as.push_back(a);
-  for (double lv = -4; lv <= 2.01; lv += 0.375) vs.push_back(std::pow(10.0, lv));
+  for (double lv = -4; lv <= 2.01; lv += 0.5) vs.push_back(std::pow(10.0, lv));
   for (const char* spec : kFamilies) {
     const LogConcaveNoise f = LogConcaveNoise::Parse(spec);
     double worst = 0;
