@@ -61,6 +61,7 @@ void BM_Lc(benchmark::State& state, const std::string& noise) {
   ident::LcRegression est(n, o);
   RunStream(state, est, s);
 }
+void BM_LcGaussian(benchmark::State& state) { BM_Lc(state, "gaussian"); }
 void BM_LcLaplace(benchmark::State& state) { BM_Lc(state, "laplace"); }
 void BM_LcHuber(benchmark::State& state) { BM_Lc(state, "huber"); }
 void BM_LcLogistic(benchmark::State& state) { BM_Lc(state, "logistic"); }
@@ -68,6 +69,7 @@ void BM_LcGengauss(benchmark::State& state) { BM_Lc(state, "gengauss:1.5"); }
 
 BENCHMARK(BM_Rls)->RangeMultiplier(2)->Range(2, 16);
 BENCHMARK(BM_Cauchy)->RangeMultiplier(2)->Range(2, 16);
+BENCHMARK(BM_LcGaussian)->RangeMultiplier(2)->Range(2, 16);
 BENCHMARK(BM_LcLaplace)->RangeMultiplier(2)->Range(2, 16);
 BENCHMARK(BM_LcHuber)->RangeMultiplier(2)->Range(2, 16);
 BENCHMARK(BM_LcLogistic)->RangeMultiplier(2)->Range(2, 16);
@@ -78,7 +80,8 @@ BENCHMARK(BM_LcGengauss)->RangeMultiplier(2)->Range(2, 16);
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  ident::bench::RatioReporter reporter({{"BM_LcLaplace", "BM_Cauchy", "lc:laplace vs Cauchy (Kárný–Hangos)"},
+  ident::bench::RatioReporter reporter({{"BM_LcGaussian", "BM_Cauchy", "lc:gaussian (the filter alone) vs Cauchy"},
+                                        {"BM_LcLaplace", "BM_Cauchy", "lc:laplace vs Cauchy (Kárný–Hangos)"},
                                         {"BM_LcHuber", "BM_Cauchy", "lc:huber vs Cauchy"},
                                         {"BM_LcLogistic", "BM_Cauchy", "lc:logistic vs Cauchy"},
                                         {"BM_LcGengauss", "BM_Cauchy", "lc:gengauss:1.5 vs Cauchy"},

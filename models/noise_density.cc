@@ -7,6 +7,8 @@
 #include <limits>
 #include <numbers>
 
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <boost/math/quadrature/gauss.hpp>
 #include <boost/math/special_functions/erf.hpp>
 #include <boost/math/special_functions/gamma.hpp>
@@ -20,6 +22,19 @@ namespace {
 constexpr double kNoiseNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kDefaultHuberK = 1.345;
 const double kNoiseLogSqrt2Pi = 0.5 * std::log(2.0 * std::numbers::pi);
+// erf/erfc in double (Boost's 53-bit rational approximations) instead of the promotion to long double.
+constexpr boost::math::policies::policy<boost::math::policies::promote_double<false>> kNoiseDoublePolicy{};
+// A mixture piece whose log-weight bound is this far below the largest exact log-weight is left out: its
+// share e^{−80} ≈ 2e−35 moves the mean and variance by less than 1e−16 of theirs for |a| up to 1e8.
+constexpr double kNegligibleLogWeight = 80;
+
+// |r|^p for the generalised Gaussian, r ≥ 0: the shapes 1, 1.5 and 2 without std::pow.
+double GengaussPower(double r, double p) {
+  if (p == 1.5) return r * std::sqrt(r);
+  if (p == 2) return r * r;
+  if (p == 1) return r;
+  return std::pow(r, p);
+}
 
 // ρ(u) = −log f(u) − log_norm for each family (the unnormalised negative log-density).
 double Rho(LogConcaveNoise::Family family, double shape, double u) {
@@ -35,7 +50,7 @@ double Rho(LogConcaveNoise::Family family, double shape, double u) {
     case F::kLogistic:
       return au + 2 * std::log1p(std::exp(-au));
     case F::kGeneralizedGaussian:
-      return std::pow(au, shape);
+      return GengaussPower(au, shape);
   }
   return kNoiseNaN;
 }
@@ -69,14 +84,79 @@ TiltedMoments Mix(const std::array<Piece, N>& pieces, int count) {
   return {top + std::log(total), mean, var, true};
 }
 
-// exp(c·r)·N(r; a, v) on [lo, hi] = exp(c·a + c²v/2)·N(r; a + c·v, v) on [lo, hi]: one piece (c = ±k for the
-// exponential tails of laplace and huber).
-bool ExponentialPiece(double c, double a, double v, double lo, double hi, double log_c0, Piece& out) {
-  const TiltedMoments t = TruncatedNormalMoments(a + c * v, v, lo, hi);
-  if (!t.ok) return false;
-  out = {log_c0 + c * a + 0.5 * c * c * v + t.log_normalizer, t.mean, t.variance};
-  return true;
+// Moments of the standard normal restricted to [x, ∞): Z = Q(x), mean λ = φ(x)/Q(x), variance 1 − λ(λ − x).
+// x < 5: Q from erfc (the variance loses at most x²·ε to cancellation). x ≥ 5: the continued fraction
+// t_k = x + k/t_(k+1) of the Mills ratio, Q(x)/φ(x) = 1/t_1, mean = t_1 = x + 1/t_2 and variance
+// (2/t_3 − 1/t_2)/t_2, free of cancellation; started at k = ⌈160/x⌉ + 6 terms, which reaches 1e−16
+// relative on t_1, the mean and the variance for every x ≥ 5 (the error falls with x; 31 terms are needed
+// at x = 5, 8 at x = 50, checked against 40-digit erfc).
+TiltedMoments UpperTailMoments(double x) noexcept {
+  if (x < 5) {
+    const double q = 0.5 * boost::math::erfc(x * (0.5 * std::numbers::sqrt2), kNoiseDoublePolicy);
+    const double log_phi = -0.5 * x * x - kNoiseLogSqrt2Pi;
+    const double lambda = std::exp(log_phi) / q;
+    return {std::log(q), lambda, std::max(0.0, 1 - lambda * (lambda - x)), true};
+  }
+  const int terms = static_cast<int>(std::min(160.0, std::ceil(160 / x))) + 6;
+  double t1 = x, t2 = x, t3 = x;
+  for (int k = terms; k >= 1; --k) {
+    t3 = t2;
+    t2 = t1;
+    t1 = x + k / t1;
+  }
+  return {-0.5 * x * x - kNoiseLogSqrt2Pi - std::log(t1), x + 1 / t2, (2 / t3 - 1 / t2) / t2, true};
 }
+
+// log Q(x) ≤ this (Q(x) ≤ ½e^{−x²/2} for x ≥ 0, Q ≤ 1): the cheap bound that skips negligible pieces.
+double LogUpperTailBound(double x) { return x > 0 ? -0.5 * x * x - std::numbers::ln2 : 0.0; }
+
+// Probabilists' Gauss–Hermite rules, E g(X) ≈ Σ w_i g(x_i) for X ~ N(0, 1), exact for polynomials of degree
+// < 2n: nodes from the Jacobi matrix (Golub–Welsch) polished by Newton on the orthonormal recurrence
+// p_(k+1) = (x p_k − √k p_(k−1))/√(k+1), weights the Christoffel numbers 1/Σ_(k<n) p_k(x_i)². Built once.
+struct HermiteRule {
+  int n = 0;
+  std::array<double, 64> x{}, w{};
+};
+constexpr std::array<int, 9> kHermiteSizes = {8, 12, 16, 20, 24, 32, 40, 48, 64};
+
+const std::array<HermiteRule, 9>& HermiteRules() {
+  static const std::array<HermiteRule, 9> rules = [] {
+    std::array<HermiteRule, 9> out{};
+    for (std::size_t r = 0; r < kHermiteSizes.size(); ++r) {
+      const int n = kHermiteSizes[r];
+      Eigen::VectorXd diag = Eigen::VectorXd::Zero(n), sub(n - 1);
+      for (int k = 1; k < n; ++k) sub(k - 1) = std::sqrt(static_cast<double>(k));
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
+      eig.computeFromTridiagonal(diag, sub, Eigen::EigenvaluesOnly);
+      out[r].n = n;
+      for (int i = 0; i < n; ++i) {
+        double x = eig.eigenvalues()(i), norm = 0;
+        for (int it = 0; it < 3; ++it) {
+          double p0 = 1, p1 = x;
+          norm = 1 + x * x;
+          for (int k = 1; k + 1 < n; ++k) {
+            const double p2 = (x * p1 - std::sqrt(static_cast<double>(k)) * p0) / std::sqrt(k + 1.0);
+            p0 = p1;
+            p1 = p2;
+            norm += p1 * p1;
+          }
+          const double pn = (x * p1 - std::sqrt(n - 1.0) * p0) / std::sqrt(static_cast<double>(n));
+          x -= pn / (std::sqrt(static_cast<double>(n)) * p1);  // p_n' = √n p_(n−1)
+        }
+        out[r].x[i] = x;
+        out[r].w[i] = 1 / norm;
+      }
+      double total = 0;
+      for (int i = 0; i < n; ++i) total += out[r].w[i];
+      for (int i = 0; i < n; ++i) out[r].w[i] /= total;  // Σ w = 1 to rounding
+    }
+    return out;
+  }();
+  return rules;
+}
+
+// Largest prior variance v (in units of σ²) for each Gauss–Hermite rule of kHermiteSizes.
+constexpr std::array<double, 9> kHermiteMaxVariance = {0.015, 0.06, 0.12, 0.2, 0.25, 0.4, 0.55, 0.8, 1.0};
 
 // g(y, s) = f(y − s) as a projected measurement on a scalar state (the quadrature reference).
 class ResidualMeasurement final : public ProjectedMeasurement {
@@ -157,6 +237,7 @@ LogConcaveNoise::LogConcaveNoise(Family family, double shape) : family_(family),
       break;
     }
     case Family::kLogistic:
+      HermiteRules();  // built here, not in the first update
       shape_ = 0;
       log_norm_ = 0;  // e^{−u}/(1 + e^{−u})² integrates to 1
       median_abs_ = std::log(3.0);
@@ -168,12 +249,14 @@ LogConcaveNoise::LogConcaveNoise(Family family, double shape) : family_(family),
                     "Gaussian)",
                     shape);
       const double p = shape;
+      HermiteRules();
       log_norm_ = std::log(2.0) + std::lgamma(1 / p) - std::log(p);
       median_abs_ = std::pow(boost::math::gamma_p_inv(1 / p, 0.5), 1 / p);
       sd_ = std::exp(0.5 * (std::lgamma(3 / p) - std::lgamma(1 / p)));
       break;
     }
   }
+  typical_ratio_ = Score(median_abs_) / median_abs_;
 }
 
 LogConcaveNoise LogConcaveNoise::Parse(std::string_view spec) {
@@ -242,8 +325,7 @@ double LogConcaveNoise::Score(double u) const {
 double LogConcaveNoise::Weight(double u) const {
   const double au = std::abs(u);
   if (!(au > median_abs_)) return std::isnan(u) ? kNoiseNaN : 1.0;
-  const double typical = Score(median_abs_) / median_abs_;
-  return std::min(1.0, Score(au) / au / typical);
+  return std::min(1.0, Score(au) / au / typical_ratio_);
 }
 
 TiltedMoments LogConcaveNoise::ResidualMoments(double a, double v) const noexcept {
@@ -257,30 +339,95 @@ TiltedMoments LogConcaveNoise::ResidualMoments(double a, double v) const noexcep
     case Family::kLaplace:
     case Family::kHuber: {
       // f(r) = e^{−ρ(r)}/e^{log_norm}: e^{k r + k²/2} below −k, e^{−r²/2} on [−k, k], e^{−k r + k²/2} above k
-      // (laplace: k = 0, no middle piece, and no k²/2).
-      const double k = family_ == Family::kHuber ? shape_ : 1.0;
-      const double lo = family_ == Family::kHuber ? -k : 0.0, hi = -lo;
-      const double offset = (family_ == Family::kHuber ? 0.5 * k * k : 0.0) - log_norm_;
-      constexpr double kInfinity = std::numeric_limits<double>::infinity();
+      // (laplace: k = 1, no middle piece, the tails meet at 0 and no k²/2). A tail piece is
+      // e^{±k r}·N(r; a, v) = e^{±k a + k²v/2}·N(r; a ± k v, v), a normal on a half-line: its standardised
+      // bound x gives Z = Q(x) (UpperTailMoments; the lower tail mirrored). Pieces whose weight bound is
+      // negligible against the largest exact weight are not evaluated (an outlier has one piece).
+      const bool huber = family_ == Family::kHuber;
+      const double k = huber ? shape_ : 1.0, corner = huber ? shape_ : 0.0, sd = std::sqrt(v);
+      const double offset = (huber ? 0.5 * k * k : 0.0) - log_norm_;
+      const double x_lo = (corner + a + k * v) / sd, x_hi = (corner - a + k * v) / sd;  // r ≤ −corner, r ≥ corner
+      const double c_lo = offset + k * a + 0.5 * k * k * v, c_hi = offset - k * a + 0.5 * k * k * v;
+      // Middle (huber): e^{−r²/2}·N(r; a, v) = √(2π)·N(a; 0, 1 + v)·N(r; a/(1+v), v/(1+v)) on [−k, k].
+      const double s = 1 + v, m_mid = a / s, sd_mid = std::sqrt(v / s);
+      const double c_mid = -log_norm_ - 0.5 * a * a / s - 0.5 * std::log(s);
+      const double l_mid = (-corner - m_mid) / sd_mid, u_mid = (corner - m_mid) / sd_mid;
+      std::array<double, 3> bound = {c_lo + LogUpperTailBound(x_lo), c_hi + LogUpperTailBound(x_hi),
+                                     huber ? c_mid + (l_mid > 0 ? LogUpperTailBound(l_mid)
+                                                                : LogUpperTailBound(-u_mid))
+                                           : -std::numeric_limits<double>::infinity()};
+      std::array<int, 3> order = {0, 1, 2};
+      std::sort(order.begin(), order.end(), [&](int i, int j) { return bound[i] > bound[j]; });
       std::array<Piece, 3> pieces{};
       int n = 0;
-      if (ExponentialPiece(k, a, v, -kInfinity, lo, offset, pieces[n])) ++n;
-      if (ExponentialPiece(-k, a, v, hi, kInfinity, offset, pieces[n])) ++n;
-      if (family_ == Family::kHuber) {
-        // e^{−r²/2}·N(r; a, v) = √(2π)·N(a; 0, 1 + v)·N(r; a/(1+v), v/(1+v)).
-        const double s = 1 + v;
-        const TiltedMoments t = TruncatedNormalMoments(a / s, v / s, lo, hi);
-        if (t.ok)
-          pieces[n++] = {-log_norm_ - 0.5 * a * a / s - 0.5 * std::log(s) + t.log_normalizer, t.mean, t.variance};
+      double top = -std::numeric_limits<double>::infinity();
+      for (int i : order) {
+        if (!(bound[i] >= top - kNegligibleLogWeight)) continue;
+        if (i == 0) {  // −r ~ N(−(a + k v), v) on [corner, ∞)
+          const TiltedMoments t = UpperTailMoments(x_lo);
+          pieces[n] = {c_lo + t.log_normalizer, a + k * v - sd * t.mean, v * t.variance};
+        } else if (i == 1) {
+          const TiltedMoments t = UpperTailMoments(x_hi);
+          pieces[n] = {c_hi + t.log_normalizer, a - k * v + sd * t.mean, v * t.variance};
+        } else {
+          const TiltedMoments t = TruncatedNormalMoments(m_mid, v / s, -corner, corner);
+          if (!t.ok) continue;
+          pieces[n] = {c_mid + t.log_normalizer, t.mean, t.variance};
+        }
+        if (!std::isfinite(pieces[n].log_weight)) continue;
+        top = std::max(top, pieces[n].log_weight);
+        ++n;
       }
       if (n == 0) return {};
       return Mix(pieces, n);
     }
     case Family::kLogistic:
-    case Family::kGeneralizedGaussian:
+    case Family::kGeneralizedGaussian: {
+      // Gauss–Hermite in the prior N(a, v) while f is smooth and slowly varying across it; else the rule.
+      // logistic: f is analytic in the strip |Im r| < π, so the n-point rule converges geometrically in
+      // π/√v; the largest v per rule keeps the error below 1e−13 (checked against 30-digit quadrature
+      // on a grid of a; the unit test holds it to 1e−10 against adaptive quadrature). gengauss: |r|^p is
+      // not smooth at 0, so 0 must lie 12 prior widths away, and f's slope ψ(a) stretches v to v·ψ(a)².
+      double v_eff = v;
+      if (family_ == Family::kGeneralizedGaussian) {
+        if (!(std::abs(a) >= 12 * std::sqrt(v))) return RuleMoments(a, v);
+        v_eff = v * std::max(1.0, Score(a) * Score(a));
+      }
+      for (std::size_t r = 0; r < kHermiteMaxVariance.size(); ++r)
+        if (v_eff <= kHermiteMaxVariance[r]) return HermiteMoments(a, v, static_cast<int>(r));
       return RuleMoments(a, v);
+    }
   }
   return {};
+}
+
+TiltedMoments LogConcaveNoise::HermiteMoments(double a, double v, int rule_index) const noexcept {
+  // Z = E f(a + √v X) = e^{−ρ(a) − log_norm}·E e^{ρ(a) − ρ(r)}: the factor e^{−ρ(a)} taken out so that
+  // outliers do not underflow; logistic's e^{ρ(a) − ρ(r)} = e^{|a| − |r|}·(1 + e^{−|a|})²/(1 + e^{−|r|})².
+  const HermiteRule& rule = HermiteRules()[static_cast<std::size_t>(rule_index)];
+  const double sd = std::sqrt(v), aa = std::abs(a);
+  const bool logistic = family_ == Family::kLogistic;
+  const double ea = std::exp(-aa), p = shape_;
+  const double rho_a = logistic ? 0.0 : GengaussPower(aa, p);
+  double z = 0, m1 = 0, m2 = 0;
+  for (int i = 0; i < rule.n; ++i) {
+    const double d = sd * rule.x[i], ar = std::abs(a + d);
+    double value;
+    if (logistic) {
+      const double e_rel = std::exp(aa - ar), e = e_rel * ea;  // e^{−|r|}·e^{|a|}, e^{−|r|}
+      value = e_rel / ((1 + e) * (1 + e));
+    } else {
+      value = std::exp(rho_a - GengaussPower(ar, p));
+    }
+    const double wv = rule.w[i] * value;
+    z += wv;
+    m1 += wv * d;
+    m2 += wv * d * d;
+  }
+  if (!(z > 0) || !std::isfinite(z)) return {};
+  const double mean_d = m1 / z;
+  const double log_z = std::log(z) + (logistic ? -aa : -rho_a - log_norm_);
+  return {log_z, a + mean_d, std::max(0.0, m2 / z - mean_d * mean_d), true};
 }
 
 TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
@@ -308,24 +455,29 @@ TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
   }
   const double width = 1 / std::sqrt(curvature(r) + 1 / v);
   const double log_peak = -Rho(family_, shape_, r) - 0.5 * (r - a) * (r - a) / v;
-  // log h is concave with curvature ≤ −1/v and, for these families, tails no lighter than e^{−|r|}'s
-  // beyond the width; ±16 widths in 12 panels of 10 Gauss–Legendre points leave below 1e−13 of the
-  // mass. gengauss: a panel boundary at r = 0, where |r|^p is not smooth.
+  // log h is concave: ±16 widths, widened until log h has fallen by 45 from its peak at both ends (so the
+  // mass beyond is below e^{−45} of the peak's per unit slope), in panels of width at most 2 (f's own
+  // scale; 12 at least, 400 at most) of 10 Gauss–Legendre points.
+  // gengauss: a panel boundary at r = 0, where |r|^p is not smooth.
   using Gauss = boost::math::quadrature::gauss<double, 10>;
   const auto& x = Gauss::abscissa();
   const auto& w = Gauss::weights();
-  constexpr int kPanels = 12;
-  const double half = 16 * width, panel = 2 * half / kPanels;
-  std::array<double, kPanels + 12> cuts{};
+  auto log_h = [&](double u) { return -Rho(family_, shape_, u) - 0.5 * (u - a) * (u - a) / v; };
+  double half = 16 * width;
+  for (int i = 0; i < 40 && std::max(log_h(r - half), log_h(r + half)) > log_peak - 45; ++i) half *= 1.5;
+  constexpr int kMaxPanels = 400;
+  const int panels = std::clamp(static_cast<int>(std::ceil(half)), 12, kMaxPanels);
+  const double panel = 2 * half / panels;
+  std::array<double, kMaxPanels + 12> cuts{};
   int n = 0;
-  for (int p = 0; p <= kPanels; ++p) cuts[n++] = r - half + p * panel;
-  if (!logistic && cuts[0] < 0 && cuts[kPanels] > 0) {
+  for (int p = 0; p <= panels; ++p) cuts[n++] = r - half + p * panel;
+  if (!logistic && cuts[0] < 0 && cuts[panels] > 0) {
     // |r|^p at 0: a boundary there and panels graded geometrically towards it (exponential convergence
     // for the r^p singularity instead of GL's algebraic one).
     cuts[n++] = 0;
     for (double g = 0.25; g > 1e-3; g *= 0.25)
       for (double c : {-g * panel, g * panel})
-        if (c > cuts[0] && c < cuts[kPanels]) cuts[n++] = c;
+        if (c > cuts[0] && c < cuts[panels]) cuts[n++] = c;
     std::sort(cuts.begin(), cuts.begin() + n);
   }
   double z = 0, m1 = 0, m2 = 0;

@@ -209,7 +209,8 @@ StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>&
   // later regressors), which the model y = z'θ + σu does not describe: it is not used. (A test on the
   // Mahalanobis radius in the information so far would also refuse, for ever, the samples that have to
   // correct a direction the start window hardly determined.)
-  if (options_.leverage_guard && options_.noise.Weight(a) < kGrossWeight && Outlying(z)) {
+  const double weight = options_.noise.Weight(a);
+  if (options_.leverage_guard && weight < kGrossWeight && Outlying(z)) {
     StepReport report{StepStatus::kUpdated};
     report.prediction_error = e;
     report.weight = 0;
@@ -222,7 +223,7 @@ StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>&
   StepReport report = filter_.ApplyTilt(z, s);
   if (!report.updated()) return report;
   report.prediction_error = e;
-  report.weight = options_.noise.Weight(a);
+  report.weight = weight;
   if (options_.scale == 0 && vt < 1) {
     ++scale_steps_;
     log_q_ += kScaleGain / static_cast<double>(scale_steps_ + window_) * (std::abs(e) > std::exp(log_q_) ? 0.5 : -0.5);
