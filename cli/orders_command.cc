@@ -239,7 +239,7 @@ void AddOrdersCommand(CLI::App& app) {
   cmd->add_option("--recursion", o->recursion, "ARMAX/OE/BJ grids: rplr or rpem")
       ->check(CLI::IsMember({"rplr", "rpem"}))
       ->capture_default_str();
-  cmd->add_option("--passes", o->passes, "ARMAX/OE/BJ grids: passes of the recursion per structure")
+  cmd->add_option("--passes", o->passes, "ARMAX/OE/BJ grids and robust estimators: passes of the recursion per structure")
       ->capture_default_str();
   cmd->add_option("--criterion", o->criterion, "Rank by aic, bic, fpe, mdl or validation (loss on the validation part)")
       ->check(CLI::IsMember({"aic", "bic", "fpe", "mdl", "validation"}))
