@@ -122,7 +122,8 @@ void RunOrders(const OrdersOptions& o) {
     request.split = o.split;
     request.passes = o.passes;
     request.detrend = o.detrend;
-    r = workflow::SelectPolynomialOrders(*raw, path, polynomial, request, o.criterion);
+    r = workflow::SelectPolynomialOrders(*raw, path, polynomial, request, o.criterion,
+                                         [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
   } else {
     r = workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
                                table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion,

@@ -52,7 +52,8 @@ std::optional<double> OrderCriterionDof(const EstimatorSpec& estimator) {
 
 OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::string& name,
                                       const PolynomialOrderGrid& grid, FitRequest request,
-                                      const std::string& criterion) {
+                                      const std::string& criterion,
+                                      const std::function<void(long done, long total, const char* unit)>& progress) {
   IDENT_REQUIRE(
       criterion == "aic" || criterion == "bic" || criterion == "fpe" || criterion == "mdl" || criterion == "validation",
       "--criterion '{}': need aic, bic, fpe, mdl or validation", criterion);
@@ -148,6 +149,7 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
       result.validation_samples = static_cast<int>(validation.size());
     }
     result.structures.push_back(std::move(s));
+    if (progress) progress(static_cast<long>(result.structures.size()), static_cast<long>(specs.size()), "structures");
   }
   std::stable_sort(result.structures.begin(), result.structures.end(),
                    [&criterion](const StructureScore& a, const StructureScore& b) {

@@ -17,6 +17,7 @@
 // FPE, a least-squares criterion, is refused (and NaN in the scores). `loss` stays the mean square.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -40,8 +41,10 @@ std::optional<double> OrderCriterionDof(const EstimatorSpec& estimator);
 // `request` gives the output, input, recursion, estimator, split, passes and detrending; its orders are
 // replaced by each structure's. `name` names the record in messages. Throws InvalidArgument for a bad grid or
 // criterion, or when no combination of the grid is a model.
+// `progress`, if set, is told (done, total, "structures") after each fit.
 OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::string& name,
                                       const PolynomialOrderGrid& grid, FitRequest request,
-                                      const std::string& criterion);
+                                      const std::string& criterion,
+                                      const std::function<void(long done, long total, const char* unit)>& progress = {});
 
 }  // namespace ident::workflow
