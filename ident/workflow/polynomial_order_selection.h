@@ -14,7 +14,9 @@
 // residuals, the scale γ profiled out (ident/workflow/student_likelihood.h), counting d + 1 parameters:
 //   AIC = 2 NLL + 2(d+1),  BIC = 2 NLL + (d+1) log N,  MDL = BIC/2,
 //   validation = NLL_k of the validation residuals at the estimation γ;
-// FPE, a least-squares criterion, is refused (and NaN in the scores). `loss` stays the mean square.
+// FPE, a least-squares criterion, is refused (and NaN in the scores). `loss` stays the mean square. Each
+// structure is fitted as FitRecord fits it (for ARX with cauchy/student: with its output cleaning); the
+// residuals are those of the final θ on the measured outputs.
 #pragma once
 
 #include <functional>
