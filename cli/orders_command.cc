@@ -1,7 +1,8 @@
 // ident orders DATA... [--experiment-column NAME] --output y --input u [--na 1:10] [--nb 1:10] [--nk 0:5] [--criterion aic|bic|fpe|mdl|validation]
-//              [--split 0.5] [--detrend mean|none] [--top N] [--json]
+//              [--estimator rls|cauchy|student:K [--dof K]] [--split 0.5] [--detrend mean|none] [--top N] [--json]
 // ARX order and delay selection (ident/workflow/order_selection.h): every structure of the grid fitted by
-// least squares on the same estimation samples, ranked by the criterion.
+// least squares on the same estimation samples, ranked by the criterion; with a robust estimator each
+// structure is one recursive fit scored by its Student-t likelihood (ident/workflow/polynomial_order_selection.h).
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -35,6 +36,7 @@ struct OrdersOptions {
   std::string recursion = "rplr";
   int passes = 3;
   std::string criterion = "aic";
+  workflow::EstimatorSpec estimator;  // rls: least squares; cauchy, student:K: robust criteria
   double split = 0.5;
   std::string detrend = "mean";
   int top = 20;
@@ -42,7 +44,11 @@ struct OrdersOptions {
   io::CsvOptions csv;
 };
 
-nlohmann::ordered_json ScoreJson(const workflow::StructureScore& s) {
+nlohmann::ordered_json Optional(const std::optional<double>& x) {
+  return x ? nlohmann::ordered_json(*x) : nlohmann::ordered_json();
+}
+
+nlohmann::ordered_json ScoreJson(const workflow::StructureScore& s, bool robust) {
   nlohmann::ordered_json j;
   j["na"] = s.na;
   j["nb"] = s.nb;
@@ -57,6 +63,11 @@ nlohmann::ordered_json ScoreJson(const workflow::StructureScore& s) {
   j["fpe"] = s.fpe;
   j["mdl"] = s.mdl;
   j["validation_loss"] = s.validation_loss ? nlohmann::ordered_json(*s.validation_loss) : nlohmann::ordered_json();
+  if (robust) {
+    j["nll"] = Optional(s.nll);
+    j["scale"] = Optional(s.scale);
+    j["validation_nll"] = Optional(s.validation_nll);
+  }
   j["theta"] = std::vector<double>(s.theta.data(), s.theta.data() + s.theta.size());
   return j;
 }
@@ -76,6 +87,12 @@ void RunOrders(const OrdersOptions& o) {
   std::tie(polynomial.nf_min, polynomial.nf_max) = workflow::OrderGrid::ParseRange(o.nf, "--nf");
   const bool with_noise_model = polynomial.nc_max > 0 || polynomial.nd_max > 0 || polynomial.nf_max > 0;
   IDENT_REQUIRE(o.passes >= 1 && o.passes <= 100, "--passes {}; need 1..100", o.passes);
+  const std::optional<double> dof = workflow::OrderCriterionDof(o.estimator);  // a robust estimator's k
+  IDENT_REQUIRE(!dof || o.criterion != "fpe", "--criterion fpe is not likelihood-based; with --estimator {} use aic, "
+                "bic, mdl or validation", o.estimator.estimator);
+  const std::string estimator_name =
+      !dof ? "rls"
+           : ParseEstimatorSpec(o.estimator.estimator).name == "cauchy" ? "cauchy" : fmt::format("student:{:g}", *dof);
   // Several experiments (several files, an experiment column) in one table, as ident fit reads them: no
   // regressor straddles two. The time column of a single record is checked (its gaps filled with --missing).
   ExperimentRecords records =
@@ -89,22 +106,24 @@ void RunOrders(const OrdersOptions& o) {
   std::optional<workflow::TimeCheck> time;
   if (!records.several) time = workflow::CheckRecordTime(table, source->used_columns(), o.missing);
   std::optional<io::DataTable> raw;  // the ARMAX/OE/BJ grid fits each structure from the record as read
-  if (with_noise_model) raw = table;
+  if (with_noise_model || dof) raw = table;
   workflow::FitOptions options;
   options.split = o.split;
   options.detrend = o.detrend == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
   const auto [estimation, validation] = workflow::PrepareData(table, *source, options);
   Progress progress("orders");  // on stderr after 2 s: the rows, then the structures
   workflow::OrderSelection r;
-  if (with_noise_model) {
+  if (with_noise_model || dof) {
     workflow::FitRequest request;
+    request.estimator = o.estimator;
     request.model.output = o.output;
     request.model.inputs = {o.input};
     request.model.recursion = o.recursion;
     request.split = o.split;
     request.passes = o.passes;
     request.detrend = o.detrend;
-    r = workflow::SelectPolynomialOrders(*raw, path, polynomial, request, o.criterion);
+    r = workflow::SelectPolynomialOrders(*raw, path, polynomial, request, o.criterion,
+                                         [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
   } else {
     r = workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
                                table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion,
@@ -114,17 +133,25 @@ void RunOrders(const OrdersOptions& o) {
     nlohmann::ordered_json j;
     j["data"] = path;
     j["criterion"] = r.criterion;
+    if (dof) j["estimator"] = estimator_name;
     j["samples"] = r.samples;
     j["validation_samples"] = r.validation_samples;
     j["experiments"] = workflow::ExperimentsJson(records.experiments);
     j["time_gaps"] = workflow::TimeGapsJson(time);
-    j["best"] = ScoreJson(r.structures.front());
+    j["best"] = ScoreJson(r.structures.front(), dof.has_value());
     auto& list = j["structures"] = nlohmann::ordered_json::array();
-    for (const auto& s : r.structures) list.push_back(ScoreJson(s));
+    for (const auto& s : r.structures) list.push_back(ScoreJson(s, dof.has_value()));
     std::cout << j.dump(2) << "\n";
     return;
   }
-  if (with_noise_model)
+  if (dof)
+    fmt::print("{}: {} structures (na {}, nb {}, nk {}{}) fitted by {} in {} passes, scored by the Student-t likelihood "
+               "(k = {:g}) on the same {} samples{}\n",
+               path, r.structures.size(), o.na, o.nb, o.nk,
+               with_noise_model ? fmt::format(", nc {}, nd {}, nf {}", o.nc, o.nd, o.nf) : "", estimator_name,
+               o.passes, *dof, r.samples,
+               r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
+  else if (with_noise_model)
     fmt::print("{}: {} structures (na {}, nb {}, nk {}, nc {}, nd {}, nf {}) fitted by {} in {} passes, scored on the same "
                "{} samples{}\n",
                path, r.structures.size(), o.na, o.nb, o.nk, o.nc, o.nd, o.nf, o.recursion, o.passes, r.samples,
@@ -142,28 +169,48 @@ void RunOrders(const OrdersOptions& o) {
   }
   if (time) PrintTimeGaps(stdout, *time, o.missing);
   fmt::print("ranked by {} (lower is better)\n\n", r.criterion);
-  fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk",
-             with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", "nc", "nd", "nf") : "", "d", "loss", "AIC", "BIC", "FPE",
-             "MDL", r.validation_samples ? fmt::format(" {:>12}", "validation") : "");
   const std::size_t shown = std::min<std::size_t>(r.structures.size(), static_cast<std::size_t>(std::max(1, o.top)));
-  for (std::size_t i = 0; i < shown; ++i) {
-    const auto& s = r.structures[i];
-    fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g}{}\n", s.na, s.nb, s.nk,
-               with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", s.nc, s.nd, s.nf) : "", s.n_parameters, s.loss,
-               s.aic, s.bic, s.fpe, s.mdl,
-               s.validation_loss ? fmt::format(" {:>12.6g}", *s.validation_loss) : "");
+  const auto noise_orders = [&](auto nc, auto nd, auto nf) {
+    return with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", nc, nd, nf) : std::string();
+  };
+  if (dof) {
+    fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk",
+               noise_orders("nc", "nd", "nf"), "d", "loss", "scale", "NLL", "AIC", "BIC", "MDL",
+               r.validation_samples ? fmt::format(" {:>14}", "validation NLL") : "");
+    for (std::size_t i = 0; i < shown; ++i) {
+      const auto& s = r.structures[i];
+      fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g}{}\n", s.na,
+                 s.nb, s.nk, noise_orders(s.nc, s.nd, s.nf), s.n_parameters, s.loss, *s.scale, *s.nll, s.aic, s.bic,
+                 s.mdl, s.validation_nll ? fmt::format(" {:>14.6g}", *s.validation_nll) : "");
+    }
+  } else {
+    fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk",
+               with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", "nc", "nd", "nf") : "", "d", "loss", "AIC", "BIC", "FPE",
+               "MDL", r.validation_samples ? fmt::format(" {:>12}", "validation") : "");
+    for (std::size_t i = 0; i < shown; ++i) {
+      const auto& s = r.structures[i];
+      fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g}{}\n", s.na, s.nb, s.nk,
+                 with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", s.nc, s.nd, s.nf) : "", s.n_parameters, s.loss,
+                 s.aic, s.bic, s.fpe, s.mdl,
+                 s.validation_loss ? fmt::format(" {:>12.6g}", *s.validation_loss) : "");
+    }
   }
   if (shown < r.structures.size()) fmt::print("  … {} more (--top, --json)\n", r.structures.size() - shown);
   const auto& best = r.structures.front();
   const std::string fit_data =
       fmt::format("{}", fmt::join(o.data, " ")) +
       (o.experiment_column.empty() ? "" : " --experiment-column " + o.experiment_column);
+  const std::string fit_estimator = dof ? " --estimator " + o.estimator.estimator +
+                                              (o.estimator.dof ? fmt::format(" --dof {:g}", *o.estimator.dof) : "")
+                                        : "";
   if (with_noise_model)
-    fmt::print("\nbest by {}: ident fit {} --output {} --input {} --na {} --nb {} --nk {} --nc {} --nd {} --nf {}\n",
-               r.criterion, fit_data, o.output, o.input, best.na, best.nb, best.nk, best.nc, best.nd, best.nf);
+    fmt::print("\nbest by {}: ident fit {} --output {} --input {} --na {} --nb {} --nk {} --nc {} --nd {} --nf {}{}\n",
+               r.criterion, fit_data, o.output, o.input, best.na, best.nb, best.nk, best.nc, best.nd, best.nf,
+               fit_estimator);
   else
-    fmt::print("\nbest by {}: ARX({},{},{})  (ident fit {} --output {} --input {} --na {} --nb {} --nk {})\n",
-               r.criterion, best.na, best.nb, best.nk, fit_data, o.output, o.input, best.na, best.nb, best.nk);
+    fmt::print("\nbest by {}: ARX({},{},{})  (ident fit {} --output {} --input {} --na {} --nb {} --nk {}{})\n",
+               r.criterion, best.na, best.nb, best.nk, fit_data, o.output, o.input, best.na, best.nb, best.nk,
+               fit_estimator);
 }
 
 }  // namespace
@@ -193,11 +240,16 @@ void AddOrdersCommand(CLI::App& app) {
   cmd->add_option("--recursion", o->recursion, "ARMAX/OE/BJ grids: rplr or rpem")
       ->check(CLI::IsMember({"rplr", "rpem"}))
       ->capture_default_str();
-  cmd->add_option("--passes", o->passes, "ARMAX/OE/BJ grids: passes of the recursion per structure")
+  cmd->add_option("--passes", o->passes, "ARMAX/OE/BJ grids and robust estimators: passes of the recursion per structure")
       ->capture_default_str();
   cmd->add_option("--criterion", o->criterion, "Rank by aic, bic, fpe, mdl or validation (loss on the validation part)")
       ->check(CLI::IsMember({"aic", "bic", "fpe", "mdl", "validation"}))
       ->capture_default_str();
+  cmd->add_option("--estimator", o->estimator.estimator,
+                  "rls (least squares), or cauchy / student:K: robust recursive fits ranked by the Student-t "
+                  "likelihood (aic, bic, mdl, validation)")
+      ->capture_default_str();
+  cmd->add_option("--dof", o->estimator.dof, "Student-t degrees of freedom k (estimator student)");
   cmd->add_option("--split", o->split, "Fraction of rows used for estimation; the rest validate")
       ->capture_default_str();
   cmd->add_option("--detrend", o->detrend, "Subtract the estimation-part means (mean) or not (none)")

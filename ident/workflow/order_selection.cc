@@ -77,7 +77,8 @@ double CriterionValue(const StructureScore& s, const std::string& criterion) {
   if (criterion == "bic") return s.bic;
   if (criterion == "fpe") return s.fpe;
   if (criterion == "mdl") return s.mdl;
-  return s.validation_loss.value_or(std::numeric_limits<double>::infinity());
+  const std::optional<double>& validation = s.nll ? s.validation_nll : s.validation_loss;
+  return validation.value_or(std::numeric_limits<double>::infinity());
 }
 
 OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, Segment validation, int output,

@@ -41,6 +41,10 @@ struct StructureScore {
   double loss = 0;  // mean square of the one-step residuals over the estimation samples
   double aic = 0, bic = 0, fpe = 0, mdl = 0;
   std::optional<double> validation_loss;  // with a validation part
+  // Scored by a Student-t_k likelihood (robust estimators, ident/workflow/student_likelihood.h): the NLL of
+  // the estimation residuals at the profiled scale γ, γ, and the validation residuals' NLL at that γ.
+  // aic, bic and mdl are then likelihood-based and fpe is NaN (polynomial_order_selection.h).
+  std::optional<double> nll, scale, validation_nll;
   Eigen::VectorXd theta;
 };
 
@@ -59,7 +63,8 @@ OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, S
                             int input, const OrderGrid& grid, const std::string& criterion,
                             const std::function<void(long done, long total, const char* unit)>& progress = {});
 
-// The value of `criterion` for one structure (lower is better).
+// The value of `criterion` for one structure (lower is better); "validation" is validation_nll when the
+// structure has an nll, else validation_loss.
 double CriterionValue(const StructureScore& s, const std::string& criterion);
 
 }  // namespace ident::workflow

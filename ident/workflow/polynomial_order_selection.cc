@@ -8,36 +8,58 @@
 
 #include "common/error.h"
 #include "ident/workflow/predictions.h"
+#include "ident/workflow/student_likelihood.h"
 
 namespace ident::workflow {
 namespace {
 
-// Mean square of y − ŷ over the rows of the segment at least `t0` rows after its start and after the start of
-// their experiment where both are finite, and their number.
-std::pair<double, int> OneStepLoss(const SegmentPredictions& p, const io::DataTable& data, int t0) {
-  double sum = 0;
-  int n = 0;
+// The one-step residuals y − ŷ over the rows of the segment at least `t0` rows after its start and after the
+// start of their experiment where both are finite.
+std::vector<double> OneStepResiduals(const SegmentPredictions& p, const io::DataTable& data, int t0) {
+  std::vector<double> residuals;
   std::size_t first = 0;  // the current experiment's first row in the segment
   for (std::size_t i = 0; i < p.measured.size(); ++i) {
     if (i > 0 && data.StartsExperiment(p.rows[i] - 1)) first = i;
     if (i - first < static_cast<std::size_t>(t0)) continue;
-    if (std::isfinite(p.one_step[i]) && std::isfinite(p.measured[i])) {
-      const double e = p.measured[i] - p.one_step[i];
-      sum += e * e;
-      ++n;
-    }
+    if (std::isfinite(p.one_step[i]) && std::isfinite(p.measured[i])) residuals.push_back(p.measured[i] - p.one_step[i]);
   }
-  return {n > 0 ? sum / n : std::numeric_limits<double>::quiet_NaN(), n};
+  return residuals;
+}
+
+double MeanSquare(const std::vector<double>& r) {
+  double sum = 0;
+  for (const double x : r) sum += x * x;
+  return r.empty() ? std::numeric_limits<double>::quiet_NaN() : sum / static_cast<double>(r.size());
 }
 
 }  // namespace
 
+std::optional<double> OrderCriterionDof(const EstimatorSpec& estimator) {
+  const EstimatorSettings s = ParseEstimatorSpec(estimator.estimator);
+  if (s.name == "rls") {
+    IDENT_REQUIRE(!estimator.dof, "dof = {} does not apply to estimator 'rls'", estimator.dof.value_or(0));
+    return std::nullopt;
+  }
+  IDENT_REQUIRE(s.name == "cauchy" || s.name == "student",
+                "orders --estimator '{}': need rls, cauchy or student:K (the robust criteria are Student-t likelihoods)",
+                estimator.estimator);
+  if (s.name == "cauchy") return 1.0;
+  const std::optional<double> dof = estimator.dof ? estimator.dof : s.dof;
+  IDENT_REQUIRE(dof && std::isfinite(*dof) && *dof > 0,
+                "orders --estimator student needs dof k > 0 (--dof 3 or student:3)");
+  return dof;
+}
+
 OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::string& name,
                                       const PolynomialOrderGrid& grid, FitRequest request,
-                                      const std::string& criterion) {
+                                      const std::string& criterion,
+                                      const std::function<void(long done, long total, const char* unit)>& progress) {
   IDENT_REQUIRE(
       criterion == "aic" || criterion == "bic" || criterion == "fpe" || criterion == "mdl" || criterion == "validation",
       "--criterion '{}': need aic, bic, fpe, mdl or validation", criterion);
+  const std::optional<double> dof = OrderCriterionDof(request.estimator);
+  IDENT_REQUIRE(!dof || criterion != "fpe", "--criterion fpe is not likelihood-based; with --estimator {} use aic, bic, mdl "
+                "or validation", request.estimator.estimator);
   IDENT_REQUIRE(criterion != "validation" || request.split < 1,
                 "--criterion validation needs a validation part (--split below 1)");
   IDENT_REQUIRE(grid.nc_min >= 0 && grid.nd_min >= 0 && grid.nf_min >= 0,
@@ -81,7 +103,10 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
     request.model = spec;
     const RecordFit fit = FitRecord(table, name, request);
     std::unique_ptr<DataSource> source = spec.MakeSource(fit.prepared.names, name);
-    const auto [loss, n] = OneStepLoss(PredictSegment(fit.prepared, fit.estimation, *source, fit.result.theta), fit.prepared, t0);
+    const std::vector<double> residuals =
+        OneStepResiduals(PredictSegment(fit.prepared, fit.estimation, *source, fit.result.theta), fit.prepared, t0);
+    const double loss = MeanSquare(residuals);
+    const int n = static_cast<int>(residuals.size());
     StructureScore s;
     s.na = spec.na;
     s.nb = spec.nb[0];
@@ -96,18 +121,35 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
                   source->structure(), s.n_parameters);
     result.samples = n;
     s.loss = loss;
-    const double log_v = std::log(loss);
-    s.aic = n * log_v + 2.0 * d;
-    s.bic = n * log_v + d * std::log(static_cast<double>(n));
-    s.fpe = loss * (1 + d / n) / (1 - d / n);
-    s.mdl = loss * (1 + d * std::log(static_cast<double>(n)) / n);
+    const double log_n = std::log(static_cast<double>(n));
+    if (dof) {
+      // Student-t_k likelihood criteria with d + 1 parameters (θ and the scale γ): AIC = 2 NLL + 2(d+1)
+      // (Akaike 1974), BIC = 2 NLL + (d+1) log N (Schwarz 1978), MDL = BIC/2 = NLL + (d+1)/2 · log N
+      // (Rissanen's two-part code length in nats, which ranks as BIC does, as the least-squares
+      // MDL = V (1 + d log N / N) ≈ V·exp(d log N / N) ranks as its BIC N log V + d log N does).
+      const StudentProfile profile = ProfileStudentLikelihood(residuals, *dof);
+      s.nll = profile.nll;
+      s.scale = profile.scale;
+      s.aic = 2 * profile.nll + 2 * (d + 1);
+      s.bic = 2 * profile.nll + (d + 1) * log_n;
+      s.mdl = s.bic / 2;
+      s.fpe = std::numeric_limits<double>::quiet_NaN();  // not likelihood-based
+    } else {
+      const double log_v = std::log(loss);
+      s.aic = n * log_v + 2.0 * d;
+      s.bic = n * log_v + d * log_n;
+      s.fpe = loss * (1 + d / n) / (1 - d / n);
+      s.mdl = loss * (1 + d * log_n / n);
+    }
     if (fit.validation.count > t0) {
-      const auto [validation_loss, m] =
-          OneStepLoss(PredictSegment(fit.prepared, fit.validation, *source, fit.result.theta), fit.prepared, t0);
-      s.validation_loss = validation_loss;
-      result.validation_samples = m;
+      const std::vector<double> validation = OneStepResiduals(
+          PredictSegment(fit.prepared, fit.validation, *source, fit.result.theta), fit.prepared, t0);
+      s.validation_loss = MeanSquare(validation);
+      if (dof) s.validation_nll = StudentNegLogLikelihood(validation, *dof, *s.scale);
+      result.validation_samples = static_cast<int>(validation.size());
     }
     result.structures.push_back(std::move(s));
+    if (progress) progress(static_cast<long>(result.structures.size()), static_cast<long>(specs.size()), "structures");
   }
   std::stable_sort(result.structures.begin(), result.structures.end(),
                    [&criterion](const StructureScore& a, const StructureScore& b) {
