@@ -262,13 +262,8 @@ void AddCompareCommand(CLI::App& app) {
   auto o = std::make_shared<CompareCommandOptions>();
   CLI::App* cmd = app.add_subcommand(
       "compare", "Compare estimators on a record with injected outliers, scored on its clean validation part");
-  cmd->add_option("DATA", o->data,
-                  "CSV file with a header, or a bundled dataset's name (e.g. dryer); several: one experiment each")
-      ->required();
-  AddExperimentColumnOption(*cmd, o->experiment_column);
-  cmd->add_flag("--missing", o->missing,
-                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
-                "with missing samples");
+  AddDataFilesOptions(*cmd, o->data, o->experiment_column);
+  AddMissingOption(*cmd, o->missing);
   cmd->add_option("--estimators", o->estimators,
                   fmt::format("Comma-separated estimators ({}; dof as 'student:3')",
                               fmt::join(RegressionEstimatorNames(), ", ")))

@@ -13,6 +13,18 @@ void AddExperimentColumnOption(CLI::App& app, std::string& column) {
                  "restart at each");
 }
 
+void AddDataFilesOptions(CLI::App& app, std::vector<std::string>& data, std::string& experiment_column,
+                         const std::string& what) {
+  app.add_option("DATA", data, what + "; several: one experiment each")->required();
+  AddExperimentColumnOption(app, experiment_column);
+}
+
+void AddMissingOption(CLI::App& app, bool& missing) {
+  app.add_flag("--missing", missing,
+               "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
+               "with missing samples");
+}
+
 ExperimentRecords ReadExperimentRecords(const std::vector<std::string>& paths, const std::string& column,
                                         const io::CsvOptions& csv) {
   IDENT_REQUIRE(!paths.empty(), "no data file given");

@@ -15,6 +15,12 @@ namespace ident::cli {
 
 // Adds --experiment-column to `app`, parsed into `column`.
 void AddExperimentColumnOption(CLI::App& app, std::string& column);
+// Adds the DATA positional (one file or bundled dataset name, or several: one experiment each), described
+// by `what` ("CSV file with a header" by default), and --experiment-column.
+void AddDataFilesOptions(CLI::App& app, std::vector<std::string>& data, std::string& experiment_column,
+                         const std::string& what = "CSV file with a header, or a bundled dataset's name (e.g. dryer)");
+// Adds --missing (empty/NaN/Inf cells are missing samples; time-column gaps are filled with them).
+void AddMissingOption(CLI::App& app, bool& missing);
 
 struct ExperimentFile {
   std::string path;

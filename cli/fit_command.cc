@@ -321,10 +321,7 @@ void RunFit(const FitCommandOptions& o) {
 void AddFitCommand(CLI::App& app) {
   auto o = std::make_shared<FitCommandOptions>();
   CLI::App* fit = app.add_subcommand("fit", "Fit a model to recorded data with a recursive estimator");
-  fit->add_option("DATA", o->data,
-                  "CSV file with a header, or a bundled dataset's name (e.g. dryer); several: one experiment each")
-      ->required();
-  AddExperimentColumnOption(*fit, o->experiment_column);
+  AddDataFilesOptions(*fit, o->data, o->experiment_column);
   o->structure.AddTo(*fit, /*require_output=*/false);
   o->estimator.AddTo(*fit);
   fit->add_option("--split", o->split, "Fraction of rows used for estimation; 1 = estimate and validate on all")
@@ -336,9 +333,7 @@ void AddFitCommand(CLI::App& app) {
   fit->add_option("--detrend", o->detrend,
                   "Subtract the estimation-part means (mean) or not (none); default mean, none with --intercept")
       ->check(CLI::IsMember({"mean", "none"}));
-  fit->add_flag("--missing", o->missing,
-                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
-                "with missing samples");
+  AddMissingOption(*fit, o->missing);
   fit->add_option("--trace", o->trace, "Write one CSV row per update: t,nu,beta,pred_err,theta1..,Dy");
   fit->add_option("--plot", o->plot,
                   "Draw measured vs one-step and simulated output (validation, data units), the parameter "

@@ -219,13 +219,8 @@ void AddOrdersCommand(CLI::App& app) {
   auto o = std::make_shared<OrdersOptions>();
   CLI::App* cmd =
       app.add_subcommand("orders", "Select ARX orders and delay: loss and AIC/BIC/FPE/MDL of every structure");
-  cmd->add_option("DATA", o->data,
-                  "CSV file with a header, or a bundled dataset's name (e.g. dryer); several: one experiment each")
-      ->required();
-  AddExperimentColumnOption(*cmd, o->experiment_column);
-  cmd->add_flag("--missing", o->missing,
-                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
-                "with missing samples");
+  AddDataFilesOptions(*cmd, o->data, o->experiment_column);
+  AddMissingOption(*cmd, o->missing);
   cmd->add_option("--output", o->output, "Output column y")->required();
   cmd->add_option("--input", o->input, "Input column u (one input)")->required();
   cmd->add_option("--na", o->na, "Range of na, A:B or N")->capture_default_str();

@@ -153,17 +153,13 @@ void AddPredictCommand(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("predict", "Predict or simulate with a saved model (ident fit --save) on a record");
   cmd->add_option("MODEL", o->model, "Model file written by ident fit --save")->required();
-  cmd->add_option("DATA", o->data,
-                  "CSV file with the model's columns, or a bundled dataset's name; several: one experiment each")
-      ->required();
-  AddExperimentColumnOption(*cmd, o->experiment_column);
+  AddDataFilesOptions(*cmd, o->data, o->experiment_column,
+                      "CSV file with the model's columns, or a bundled dataset's name");
   cmd->add_option("--rows", o->rows, "Rows A:B (1-based) to predict and score; default all");
   cmd->add_option("--horizon", o->horizon, "Also the K-step-ahead prediction (outputs after t-K predicted)")
       ->capture_default_str();
   cmd->add_flag("--simulate", o->simulate, "Also the simulated output (the model's own past outputs)");
-  cmd->add_flag("--missing", o->missing,
-                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
-                "with missing samples");
+  AddMissingOption(*cmd, o->missing);
   cmd->add_flag("--json", o->json, "Print fit % and RMS (one_step, simulation, k_step) as JSON instead of the CSV");
   AddDelimiterOption(*cmd, o->csv);
   cmd->callback([o] { RunPredict(*o); });
