@@ -137,10 +137,7 @@ void PrintTable(const workflow::CompareResult& r, const std::string& name, const
   fmt::print("{}: {}, estimation rows {}-{}, validation rows {}-{}\n", name, r.structure, r.estimation.first + 1,
              r.estimation.first + r.estimation.count, r.validation.first + 1, r.validation.first + r.validation.count);
   if (r.experiments.size() > 1) {
-    fmt::print("{} experiments (regressors restart at each):", r.experiments.size());
-    for (std::size_t i = 0; i < r.experiments.size(); ++i)
-      fmt::print("{} {} rows {}-{}", i ? "," : "", r.experiments[i].name, r.experiments[i].first + 1,
-                 r.experiments[i].first + r.experiments[i].count);
+    PrintExperiments(r.experiments);
     fmt::print("\n");
   }
   if (r.time) PrintTimeGaps(stdout, *r.time, missing);

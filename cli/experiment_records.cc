@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include <fmt/format.h>
+
 #include "common/error.h"
 #include "ident/io/mat_file.h"
 
@@ -23,6 +25,14 @@ void AddMissingOption(CLI::App& app, bool& missing) {
   app.add_flag("--missing", missing,
                "Treat empty/NaN/Inf cells as missing samples instead of errors; fill gaps of the time column t "
                "with missing samples");
+}
+
+void PrintExperiments(const std::vector<workflow::Experiment>& experiments) {
+  if (experiments.size() <= 1) return;
+  fmt::print("{} experiments (regressors restart at each):", experiments.size());
+  for (std::size_t i = 0; i < experiments.size(); ++i)
+    fmt::print("{} {} rows {}-{}", i ? "," : "", experiments[i].name, experiments[i].first + 1,
+               experiments[i].first + experiments[i].count);
 }
 
 ExperimentRecords ReadExperimentRecords(const std::vector<std::string>& paths, const std::string& column,

@@ -21,6 +21,9 @@ void AddDataFilesOptions(CLI::App& app, std::vector<std::string>& data, std::str
                          const std::string& what = "CSV file with a header, or a bundled dataset's name (e.g. dryer)");
 // Adds --missing (empty/NaN/Inf cells are missing samples; time-column gaps are filled with them).
 void AddMissingOption(CLI::App& app, bool& missing);
+// With more than one experiment, prints "N experiments (regressors restart at each): name rows A-B, …"
+// (1-based rows) without a line end; nothing for one.
+void PrintExperiments(const std::vector<workflow::Experiment>& experiments);
 
 struct ExperimentFile {
   std::string path;

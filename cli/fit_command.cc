@@ -139,10 +139,8 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
   else if (o.split != 1)
     fmt::print(", validation rows {}-{}", r.samples_estimation + 1, r.samples_estimation + r.samples_validation);
   if (experiments.size() > 1) {
-    fmt::print("\n{} experiments (regressors restart at each):", experiments.size());
-    for (std::size_t i = 0; i < experiments.size(); ++i)
-      fmt::print("{} {} rows {}-{}", i ? "," : "", experiments[i].name, experiments[i].first + 1,
-                 experiments[i].first + experiments[i].count);
+    fmt::print("\n");
+    PrintExperiments(experiments);
   }
   fmt::print("\n");
   if (r.time) PrintTimeGaps(stdout, *r.time, o.missing);

@@ -161,10 +161,7 @@ void RunOrders(const OrdersOptions& o) {
                r.structures.size(), o.na, o.nb, o.nk, r.samples,
                r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
   if (records.experiments.size() > 1) {
-    fmt::print("{} experiments (regressors restart at each):", records.experiments.size());
-    for (std::size_t i = 0; i < records.experiments.size(); ++i)
-      fmt::print("{} {} rows {}-{}", i ? "," : "", records.experiments[i].name, records.experiments[i].first + 1,
-                 records.experiments[i].first + records.experiments[i].count);
+    PrintExperiments(records.experiments);
     fmt::print("\n");
   }
   if (time) PrintTimeGaps(stdout, *time, o.missing);

@@ -9,30 +9,27 @@
 #include "ident/regression/estimator_registry.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"
+#include "tests/support/forwarding_estimator.h"
 #include "tests/support/test_data.h"
 
 namespace ident {
 namespace {
 
-class SolveCounter final : public AnyRegressionEstimator {
+class SolveCounter final : public testing::ForwardingEstimator {
  public:
-  explicit SolveCounter(std::unique_ptr<AnyRegressionEstimator> inner) : inner_(std::move(inner)) {}
-  std::string name() const override { return inner_->name(); }
+  using ForwardingEstimator::ForwardingEstimator;
   StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) override {
     fresh_ = true;
     ++updates;
-    return inner_->Update(y, z);
+    return ForwardingEstimator::Update(y, z);
   }
-  int num_parameters() const override { return inner_->num_parameters(); }
-  Eigen::VectorXd parameters() const override { return Read(), inner_->parameters(); }
-  Eigen::MatrixXd covariance() const override { return Read(), inner_->covariance(); }
-  double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const override { return Read(), inner_->Predict(z); }
-  double nu() const override { return inner_->nu(); }
-  double Dy() const override { return Read(), inner_->Dy(); }
-  double noise_std() const override { return Read(), inner_->noise_std(); }
-  void Reset() override { inner_->Reset(); }
-  std::string kind() const override { return inner_->kind(); }
-  bool judges_outliers() const override { return inner_->judges_outliers(); }
+  Eigen::VectorXd parameters() const override { return Read(), ForwardingEstimator::parameters(); }
+  Eigen::MatrixXd covariance() const override { return Read(), ForwardingEstimator::covariance(); }
+  double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const override {
+    return Read(), ForwardingEstimator::Predict(z);
+  }
+  double Dy() const override { return Read(), ForwardingEstimator::Dy(); }
+  double noise_std() const override { return Read(), ForwardingEstimator::noise_std(); }
 
   int updates = 0;
   mutable int solves = 0;
@@ -42,7 +39,6 @@ class SolveCounter final : public AnyRegressionEstimator {
     solves += fresh_;
     fresh_ = false;
   }
-  std::unique_ptr<AnyRegressionEstimator> inner_;
   mutable bool fresh_ = false;
 };
 

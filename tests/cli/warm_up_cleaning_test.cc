@@ -15,40 +15,25 @@
 #include "ident/workflow/compare.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"
+#include "tests/support/forwarding_estimator.h"
 #include "tests/support/test_data.h"
 
 namespace ident {
 namespace {
 
-// Forwards to an estimator and records the regressor of every update with the row it came from.
-class RecordingEstimator final : public AnyRegressionEstimator {
+// Records the regressor of every update with the row it came from.
+class RecordingEstimator final : public testing::ForwardingEstimator {
  public:
-  explicit RecordingEstimator(std::unique_ptr<AnyRegressionEstimator> inner) : inner_(std::move(inner)) {}
-  std::string name() const override { return inner_->name(); }
+  using ForwardingEstimator::ForwardingEstimator;
   StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) override {
     rows.push_back(row);
     regressors.emplace_back(z);
-    return inner_->Update(y, z);
+    return ForwardingEstimator::Update(y, z);
   }
-  int num_parameters() const override { return inner_->num_parameters(); }
-  Eigen::VectorXd parameters() const override { return inner_->parameters(); }
-  Eigen::MatrixXd covariance() const override { return inner_->covariance(); }
-  double Predict(const Eigen::Ref<const Eigen::VectorXd>& z) const override { return inner_->Predict(z); }
-  double nu() const override { return inner_->nu(); }
-  double Dy() const override { return inner_->Dy(); }
-  double noise_std() const override { return inner_->noise_std(); }
-  void Reset() override { inner_->Reset(); }
-  bool judges_outliers() const override { return inner_->judges_outliers(); }
-  bool in_startup() const override { return inner_->in_startup(); }
-  bool FinishStartup() override { return inner_->FinishStartup(); }
-  bool ReconsiderAtEnd() override { return inner_->ReconsiderAtEnd(); }
 
   int row = -1;
   std::vector<int> rows;
   std::vector<Eigen::VectorXd> regressors;
-
- private:
-  std::unique_ptr<AnyRegressionEstimator> inner_;
 };
 
 TEST(WarmUpCleaning, AScreenedOutlierNeverReturnsIntoTheRegressorsDuringTheStartUp) {
