@@ -149,6 +149,20 @@ TiltedMoments ProjectedMeasurement::QuadratureTilt(double y, double mean, double
       a = std::max(p.lo, p.hi - 40 * sd);
     }
   }
+  // The likelihood can pull the mode far outside that window (a narrow prior far from the reading). The
+  // log integrand is concave, so while it still rises at an end of the window the mode lies beyond it:
+  // move that end out, doubling the step, until the integrand falls or the support ends.
+  const double centre = 0.5 * (a + b);
+  for (int side : {1, -1}) {
+    double& end = side > 0 ? b : a;
+    const double bound = side > 0 ? p.hi : p.lo;
+    double inner = centre, step = 40 * sd;
+    for (int i = 0; i < 80 && end != bound && log_f(end) > log_f(inner); ++i) {
+      inner = end;
+      step *= 2;
+      end = side > 0 ? std::min(bound, end + step) : std::max(bound, end - step);
+    }
+  }
   // Golden-section search for the mode of the concave log integrand.
   const double g = (std::sqrt(5.0) - 1) / 2;
   double x1 = b - g * (b - a), x2 = a + g * (b - a), f1 = log_f(x1), f2 = log_f(x2);

@@ -84,6 +84,20 @@ TEST(TiltedMoments, GaussianClosedFormEqualsQuadratureTo1e10) {
   }
 }
 
+TEST(TiltedMoments, QuadratureFindsAModeFarOutsideThePriorsWindow) {
+  // A narrow prior far from the reading: the posterior mode lies hundreds of prior widths from the prior
+  // mean (Gaussian product: mean = (σ²·μ + v·y)/(σ² + v), variance = σ²v/(σ² + v)).
+  GaussianMeasurement g(kC, 1.0);
+  for (double mean : {-300.0, 300.0, 2.0e4})
+    for (double var : {0.03, 1.0}) {
+      const TiltedMoments a = g.Tilt(0.0, mean, var), b = g.QuadratureTilt(0.0, mean, var);
+      ASSERT_TRUE(a.ok && b.ok) << mean << " " << var;
+      EXPECT_NEAR(b.mean, mean / (1 + var), 1e-9 * std::abs(mean)) << mean << " " << var;
+      EXPECT_NEAR(b.variance, var / (1 + var), 1e-9) << mean << " " << var;
+      EXPECT_NEAR(b.log_normalizer, a.log_normalizer, 1e-9 * std::abs(a.log_normalizer)) << mean << " " << var;
+    }
+}
+
 TEST(TiltedMoments, QuadratureForLaplaceAndOptimalQuantizerMatchesFineTrapezoid) {
   LaplaceMeasurement lap(kC, 0.3);
   OptimalQuantizer oq(kC);
