@@ -229,6 +229,8 @@ void RunFit(const FitCommandOptions& o) {
   if (!experiments) files = {{path, once ? once->num_rows() : 0}};  // as read, before gaps are filled
   if (once && !experiments)  // a time column restarts in each experiment
     time = workflow::CheckRecordTime(*once, source->used_columns(), o.missing);
+  // Streamed: the gaps to fill are found in a pass of their own; otherwise the estimation pass checks the time.
+  if (streamed && o.missing) time = workflow::ScanCsvTime(path, csv, source->used_columns());
   workflow::FitRequest request;
   request.model = o.structure;
   request.estimator = o.estimator;
@@ -240,7 +242,7 @@ void RunFit(const FitCommandOptions& o) {
   workflow::FitOptions length_check;
   length_check.split = o.split;
   std::optional<workflow::CsvLayout> layout;
-  if (!once) layout = workflow::CheckCsvLayout(path, csv, *source, length_check, data_lines);
+  if (!once) layout = workflow::CheckCsvLayout(path, csv, *source, length_check, data_lines, time ? &*time : nullptr);
   const long estimation_rows =
       once ? workflow::CheckRecordLength(once->num_rows(), *source, length_check, path) : layout->estimation.count;
   workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
@@ -271,7 +273,7 @@ void RunFit(const FitCommandOptions& o) {
       if (*f) (*f)->Commit();
   };
   if (streamed) {
-    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, plan, *layout);
+    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, plan, *layout, time ? &*time : nullptr);
     commit_outputs();
     if (o.json) {
       std::cout << workflow::FitJson(result, path, o.split, o.detrend, nullptr, nullptr).dump(2) << "\n";

@@ -16,6 +16,9 @@
 //           regressors over the estimation part, detrended)
 //   pass 3  estimate on rows 1..⌊split·N⌋, then score on the rest in the same pass (split < 1);
 //           with split = 1 a fourth pass scores the whole record.
+//   The time column (time_column.h) is checked in pass 3, which reads every row: FitResult::time lists its
+//   gaps. With its gaps to be filled (--missing), ScanCsvTime reads it in a pass of its own first, and
+//   every pass reads each gap's missing rows before the row that ends it.
 // It gives the same numbers as Fit(ReadCsv(path)) up to rounding in the fit-% sums.
 #pragma once
 
@@ -158,9 +161,18 @@ struct CsvLayout {
 };
 
 // CheckCsvRecordLength's checks, returning the layout; `data_lines` is CountCsvDataRows(path) when the caller
-// has it (negative: counted here).
+// has it (negative: counted here). With `filled` (ScanCsvTime's check, --missing) the layout is that of the
+// record with each gap's missing rows inserted, and their TimeGap::filled set.
 CsvLayout CheckCsvLayout(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                         const FitOptions& options, long data_lines = -1);
+                         const FitOptions& options, long data_lines = -1, TimeCheck* filled = nullptr);
+
+// The time column of a CSV file (time_column.h), read in one pass in constant memory: each step is judged
+// against the median of the last ArrivingTimeCheck::kSteps regular steps, as rows that arrive one at a
+// time are. Null when the file has no time column or the model reads it (`used_columns`). Throws the
+// DataError "<path>:<line>: time column 't' does not increase: …", and for a gap that misses more samples
+// than the rows before it.
+std::optional<TimeCheck> ScanCsvTime(const std::string& path, const io::CsvOptions& csv,
+                                     const std::vector<int>& used_columns);
 
 // Number of data rows of a CSV file: the lines that are neither blank nor comments, minus one (the header).
 // Reads the file in blocks without parsing numbers. Throws DataError if it cannot be read.

@@ -5,8 +5,11 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <algorithm>
 #include <iterator>
+#include <limits>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 #include <Eigen/Eigenvalues>
@@ -69,15 +72,75 @@ long CountCsvDataRows(const std::string& path) {
 
 namespace {
 
+// The rows of a CSV file as a streamed fit reads them. With `filled` (time gaps to fill, --missing) each
+// gap's missing rows come before the row that ends it, as FillTimeGaps inserts them into a table: NaN in
+// every column but the time column, whose values step on from the gap's start by its step.
+class RecordRows {
+ public:
+  RecordRows(const std::string& path, const io::CsvOptions& csv, const TimeCheck* filled)
+      : reader_(path, csv), filled_(filled != nullptr && !filled->gaps.empty() ? filled : nullptr) {
+    if (filled_ == nullptr) return;
+    const auto& names = reader_.names();
+    time_column_ = static_cast<int>(std::find(names.begin(), names.end(), filled_->column) - names.begin());
+    IDENT_REQUIRE(time_column_ < reader_.num_columns(), "{}: no time column '{}'", path, filled_->column);
+    held_.resize(reader_.num_columns());
+  }
+  int num_columns() const { return reader_.num_columns(); }
+  const std::vector<std::string>& names() const { return reader_.names(); }
+  long line() const { return reader_.line(); }  // of the last row read from the file
+
+  bool Next(Eigen::Ref<Eigen::VectorXd> row) {
+    if (filled_ == nullptr) return reader_.Next(row);
+    if (pending_ > 0) {  // the next missing row of gap gap_
+      const TimeGap& g = filled_->gaps[gap_];
+      row.setConstant(std::numeric_limits<double>::quiet_NaN());
+      row(time_column_) = g.t_before + static_cast<double>(g.missing - pending_ + 1) * g.step;
+      --pending_;
+      return true;
+    }
+    if (holding_) {  // the row that ends the gap
+      row = held_;
+      holding_ = false;
+      ++gap_;
+      return true;
+    }
+    if (!reader_.Next(row)) return false;
+    ++file_rows_;
+    if (gap_ < filled_->gaps.size() && filled_->gaps[gap_].row == file_rows_) {
+      held_ = row;
+      holding_ = true;
+      pending_ = filled_->gaps[gap_].missing;
+      return Next(row);
+    }
+    return true;
+  }
+
+ private:
+  io::CsvReader reader_;
+  const TimeCheck* filled_;
+  int time_column_ = -1;
+  std::size_t gap_ = 0;  // the next gap to fill
+  long file_rows_ = 0, pending_ = 0;
+  bool holding_ = false;
+  Eigen::VectorXd held_;
+};
+
 // The layout of a CSV file from its header and its data lines (`data_lines`: CountCsvDataRows(path), counted
 // here if negative).
 CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                 const FitOptions& options, long data_lines = -1) {
+                 const FitOptions& options, long data_lines = -1, TimeCheck* filled = nullptr) {
   io::CsvReader header(path, csv);
   CsvLayout layout;
   layout.columns = header.num_columns();
   if (data_lines < 0) data_lines = CountCsvDataRows(path);
   layout.rows = data_lines + (header.generated_names() ? 1 : 0);  // no header: its line is a row
+  if (filled != nullptr) {
+    for (TimeGap& g : filled->gaps) {
+      IDENT_REQUIRE(g.missing <= 2'000'000'000L - layout.rows, "{}: the time gaps miss more than 2e9 rows", path);
+      layout.rows += g.missing;
+      g.filled = g.missing;
+    }
+  }
   if (layout.rows == 0) {
     Eigen::VectorXd row(layout.columns);
     header.Next(row);  // throws "no data rows after the header"
@@ -90,8 +153,8 @@ CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataS
 // Detrending offsets of a CSV file: the estimation-part means of the used columns (NaN = missing skipped),
 // zero with Detrend::kNone.
 Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                               const FitOptions& options, Segment estimation) {
-  io::CsvReader reader(path, csv);
+                               const FitOptions& options, Segment estimation, const TimeCheck* filled) {
+  RecordRows reader(path, csv, filled);
   Eigen::VectorXd offset = Eigen::VectorXd::Zero(reader.num_columns()), row(reader.num_columns());
   if (options.detrend == Detrend::kMean) {
     std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
@@ -121,7 +184,7 @@ auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) 
 // Passes 3 and 4 of FitCsvFile (fit.h), given the layout (pass 1) and the detrending offsets (pass 2).
 FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                         AnyRegressionEstimator& estimator, const FitOptions& options, const CsvLayout& layout,
-                        const Eigen::VectorXd& offset) {
+                        const Eigen::VectorXd& offset, const TimeCheck* filled) {
   const long rows = layout.rows;
   const Segment estimation = layout.estimation, validation = layout.validation;  // captured below (clang 14)
   Eigen::VectorXd row(layout.columns);
@@ -138,7 +201,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
     earlier.on_update = {};
     RunPasses(estimator, source, earlier, &passes, &repeated, [&](const FitOptions& o) {
       Estimation estimating(source, estimator, o);
-      io::CsvReader reader(path, csv);
+      RecordRows reader(path, csv, filled);
       for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
         row -= offset;
         estimating.Row(row, r);
@@ -157,7 +220,17 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
   Estimation estimating(source, estimator, options);
   std::unique_ptr<Scoring> scoring;
   FitResult result;
-  io::CsvReader reader(path, csv);
+  RecordRows reader(path, csv, filled);
+  // The time column, checked as the rows arrive (unless its gaps were found, to be filled, before).
+  std::optional<TimeCheck> time;
+  int time_column = -1;
+  ArrivingTimeCheck arriving;
+  if (filled != nullptr) {
+    time = *filled;
+  } else if ((time_column = TimeColumnIndex(reader.names(), source.used_columns())) >= 0) {
+    time.emplace();
+    time->column = reader.names()[static_cast<std::size_t>(time_column)];
+  }
   int r = 0;
   auto finish_estimation = [&] {
     std::tie(result.updates, result.rejected) = estimating.Finish(path);
@@ -171,6 +244,10 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
     scoring = std::make_unique<Scoring>(source, result.theta, validation.first);
   };
   while (reader.Next(row)) {
+    if (time_column >= 0) {
+      if (std::optional<TimeGap> gap = arriving.Next(row(time_column), r + 1, time->column, path, reader.line()))
+        time->gaps.push_back(*gap);
+    }
     row -= offset;
     if (r == estimation.count) finish_estimation();
     if (r < estimation.count)
@@ -183,20 +260,22 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
   if (!scoring) {
     // Pass 4 (split = 1): score the whole record.
     finish_estimation();
-    io::CsvReader again(path, csv);
+    RecordRows again(path, csv, filled);
     while (again.Next(row)) {
       row -= offset;
       scoring->Row(row);
     }
   }
   result.validation = scoring->Finish(path);
+  if (time_column >= 0) time->median_step = arriving.median_step();
+  result.time = std::move(time);
   return result;
 }
 
 Eigen::VectorXd StreamMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
-                                  const CsvLayout& layout, const Eigen::VectorXd& offset) {
+                                  const CsvLayout& layout, const Eigen::VectorXd& offset, const TimeCheck* filled) {
   MeanSquares squares(source);
-  io::CsvReader reader(path, csv);
+  RecordRows reader(path, csv, filled);
   Eigen::VectorXd row(layout.columns);
   for (int r = 0; r < layout.estimation.count && reader.Next(row); ++r) {
     row -= offset;
@@ -211,8 +290,8 @@ Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvO
                                          const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] {
     const CsvLayout layout = LayOut(path, csv, source, options);
-    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation);
-    return StreamMeanSquares(path, csv, source, layout, offset);
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation, nullptr);
+    return StreamMeanSquares(path, csv, source, layout, offset, nullptr);
   });
 }
 
@@ -220,22 +299,40 @@ FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSou
                      AnyRegressionEstimator& estimator, const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] {
     const CsvLayout layout = LayOut(path, csv, source, options);
-    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation);
-    return StreamCsvFile(path, csv, source, estimator, options, layout, offset);
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation, nullptr);
+    return StreamCsvFile(path, csv, source, estimator, options, layout, offset, nullptr);
   });
 }
 
 CsvLayout CheckCsvLayout(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                         const FitOptions& options, long data_lines) {
-  return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options, data_lines); });
+                         const FitOptions& options, long data_lines, TimeCheck* filled) {
+  return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options, data_lines, filled); });
+}
+
+std::optional<TimeCheck> ScanCsvTime(const std::string& path, const io::CsvOptions& csv,
+                                     const std::vector<int>& used_columns) {
+  return DataErrorsFirst(path, csv, [&]() -> std::optional<TimeCheck> {
+    io::CsvReader reader(path, csv);
+    const int column = TimeColumnIndex(reader.names(), used_columns);
+    if (column < 0) return std::nullopt;
+    TimeCheck check;
+    check.column = reader.names()[static_cast<std::size_t>(column)];
+    ArrivingTimeCheck arriving;
+    Eigen::VectorXd row(reader.num_columns());
+    for (long rows = 1; reader.Next(row); ++rows)
+      if (std::optional<TimeGap> gap = arriving.Next(row(column), rows, check.column, path, reader.line()))
+        check.gaps.push_back(*gap);
+    check.median_step = arriving.median_step();
+    return check;
+  });
 }
 
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
-                     const CsvLayout& layout) {
+                     const CsvLayout& layout, const TimeCheck* filled) {
   return DataErrorsFirst(path, csv, [&] {
-    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, plan.options, layout.estimation);
-    if (plan.scaled_prior) plan.UseScaledPrior(StreamMeanSquares(path, csv, source, layout, offset));
-    return StreamCsvFile(path, csv, source, *plan.estimator, plan.options, layout, offset);
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, plan.options, layout.estimation, filled);
+    if (plan.scaled_prior) plan.UseScaledPrior(StreamMeanSquares(path, csv, source, layout, offset, filled));
+    return StreamCsvFile(path, csv, source, *plan.estimator, plan.options, layout, offset, filled);
   });
 }
 

@@ -72,9 +72,10 @@ struct RecordFit {
 RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int residual_lags = 20);
 
 // FitTable's fit of a CSV file, streamed (FitCsvFile of fit.h) with `layout` from CheckCsvLayout: the
-// detrending means are computed once for the data-scaled prior (plan.scaled_prior) and the fit.
+// detrending means are computed once for the data-scaled prior (plan.scaled_prior) and the fit. `filled`:
+// the time gaps CheckCsvLayout filled (the same object), whose missing rows every pass reads.
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
-                     const CsvLayout& layout);
+                     const CsvLayout& layout, const TimeCheck* filled = nullptr);
 
 // `name` is the record's name in messages (a path, "DataFrame", …).
 RecordFit FitRecord(io::DataTable table, const std::string& name, const FitRequest& request);

@@ -22,7 +22,8 @@ int TimeColumnIndex(const std::vector<std::string>& names, const std::vector<int
 }
 
 std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::string& column,
-                                               const std::string& where) {
+                                               const std::string& source, long line) {
+  const auto where = [&] { return line < 0 ? source : fmt::format("{}:{}", source, line); };
   if (std::isnan(t)) return std::nullopt;  // a missing sample, passed over as CheckTimeColumn does
   if (!started_) {
     started_ = true;
@@ -31,7 +32,7 @@ std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::st
     return std::nullopt;
   }
   if (!(t > previous_))
-    throw DataError(fmt::format("{}: time column '{}' does not increase: {} after {}", where, column, t, previous_));
+    throw DataError(fmt::format("{}: time column '{}' does not increase: {} after {}", where(), column, t, previous_));
   const double step = t - previous_;
   std::optional<TimeGap> gap;
   if (count_ > 0 && step > kTimeGapFactor * median_) {
@@ -40,22 +41,30 @@ std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::st
       throw DataError(fmt::format(
           "{}: time column '{}' jumps from {} to {}: the gap misses more samples than the {} rows before it; cut the "
           "record at its gaps",
-          where, column, previous_, t, taken_));
+          where(), column, previous_, t, taken_));
     gap = TimeGap{.row = static_cast<int>(std::min<long>(row, std::numeric_limits<int>::max())),
                   .t_before = previous_,
                   .t_after = t,
                   .missing = std::max(1L, static_cast<long>(samples) - 1),
-                  .filled = 0};
-  } else {  // a regular step: into the window of the last kSteps
+                  .filled = 0,
+                  .step = median_};
+  } else {  // a regular step: into the window of the last kSteps, kept sorted (the oldest leaves it)
+    const int held = std::min(count_, kSteps);
+    double* const sorted = sorted_.data();
+    if (held == kSteps) {
+      const double oldest = steps_[static_cast<std::size_t>(count_ % kSteps)];
+      double* const at = std::lower_bound(sorted, sorted + held, oldest);
+      std::copy(at + 1, sorted + held, at);
+    }
+    const int size = held == kSteps ? held - 1 : held;
+    double* const to = std::upper_bound(sorted, sorted + size, step);
+    std::copy_backward(to, sorted + size, sorted + size + 1);
+    *to = step;
     steps_[static_cast<std::size_t>(count_ % kSteps)] = step;
     ++count_;
     if (count_ == 2 * kSteps) count_ = kSteps;  // keeps the index cycling without overflow
-    const int held = std::min(count_, kSteps);
-    std::array<double, kSteps> sorted = steps_;
-    std::sort(sorted.begin(), sorted.begin() + held);
-    median_ = held % 2
-                  ? sorted[static_cast<std::size_t>(held / 2)]
-                  : (sorted[static_cast<std::size_t>(held / 2 - 1)] + sorted[static_cast<std::size_t>(held / 2)]) / 2;
+    const int now = size + 1;
+    median_ = now % 2 ? sorted[now / 2] : (sorted[now / 2 - 1] + sorted[now / 2]) / 2;
   }
   previous_ = t;
   ++taken_;
@@ -100,7 +109,7 @@ std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::
       const long missing = samples - 1 >= static_cast<double>(std::numeric_limits<long>::max() / 2)
                                ? std::numeric_limits<long>::max() / 2
                                : std::max(1L, static_cast<long>(samples) - 1);
-      check.gaps.push_back({i + 1, t(previous), t(i), missing, 0});
+      check.gaps.push_back({i + 1, t(previous), t(i), missing, 0, median});
     }
     previous = i;
   }

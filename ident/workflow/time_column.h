@@ -27,6 +27,7 @@ struct TimeGap {
   double t_before = 0, t_after = 0;
   long missing = 0;  // samples missing in it: round(step / median step) - 1, at least 1
   long filled = 0;   // rows FillTimeGaps inserted for it
+  double step = 0;   // the spacing of its missing rows' times: the median step it was judged by
 };
 
 struct TimeCheck {
@@ -59,11 +60,16 @@ class ArrivingTimeCheck {
   // The gap that ends at time `t` of 1-based data row `row` (TimeGap::missing = round(step / median) − 1,
   // at least 1), or null. Throws DataError "<where>: time column 't' does not increase: 4 after 5" (`where`:
   // "source:line"), and for a gap that misses more samples than rows have arrived before it.
-  std::optional<TimeGap> Next(double t, long row, const std::string& column, const std::string& where);
+  std::optional<TimeGap> Next(double t, long row, const std::string& column, const std::string& where) {
+    return Next(t, row, column, where, -1);
+  }
+  // The same, `where` given as a source and its 1-based line ("source:line"), formatted only for an error.
+  std::optional<TimeGap> Next(double t, long row, const std::string& column, const std::string& source, long line);
   double median_step() const { return median_; }
 
  private:
-  std::array<double, kSteps> steps_{};
+  std::array<double, kSteps> steps_{};   // in arrival order (a ring)
+  std::array<double, kSteps> sorted_{};  // the same steps, ascending
   int count_ = 0;  // steps held (up to kSteps); the next goes to steps_[count_ % kSteps] once full
   long taken_ = 0;
   double previous_ = 0, median_ = 0;

@@ -1,7 +1,9 @@
 // The streamed fit of a CSV file (ident/workflow/fit_record.h FitCsvFile with a plan, as `ident fit` runs
 // a record of more than 10^6 rows) on a record small enough to fit in memory too: how often it opens the
 // file, and that its estimate equals the in-memory fit's (FitTable on the same file read whole).
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <memory>
 #include <random>
 #include <string>
@@ -11,9 +13,11 @@
 #include <gtest/gtest.h>
 
 #include "cli/command_line.h"
+#include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/fit_record.h"
+#include "ident/workflow/time_column.h"
 #include "tests/support/cli.h"
 
 namespace ident {
@@ -117,6 +121,135 @@ TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
   EXPECT_EQ(code, 0);
   EXPECT_NE(out.find("\"theta\""), std::string::npos);
   EXPECT_EQ(io::CsvFilesOpened() - before, 1);
+}
+
+// The record of SimulatedRecord without the rows in [first, last) of each pair: gaps in its time column.
+std::string WithoutRows(const std::string& text, const std::vector<std::pair<int, int>>& dropped) {
+  std::string out;
+  std::size_t at = 0;
+  for (int line = 0; at < text.size(); ++line) {
+    const std::size_t end = text.find('\n', at) + 1;
+    const int row = line - 1;  // data row, 0-based (line 0 is the header)
+    bool keep = true;
+    for (const auto& [first, last] : dropped) keep = keep && !(row >= first && row < last);
+    if (keep) out += text.substr(at, end - at);
+    at = end;
+  }
+  return out;
+}
+
+// The streamed fit checks the time column in its estimation pass (the gaps of an in-memory check), and with
+// --missing fills each gap's rows before the row that ends it, to the same estimate as the in-memory fit of
+// the filled table.
+TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
+  const std::string path = testing::WriteFile(
+      "streamed_gaps.csv", WithoutRows(SimulatedRecord(20'000), {{5'000, 5'010}, {12'000, 12'003}}));
+  const workflow::FitRequest request = Arx221("cauchy", 0.5);
+  for (bool fill : {false, true}) {
+    SCOPED_TRACE(fill ? "filled" : "reported");
+    const io::CsvOptions csv{.missing_as_nan = fill};
+    // In memory, as `ident fit` checks and fills a table.
+    io::DataTable table = io::ReadCsv(path, csv);
+    std::unique_ptr<workflow::DataSource> memory_source = request.model.MakeSource(table.names, path);
+    const std::optional<workflow::TimeCheck> memory_time =
+        workflow::CheckRecordTime(table, memory_source->used_columns(), fill);
+    ASSERT_TRUE(memory_time.has_value());
+    ASSERT_EQ(memory_time->gaps.size(), 2u);
+    workflow::FitPlan memory_plan = workflow::PlanFit(request, memory_source->num_parameters(),
+                                                      workflow::EstimationRows(table.num_rows(), request.split));
+    const workflow::FitResult memory = workflow::FitTable(std::move(table), *memory_source, memory_plan, 0).result;
+    // Streamed.
+    std::unique_ptr<workflow::DataSource> source = request.model.MakeSource({"t", "u", "y"}, path);
+    std::optional<workflow::TimeCheck> time;
+    if (fill) time = workflow::ScanCsvTime(path, csv, source->used_columns());
+    workflow::FitOptions length_check;
+    length_check.split = request.split;
+    const workflow::CsvLayout layout = workflow::CheckCsvLayout(path, csv, *source, length_check, -1,
+                                                                time ? &*time : nullptr);
+    workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), layout.estimation.count);
+    const workflow::FitResult streamed = workflow::FitCsvFile(path, csv, *source, plan, layout, time ? &*time : nullptr);
+
+    ASSERT_TRUE(streamed.time.has_value());
+    EXPECT_EQ(streamed.time->column, "t");
+    ASSERT_EQ(streamed.time->gaps.size(), 2u);
+    const long missing[] = {10, 3};
+    const int rows[] = {5'001, 11'991};  // the data row that ends each gap
+    for (int g = 0; g < 2; ++g) {
+      const workflow::TimeGap& s = streamed.time->gaps[static_cast<std::size_t>(g)];
+      const workflow::TimeGap& m = memory_time->gaps[static_cast<std::size_t>(g)];
+      EXPECT_EQ(s.row, rows[g]);
+      EXPECT_EQ(s.row, m.row);
+      EXPECT_EQ(s.t_before, m.t_before);
+      EXPECT_EQ(s.t_after, m.t_after);
+      EXPECT_EQ(s.missing, missing[g]);
+      EXPECT_EQ(s.missing, m.missing);
+      EXPECT_EQ(s.filled, fill ? missing[g] : 0);
+      EXPECT_EQ(s.filled, m.filled);
+    }
+    EXPECT_NEAR(streamed.time->median_step, 0.01, 1e-12);
+    EXPECT_EQ(streamed.samples_estimation, memory.samples_estimation);
+    EXPECT_EQ(streamed.updates, memory.updates);
+    EXPECT_EQ(streamed.rejected, memory.rejected);
+    ASSERT_EQ(streamed.theta.size(), 4);
+    for (int i = 0; i < 4; ++i) EXPECT_NEAR(streamed.theta(i), memory.theta(i), 1e-12 * std::abs(memory.theta(i)));
+    EXPECT_NEAR(streamed.validation.one_step, memory.validation.one_step, 1e-9);
+  }
+  // Filled, the record is 13 rows longer: its estimation part has 6 more (⌊0.5·19 987⌋ against ⌊0.5·20 000⌋).
+  const io::CsvOptions missing{.missing_as_nan = true};
+  std::unique_ptr<workflow::DataSource> source = request.model.MakeSource({"t", "u", "y"}, path);
+  std::optional<workflow::TimeCheck> time = workflow::ScanCsvTime(path, missing, source->used_columns());
+  ASSERT_TRUE(time.has_value());
+  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, &*time).rows, 20'000);
+  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, nullptr).rows, 19'987);
+}
+
+// A time that does not increase stops the streamed fit with the in-memory check's message.
+TEST(StreamedReads, ATimeThatDoesNotIncreaseIsAnError) {
+  std::string text = SimulatedRecord(3'000);
+  const std::size_t at = text.find("\n20,");  // the data row of t = 20 (line 2 002) gets t = 19
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at + 1, 2, "19");
+  const std::string path = testing::WriteFile("streamed_back.csv", text);
+  const workflow::FitRequest request = Arx221("rls", 0.5);
+  std::unique_ptr<workflow::DataSource> source = request.model.MakeSource({"t", "u", "y"}, path);
+  workflow::FitOptions length_check;
+  length_check.split = request.split;
+  const workflow::CsvLayout layout = workflow::CheckCsvLayout(path, {}, *source, length_check);
+  workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), layout.estimation.count);
+  const std::string expected = path + ":2002: time column 't' does not increase: 19 after 19.990000000000002";
+  try {
+    workflow::FitCsvFile(path, {}, *source, plan, layout);
+    ADD_FAILURE() << "no error";
+  } catch (const DataError& e) {
+    EXPECT_EQ(std::string(e.what()), expected);
+  }
+  try {
+    workflow::ScanCsvTime(path, {}, source->used_columns());
+    ADD_FAILURE() << "no error";
+  } catch (const DataError& e) {
+    EXPECT_EQ(std::string(e.what()), expected);
+  }
+}
+
+// The median of the last steps as rows arrive equals the median of that window sorted afresh.
+TEST(ArrivingTimeCheck, ItsMedianIsThatOfTheLastRegularSteps) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> step(0.9, 1.1);
+  workflow::ArrivingTimeCheck check;
+  std::vector<double> steps;
+  double t = 0;
+  for (int k = 0; k < 500; ++k) {
+    const double s = step(rng);
+    t += s;
+    ASSERT_FALSE(check.Next(t, k + 1, "t", "test").has_value());
+    if (k == 0) continue;  // the first row has no step
+    steps.push_back(s);
+    const std::size_t n = std::min<std::size_t>(steps.size(), workflow::ArrivingTimeCheck::kSteps);
+    std::vector<double> window(steps.end() - static_cast<std::ptrdiff_t>(n), steps.end());
+    std::sort(window.begin(), window.end());
+    const double median = n % 2 ? window[n / 2] : (window[n / 2 - 1] + window[n / 2]) / 2;
+    EXPECT_NEAR(check.median_step(), median, 1e-12) << k;
+  }
 }
 
 }  // namespace
