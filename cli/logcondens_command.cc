@@ -11,6 +11,7 @@
 
 #include "cli/commands.h"
 #include "cli/csv_options.h"
+#include "cli/progress.h"
 #include "common/error.h"
 #include "ident/density/logconcave_mle.h"
 #include "ident/io/csv.h"
@@ -26,8 +27,10 @@ struct LogcondensOptions {
   bool json = false;
 };
 
-std::vector<double> ReadSamples(const LogcondensOptions& o) {
-  const io::DataTable table = io::ReadDataFile(o.samples, o.csv);
+std::vector<double> ReadSamples(const LogcondensOptions& o, Progress& progress) {
+  io::CsvOptions csv = o.csv;
+  csv.on_read = ReadingProgress(progress, o.samples);
+  const io::DataTable table = io::ReadDataFile(o.samples, csv);
   int col = 0;
   if (!o.column.empty()) {
     col = table.ColumnIndex(o.column);
@@ -44,9 +47,13 @@ std::vector<double> ReadSamples(const LogcondensOptions& o) {
 }
 
 void RunLogcondens(const LogcondensOptions& o) {
-  const std::vector<double> samples = ReadSamples(o);
+  Progress progress("logcondens");  // on stderr after 2 s: the reading, then the active-set rounds
+  const std::vector<double> samples = ReadSamples(o, progress);
+  approx::LogConcaveMleOptions options;
+  options.on_iteration = DecadesProgress(progress, options.tolerance,
+                                         "decades of the largest D_j down to the tolerance");
   const std::clock_t start = std::clock();  // process CPU time of the fit alone (no CSV reading, no start-up)
-  const approx::LogConcaveMle mle = approx::FitLogConcaveMle(samples);
+  const approx::LogConcaveMle mle = approx::FitLogConcaveMle(samples, options);
   const double fit_cpu_seconds = static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;
   const approx::LogConcaveKkt kkt = approx::CheckKkt(mle);
   if (o.json) {

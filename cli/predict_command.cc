@@ -18,6 +18,7 @@
 #include "cli/csv_options.h"
 #include "cli/estimator_options.h"
 #include "cli/experiment_records.h"
+#include "cli/progress.h"
 #include "cli/time_gaps.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
@@ -57,8 +58,11 @@ void RunPredict(const PredictOptions& o) {
   const workflow::SavedModel m = workflow::SavedModel::Read(o.model);
   std::vector<std::string> paths;
   for (const std::string& d : o.data) paths.push_back(ResolveDataPath(d));
-  ExperimentRecords records =
-      ReadExperimentRecords(paths, o.experiment_column, {.missing_as_nan = o.missing, .delimiter = o.csv.delimiter});
+  // Progress on stderr after 2 s: the reading of a single file, then the rows written.
+  Progress progress("predict");
+  io::CsvOptions csv{.missing_as_nan = o.missing, .delimiter = o.csv.delimiter};
+  if (paths.size() == 1) csv.on_read = ReadingProgress(progress, paths.front());
+  ExperimentRecords records = ReadExperimentRecords(paths, o.experiment_column, csv);
   io::DataTable& table = records.table;
   const std::string path = records.name;
   std::unique_ptr<workflow::DataSource> source = m.model.MakeSource(table.names, path);
@@ -143,6 +147,7 @@ void RunPredict(const PredictOptions& o) {
     if (o.simulate && !p.simulation.empty()) fmt::print(",{}", p.simulation[i] + output_mean);
     if (!experiment_of.empty()) fmt::print(",{}", experiment_of[static_cast<std::size_t>(p.rows[i] - 1)]);
     fmt::print("\n");
+    progress.Report(static_cast<long>(i + 1), static_cast<long>(p.rows.size()), "rows written");
   }
 }
 

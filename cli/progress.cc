@@ -2,10 +2,16 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <utility>
 
 #include <fmt/format.h>
+
+#include "ident/io/csv.h"
+#include "ident/io/mat_file.h"
 
 namespace ident::cli {
 
@@ -36,6 +42,31 @@ void Progress::Report(long done, long total, const char* unit, int pass) {
     fmt::print(stderr, "{}\n", line);
   }
   std::fflush(stderr);
+}
+
+std::function<void(long)> ReadingProgress(Progress& progress, const std::string& path) {
+  std::error_code error;
+  if (!io::CanReadTwice(path) || io::IsMatFile(path)) return {};
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (error || size == 0) return {};
+  constexpr long kMegabyte = 1 << 20;
+  const long total = static_cast<long>((size + kMegabyte - 1) / kMegabyte);
+  return [&progress, total](long bytes) { progress.Report(bytes / kMegabyte, total, "MB read"); };
+}
+
+std::function<void(int, double)> DecadesProgress(Progress& progress, double tolerance, const char* unit) {
+  return [&progress, tolerance, unit, first = 0.0, total = 1L](int iteration, double measure) mutable {
+    if (iteration == 0) {
+      first = measure;
+      const double decades = std::log10(first / tolerance);  // NaN or ±inf for a measure that is not finite
+      total = std::isfinite(decades) ? std::clamp(static_cast<long>(std::ceil(decades)), 1L, 1000L) : 1L;
+    }
+    const double fallen = std::log10(first / measure);
+    const long done = measure <= tolerance     ? total
+                      : std::isfinite(fallen) ? std::clamp(static_cast<long>(std::clamp(fallen, 0.0, 1e3)), 0L, total - 1)
+                                              : 0L;
+    progress.Report(done, total, unit);
+  };
 }
 
 }  // namespace ident::cli

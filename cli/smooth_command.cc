@@ -37,29 +37,12 @@ std::vector<std::vector<double>> Rows(const Eigen::MatrixXd& m) {  // one row pe
   return rows;
 }
 
-// Progress of the interior-point method on stderr after 2 s: its number of iterations is not known in advance,
-// but its relative KKT residual falls from the first iteration's to the tolerance about geometrically
-// (superlinearly near the end), so the decades it has fallen of those it must fall are the work done.
-std::function<void(int, double)> SmoothProgress(Progress& progress, double tolerance) {
-  return [&progress, tolerance, first = 0.0, total = 1L](int iteration, double kkt) mutable {
-    if (iteration == 0) {
-      first = kkt;
-      const double decades = std::log10(first / tolerance);  // NaN or ±inf for a residual that is not finite
-      total = std::isfinite(decades) ? std::clamp(static_cast<long>(std::ceil(decades)), 1L, 1000L) : 1L;
-    }
-    const double fallen = std::log10(first / kkt);
-    const long done = kkt <= tolerance     ? total
-                      : std::isfinite(fallen) ? std::clamp(static_cast<long>(std::clamp(fallen, 0.0, 1e3)), 0L, total - 1)
-                                              : 0L;
-    progress.Report(done, total, "decades of the KKT residual down to the tolerance");
-  };
-}
-
 void RunSmooth(const SmoothOptions& o) {
   const MapSmootherProblem p = workflow::ReadSmoothProblem(o.model, o.data, o.csv);
   Progress progress("smooth");
   MapSmootherOptions options;
-  options.on_iteration = SmoothProgress(progress, options.tolerance);
+  // The interior-point method's relative KKT residual falls about geometrically (superlinearly near the end).
+  options.on_iteration = DecadesProgress(progress, options.tolerance, "decades of the KKT residual down to the tolerance");
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   const MapSmootherResult r = SolveMapSmoother(p, options);

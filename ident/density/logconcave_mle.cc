@@ -198,6 +198,7 @@ class ActiveSet {
         added.push_back(local);
         if (best < 0 || D(local) > D(best)) best = local;
       }
+      if (o_.on_iteration) o_.on_iteration(iterations, best < 0 ? 0.0 : D(best) / range);
       if (best < 0) break;
       if (single) added.assign(1, best);
       ++iterations;

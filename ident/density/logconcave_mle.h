@@ -25,6 +25,7 @@
 //   ident::models::Penalty g = mle.NegativeLogDensity();      // for the MAP smoother
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -36,6 +37,9 @@ namespace ident::approx {
 struct LogConcaveMleOptions {
   int max_iterations = 10000;  // active-set changes
   double tolerance = 1e-12;    // on D_j (relative to the data range) and on Newton steps
+  // Called before each round of knot changes with (round, max_j D_j / range), and with 0 once no D_j is
+  // above the tolerance (a progress measure: it falls to the tolerance). Empty: not called.
+  std::function<void(int, double)> on_iteration = nullptr;
 };
 
 struct LogConcaveMle {

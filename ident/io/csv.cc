@@ -254,6 +254,8 @@ bool CsvReader::Fill() {
   }
   chunk_end_ = static_cast<std::size_t>(got);
   next_cr_ = 0;
+  bytes_taken_ += static_cast<long>(got);
+  if (options_.on_read) options_.on_read(bytes_taken_);
   return true;
 }
 

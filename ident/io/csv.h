@@ -44,6 +44,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <istream>
 #include <memory>
 #include <string>
@@ -82,6 +83,9 @@ std::string DelimiterName(Delimiter delimiter);
 struct CsvOptions {
   bool missing_as_nan = false;  // store empty/NaN/Inf cells as NaN instead of rejecting them
   Delimiter delimiter = Delimiter::kAuto;
+  // Called after each block the reader takes from its input, with the bytes taken so far (a long read's
+  // progress); empty: not called.
+  std::function<void(long)> on_read = nullptr;
 };
 
 // Streams a CSV file row by row (constant memory).
@@ -111,6 +115,7 @@ class CsvReader {
  private:
   std::string path_;
   CsvOptions options_;
+  long bytes_taken_ = 0;  // from the input, for CsvOptions::on_read
   void ReadHeader();
   // Chooses delimiter_ from the header line and the first data line (`data`, null if none).
   void ChooseDelimiter(std::string_view header, const std::string_view* data);

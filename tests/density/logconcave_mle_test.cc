@@ -55,6 +55,27 @@ TEST(LogConcaveMle, SatisfiesItsCharacterisationOnRandomSamples) {
   }
 }
 
+// The progress hook sees each round with the largest relative directional derivative, the last call below
+// the tolerance (the KKT condition max D_j <= 0 up to it, checked directly), and changes nothing.
+TEST(LogConcaveMle, OnIterationSeesEachRoundAndEndsBelowTheTolerance) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> N(0, 1);
+  std::vector<double> x(3000);
+  for (double& v : x) v = N(rng);
+  std::vector<std::pair<int, double>> calls;
+  LogConcaveMleOptions options;
+  options.on_iteration = [&calls](int round, double d) { calls.emplace_back(round, d); };
+  const LogConcaveMle with = FitLogConcaveMle(x, options), without = FitLogConcaveMle(x);
+  ASSERT_GE(calls.size(), 3u);
+  EXPECT_EQ(calls.front().first, 0);
+  EXPECT_GT(calls.front().second, 1e-3);  // the start (a few knots) is far from the optimum
+  EXPECT_LE(calls.back().second, options.tolerance);
+  const LogConcaveKkt kkt = CheckKkt(with);
+  EXPECT_LE(kkt.max_directional_derivative, 1e-8);
+  EXPECT_EQ(with.loglik, without.loglik);
+  EXPECT_EQ(with.iterations, without.iterations);
+}
+
 TEST(LogConcaveMle, ConjugateOfTheNegativeLogDensityEqualsItsSupByNumericalMaximisation) {
   std::mt19937 rng(4);
   std::normal_distribution<double> N(0, 1);

@@ -327,5 +327,22 @@ TEST(CsvReader, CommentLinesAreSkippedAndCounted) {
   ExpectDataError(WriteFile("comment_rows.csv", "t,u\n# nothing\n"), "comment_rows.csv: no data rows after the header");
 }
 
+// CsvOptions::on_read sees the bytes taken so far after each block: increasing, ending at the file's size,
+// and the table read with it is the table read without.
+TEST(CsvReader, OnReadReportsTheBytesTakenUpToTheFileSize) {
+  std::string text = "t,y\n";
+  for (int k = 0; k < 40'000; ++k) text += fmt::format("{},{}\n", k, 0.25 * k);
+  const std::string path = WriteFile("on_read.csv", text);
+  std::vector<long> seen;
+  CsvOptions options;
+  options.on_read = [&seen](long bytes) { seen.push_back(bytes); };
+  const DataTable with = ReadCsv(path, options);
+  ASSERT_GE(seen.size(), 2u);  // a file of several blocks
+  for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_GT(seen[i], seen[i - 1]);
+  EXPECT_EQ(seen.back(), static_cast<long>(text.size()));
+  const DataTable without = ReadCsv(path);
+  EXPECT_EQ(with.values, without.values);
+}
+
 }  // namespace
 }  // namespace ident::io
