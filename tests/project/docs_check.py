@@ -5,6 +5,8 @@
              names a heading of the target Markdown file (GitHub's anchor rule);
   options    every option `ident SUBCOMMAND --help` lists appears in docs/reference/cli.md, and every
              option the reference names is an option of the program;
+  spans      every inline code span of README.md and docs/ that reads `ident SUBCOMMAND …` names a
+             subcommand of the program and only options that subcommand lists in its --help;
   words      no tracked file outside CHANGELOG.md holds a dated or personal note (the patterns below);
              skipped outside a git checkout.
 
@@ -86,6 +88,41 @@ def check_options(root, ident):
     return errors
 
 
+def help_options(ident):
+    """{subcommand: the options its --help lists}."""
+    top = subprocess.run([ident, "--help"], capture_output=True, text=True, check=True).stdout
+    out = {}
+    for sub in re.findall(r"^  ([a-z]+) {2,}", top.split("Subcommands:", 1)[1], flags=re.M):
+        text = subprocess.run([ident, sub, "--help"], capture_output=True, text=True, check=True).stdout
+        out[sub] = set(re.findall(r"^\s+(?:-\w,)?(--[a-z][a-z0-9-]*)", text, flags=re.M)) | {"--help"}
+    return out
+
+
+def check_spans(root, ident):
+    errors = []
+    options = help_options(ident)
+    pages = [os.path.join(root, "README.md")] + sorted(glob.glob(os.path.join(root, "docs", "**", "*.md"),
+                                                                 recursive=True))
+    for page in pages:
+        with open(page, encoding="utf-8") as f:
+            text = f.read()
+        text = re.sub(r"^```.*?^```", "", text, flags=re.M | re.S)  # fenced blocks: docs_examples.py runs them
+        for span in re.findall(r"`([^`\n]+)`", text):
+            m = re.match(r"ident ([a-z]+)\b(.*)", span)
+            if not m:
+                continue
+            sub, rest = m.groups()
+            where = os.path.relpath(page, root)
+            if sub not in options:
+                if sub.isalpha() and not rest.startswith(("/", ".", "::")):
+                    errors.append(f"{where}: `{span}`: '{sub}' is not a subcommand")
+                continue
+            for option in re.findall(r"(?<![\w-])(--[a-z][a-z0-9-]*)", rest):
+                if option not in options[sub] | UNKNOWN_ON_PURPOSE:
+                    errors.append(f"{where}: `{span}`: {option} is not an option of ident {sub}")
+    return errors
+
+
 def check_words(root):
     if subprocess.run(["git", "-C", root, "rev-parse", "--is-inside-work-tree"],
                       capture_output=True).returncode != 0:
@@ -98,7 +135,7 @@ def check_words(root):
 
 def main():
     root, ident = sys.argv[1], sys.argv[2]
-    errors = check_links(root) + check_options(root, ident) + check_words(root)
+    errors = check_links(root) + check_options(root, ident) + check_spans(root, ident) + check_words(root)
     for e in errors:
         print(e)
     print(f"{len(errors)} problem(s)")
