@@ -36,6 +36,7 @@ void PseudoLinearRegressor::Reset() {
   past_v_.setZero();
   past_w_.setZero();
   past_psi_.setZero();
+  newest_psi_ = 0;
   formed_ = gradient_ = false;
   samples_ = 0;
 }
@@ -59,7 +60,9 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   // ψ(t) = φ(t) − Σ_k g_k ψ(t−k), G = C (ARMAX) or F (OE) of the tracked estimate.
   const int offset = structure_.nf() > 0 ? structure_.f_offset() : structure_.c_offset();
   psi_ = phi_;
-  for (Eigen::Index k = 0; k < past_psi_.cols(); ++k) psi_.noalias() -= theta_(offset + k) * past_psi_.col(k);
+  const Eigen::Index n = past_psi_.cols();
+  for (Eigen::Index k = 0; k < n; ++k)
+    psi_.noalias() -= theta_(offset + k) * past_psi_.col((newest_psi_ + k) % n);
   z = psi_;
   return true;
 }
@@ -122,13 +125,15 @@ void PseudoLinearRegressor::Store(double y) {
   Shift(past_v_, v);
   Shift(past_w_, w);
   if (past_psi_.cols() > 0) {
-    // ψ(t) enters the filter; φ(t) stands in for it while no estimate is tracked (G = 1), 0 before t0.
-    for (Eigen::Index k = past_psi_.cols() - 1; k > 0; --k) past_psi_.col(k) = past_psi_.col(k - 1);
+    // ψ(t) enters the filter; φ(t) stands in for it while no estimate is tracked (G = 1), 0 before t0. The
+    // columns are a ring: the newest takes the place of the oldest.
+    newest_psi_ = (newest_psi_ + past_psi_.cols() - 1) % past_psi_.cols();
+    auto newest = past_psi_.col(newest_psi_);
     if (!formed_)
-      past_psi_.col(0).setZero();
+      newest.setZero();
     else
-      past_psi_.col(0) = gradient_ ? psi_ : phi_;
-    if (!past_psi_.col(0).allFinite()) past_psi_.col(0).setZero();
+      newest = gradient_ ? psi_ : phi_;
+    if (!newest.allFinite()) newest.setZero();
   }
   formed_ = gradient_ = false;
 }

@@ -87,7 +87,8 @@ class PseudoLinearRegressor {
   Eigen::VectorXd work_;                      // the stability test's buffer
   Recursion recursion_;
   Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
-  Eigen::MatrixXd past_psi_;                  // column k: ψ(t−1−k), k < nc (ARMAX) or nf (OE)
+  Eigen::MatrixXd past_psi_;                  // ψ(t−1−k), k < nc (ARMAX) or nf (OE), in column (newest_psi_ + k) mod n
+  Eigen::Index newest_psi_ = 0;
   bool gradient_ = false;                     // z = ψ(t) for the current sample
   bool known_ = false;                        // an estimate has been given
   bool measured_w_ = false;                   // w = y (TrackEstimate's measured_noise_free)
