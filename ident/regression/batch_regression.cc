@@ -38,20 +38,24 @@ BatchRegressionResult HuberRegression(const Eigen::Ref<const Eigen::MatrixXd>& Z
   Eigen::VectorXd beta = f.Q.transpose() * y;  // least squares
   Eigen::VectorXd r = y - f.Q * beta;
   double s = 0;
+  // The iterations' n-row vectors and n×p matrix, sized once.
+  Eigen::VectorXd w(n), next(n);
+  Eigen::MatrixXd Qw(n, p);
+  std::vector<double> sorted;
   while (result.iterations < options.max_iterations) {
-    s = MedianAbs(r) / 0.6745;
+    s = MedianAbs(r, sorted) / 0.6745;
     if (!(s > 0)) {  // more than half the residuals vanish: an exact fit (rlm stops here too)
       result.converged = true;
       break;
     }
-    const Eigen::VectorXd w = (k * s / r.array().abs()).min(1.0);
-    if (!WeightedFit(f.Q, y, w, beta)) break;
-    Eigen::VectorXd next = y - f.Q * beta;
+    w = (k * s / r.array().abs()).min(1.0);
+    if (!WeightedFit(f.Q, y, w, beta, Qw)) break;
+    next.noalias() = y - f.Q * beta;
     ++result.iterations;
     // rlm's relative change of the residuals, without its absolute floor max(1e-20, ‖r‖²), which stops the
     // iteration at once on data in small units (‖r‖² > 0 here: the MAD scale s is positive).
     const double delta = std::sqrt((next - r).squaredNorm() / r.squaredNorm());
-    r = std::move(next);
+    r.swap(next);
     if (delta <= options.tolerance) {
       result.converged = true;
       break;

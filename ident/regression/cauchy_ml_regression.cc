@@ -30,7 +30,9 @@ struct CauchyPoint {
 
 class CauchyProblem {
  public:
-  CauchyProblem(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y) : Q_(Q), y_(y) {}
+  CauchyProblem(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y)
+      : Q_(Q), y_(y), r_(Q.rows()), w_(Q.rows()), t_(Q.rows()), Qb_(Q.rows()), u_(Q.rows()), d_(Q.rows()),
+        d2_(Q.rows()), Qw_(Q.rows(), Q.cols()) {}
 
   Eigen::Index n() const { return Q_.rows(); }
   Eigen::Index p() const { return Q_.cols(); }
@@ -39,17 +41,17 @@ class CauchyProblem {
 
   double Nll(const Eigen::VectorXd& beta, double gamma) const {
     if (!(gamma > 0) || !std::isfinite(gamma)) return kInf;
-    const Eigen::VectorXd r = y_ - Q_ * beta;
+    r_.noalias() = y_ - Q_ * beta;
     const double nd = static_cast<double>(n());
     const double g2 = gamma * gamma;
-    return (r.array().square() + g2).log().sum() - nd * std::log(gamma) + nd * std::log(std::numbers::pi);
+    return (r_.array().square() + g2).log().sum() - nd * std::log(gamma) + nd * std::log(std::numbers::pi);
   }
 
   // A start at β with γ = median|r| (mean |r| if that is 0); nll = +inf if the residuals all vanish.
   CauchyPoint Start(Eigen::VectorXd beta) const {
-    const Eigen::VectorXd r = y_ - Q_ * beta;
-    double gamma = MedianAbs(r);
-    if (!(gamma > 0)) gamma = r.cwiseAbs().mean();
+    r_.noalias() = y_ - Q_ * beta;
+    double gamma = MedianAbs(r_, sorted_);
+    if (!(gamma > 0)) gamma = r_.cwiseAbs().mean();
     CauchyPoint point{std::move(beta), gamma};
     point.nll = Nll(point.beta, point.gamma);
     return point;
@@ -59,11 +61,12 @@ class CauchyProblem {
   // the NLL). Returns false (point unchanged) if the weighted fit or γ breaks down.
   bool EmStep(CauchyPoint& point) const {
     const double g2 = point.gamma * point.gamma;
-    const Eigen::VectorXd r = y_ - Q_ * point.beta;
-    const Eigen::VectorXd w = 2 * g2 / (r.array().square() + g2);
+    r_.noalias() = y_ - Q_ * point.beta;
+    w_ = 2 * g2 / (r_.array().square() + g2);
     Eigen::VectorXd beta;
-    if (!WeightedFit(Q_, y_, w, beta)) return false;
-    const double gamma = std::sqrt(w.dot((y_ - Q_ * beta).cwiseAbs2()) / static_cast<double>(n()));
+    if (!WeightedFit(Q_, y_, w_, beta, Qw_)) return false;
+    Qb_.noalias() = Q_ * beta;
+    const double gamma = std::sqrt(w_.dot((y_ - Qb_).cwiseAbs2()) / static_cast<double>(n()));
     if (!(gamma > 0) || !std::isfinite(gamma)) return false;
     point.beta = std::move(beta);
     point.gamma = gamma;
@@ -77,18 +80,22 @@ class CauchyProblem {
     // under/overflow of (r² + γ²)² on data in very small or large units.
     const Eigen::Index np = p();
     const double inv_gamma = 1 / point.gamma;
-    const Eigen::ArrayXd u = (y_ - Q_ * point.beta).array() * inv_gamma;
-    const Eigen::ArrayXd d = 1 + u.square();
-    const Eigen::ArrayXd d2 = d.square();
+    Qb_.noalias() = Q_ * point.beta;
+    u_ = (y_ - Qb_).array() * inv_gamma;
+    d_ = 1 + u_.square();
+    d2_ = d_.square();
     g.resize(np + 1);
     H.resize(np + 1, np + 1);
-    g.head(np) = -inv_gamma * (Q_.transpose() * (2 * u / d).matrix());
-    g(np) = (2 / d).sum() - static_cast<double>(n());
-    const Eigen::MatrixXd Qa = Q_.array().colwise() * (2 * (1 - u.square()) / d2);
-    H.topLeftCorner(np, np) = (inv_gamma * inv_gamma) * (Qa.transpose() * Q_);
-    H.col(np).head(np) = inv_gamma * (Q_.transpose() * (4 * u / d2).matrix());
+    t_ = 2 * u_ / d_;
+    g.head(np) = -inv_gamma * (Q_.transpose() * t_.matrix());
+    g(np) = (2 / d_).sum() - static_cast<double>(n());
+    t_ = 2 * (1 - u_.square()) / d2_;
+    Qw_ = Q_.array().colwise() * t_;
+    H.topLeftCorner(np, np) = (inv_gamma * inv_gamma) * (Qw_.transpose() * Q_);
+    t_ = 4 * u_ / d2_;
+    H.col(np).head(np) = inv_gamma * (Q_.transpose() * t_.matrix());
     H.row(np).head(np) = H.col(np).head(np).transpose();
-    H(np, np) = (4 * u.square() / d2).sum();
+    H(np, np) = (4 * u_.square() / d2_).sum();
   }
 
   // ‖(γ ∂/∂β, ∂/∂η)‖: scale free (each term of the sums is O(1)).
@@ -174,6 +181,15 @@ class CauchyProblem {
  private:
   const Eigen::MatrixXd& Q_;
   const Eigen::VectorXd y_;
+  // Workspace of the O(n) steps, sized once: a fit runs hundreds of them, and fresh n-row temporaries each
+  // time cost page faults where the allocator hands large blocks back to the system at once (as Dask
+  // workers make it do, with MALLOC_TRIM_THRESHOLD_).
+  mutable Eigen::VectorXd r_, w_;
+  mutable Eigen::ArrayXd t_;
+  mutable Eigen::VectorXd Qb_;
+  mutable Eigen::ArrayXd u_, d_, d2_;
+  mutable Eigen::MatrixXd Qw_;
+  mutable std::vector<double> sorted_;
 };
 
 // Draws elemental subsets (ρ distinct rows, solved exactly); a partial Fisher–Yates shuffle of a kept
@@ -211,13 +227,17 @@ class ElementalSampler {
 
 // Concentration steps from β: least squares on the h rows with the smallest squared residuals, until the
 // sum of those h squares stops decreasing (at most 50 steps).
+// The n-row vectors and the n×p matrix of the steps are sized once, for all steps.
 Eigen::VectorXd Concentrate(const CauchyProblem& problem, Eigen::VectorXd beta) {
   const Eigen::Index n = problem.n(), p = problem.p();
   const Eigen::Index h = (n + p + 1) / 2;
   std::vector<Eigen::Index> idx(static_cast<std::size_t>(n));
+  Eigen::VectorXd Qb(n), r2(n), w(n);
+  Eigen::MatrixXd Qw(n, p);
   double best = kInf;
   for (int step = 0; step < 50; ++step) {
-    const Eigen::VectorXd r2 = (problem.y() - problem.Q() * beta).cwiseAbs2();
+    Qb.noalias() = problem.Q() * beta;
+    r2 = (problem.y() - Qb).cwiseAbs2();
     std::iota(idx.begin(), idx.end(), Eigen::Index{0});
     std::nth_element(idx.begin(), idx.begin() + h - 1, idx.end(),
                      [&](Eigen::Index a, Eigen::Index b) { return r2(a) < r2(b); });
@@ -225,10 +245,10 @@ Eigen::VectorXd Concentrate(const CauchyProblem& problem, Eigen::VectorXd beta) 
     for (Eigen::Index i = 0; i < h; ++i) sum += r2(idx[static_cast<std::size_t>(i)]);
     if (!(sum < best)) break;
     best = sum;
-    Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
+    w.setZero();
     for (Eigen::Index i = 0; i < h; ++i) w(idx[static_cast<std::size_t>(i)]) = 1;
     Eigen::VectorXd next;
-    if (!WeightedFit(problem.Q(), problem.y(), w, next)) break;
+    if (!WeightedFit(problem.Q(), problem.y(), w, next, Qw)) break;
     beta = std::move(next);
   }
   return beta;

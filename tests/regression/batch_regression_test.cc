@@ -23,6 +23,7 @@
 #include "common/error.h"
 #include "ident/regression/batch_regression.h"
 #include "ident/regression/regression_estimator.h"
+#include "tests/support/alloc_counter.h"
 #include "tests/support/sanitizer.h"
 #include "tests/support/test_data.h"
 
@@ -467,6 +468,43 @@ TEST(CauchyMlRegression, RecoversTheTruthThroughTwentyPercentGrossOutliers) {
               Join(m.theta).c_str(), m.scale);
   EXPECT_TRUE(m.converged);
   EXPECT_LE((m.theta - theta).cwiseAbs().maxCoeff(), 0.2);
+}
+
+// The batch fits' iterations reuse their row-sized vectors and matrices: the number of large blocks a fit
+// takes from the allocator (each one the system's pages, where the allocator trims at that size) does
+// not grow with its iterations. 20 000 rows make every n-row vector a large block.
+TEST(BatchRegression, IterationsDoNotTakeNewRowSizedBlocks) {
+  const int n = 20'000;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> normal;
+  std::cauchy_distribution<double> cauchy(0.0, 0.5);
+  Eigen::MatrixXd Z(n, 3);
+  Eigen::VectorXd y(n);
+  for (int i = 0; i < n; ++i) {
+    Z.row(i) << 1, normal(rng), normal(rng);
+    y(i) = 1 + 2 * Z(i, 1) - Z(i, 2) + cauchy(rng);
+  }
+  auto cauchy_blocks = [&](int screening) {
+    CauchyMlOptions o;
+    o.elemental_starts = 4;
+    o.lts_starts = 1;
+    o.polished = 1;
+    o.screening_iterations = screening;
+    testing::AllocationCounter count;
+    const BatchRegressionResult fit = CauchyMlRegression(Z, y, o);
+    EXPECT_NEAR(fit.theta(1), 2, 0.05);
+    return count.large_allocations();
+  };
+  const std::int64_t few = cauchy_blocks(2), many = cauchy_blocks(40);
+  EXPECT_EQ(many, few);
+  EXPECT_LE(few, 40);
+  auto huber_blocks = [&](int iterations) {
+    testing::AllocationCounter count;
+    const BatchRegressionResult fit = HuberRegression(Z, y, {.tolerance = 0, .max_iterations = iterations});
+    EXPECT_NEAR(fit.theta(1), 2, 0.05);
+    return count.large_allocations();
+  };
+  EXPECT_EQ(huber_blocks(30), huber_blocks(3));
 }
 
 }  // namespace

@@ -15,10 +15,16 @@
 
 namespace {
 thread_local std::int64_t g_allocations = 0;
+thread_local std::int64_t g_large_allocations = 0;  // of at least kLargeAllocationBytes
+void Count(std::size_t size) {
+  ++g_allocations;
+  if (size >= ident::testing::kLargeAllocationBytes) ++g_large_allocations;
+}
 }  // namespace
 
 namespace ident::testing {
 std::int64_t AllocationsSoFar() { return g_allocations; }
+std::int64_t LargeAllocationsSoFar() { return g_large_allocations; }
 }  // namespace ident::testing
 
 #if defined(IDENT_TESTS_UNDER_ASAN)
@@ -26,7 +32,7 @@ std::int64_t AllocationsSoFar() { return g_allocations; }
 extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
                                                          void (*free_hook)(const volatile void*));
 namespace {
-void CountMalloc(const volatile void*, std::size_t) { ++g_allocations; }
+void CountMalloc(const volatile void*, std::size_t size) { Count(size); }
 void IgnoreFree(const volatile void*) {}
 [[maybe_unused]] const int g_hooks_installed = __sanitizer_install_malloc_and_free_hooks(CountMalloc, IgnoreFree);
 }  // namespace
@@ -41,28 +47,28 @@ void* __libc_memalign(std::size_t alignment, std::size_t size);
 void __libc_free(void* p);
 
 void* malloc(std::size_t size) {
-  ++g_allocations;
+  Count(size);
   return __libc_malloc(size);
 }
 void* calloc(std::size_t count, std::size_t size) {
-  ++g_allocations;
+  Count(count * size);
   return __libc_calloc(count, size);
 }
 void* realloc(void* p, std::size_t size) {
-  ++g_allocations;
+  Count(size);
   return __libc_realloc(p, size);
 }
 void* aligned_alloc(std::size_t alignment, std::size_t size) {
-  ++g_allocations;
+  Count(size);
   return __libc_memalign(alignment, size);
 }
 void* memalign(std::size_t alignment, std::size_t size) {
-  ++g_allocations;
+  Count(size);
   return __libc_memalign(alignment, size);
 }
 int posix_memalign(void** out, std::size_t alignment, std::size_t size) {
   if (alignment < sizeof(void*) || (alignment & (alignment - 1)) != 0) return 22;  // EINVAL
-  ++g_allocations;
+  Count(size);
   void* p = __libc_memalign(alignment, size);
   if (p == nullptr && size != 0) return 12;  // ENOMEM
   *out = p;

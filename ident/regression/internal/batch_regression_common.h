@@ -59,24 +59,34 @@ inline Orthonormalised RequireFullRank(const Eigen::Ref<const Eigen::MatrixXd>& 
 
 // argmin_β Σ w_i (y_i − β'q_i)² by the normal equations on the orthonormal Q (well conditioned unless the
 // weights are); nullopt-like: returns false if Q'WQ is not positive definite.
-inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::VectorXd& y, const Eigen::VectorXd& w,
-                        Eigen::VectorXd& beta) {
-  const Eigen::MatrixXd Qw = Q.array().colwise() * w.array();
+// `Qw`: workspace for W·Q (resized to Q's shape if it is not).
+inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        const Eigen::VectorXd& w, Eigen::VectorXd& beta, Eigen::MatrixXd& Qw) {
+  Qw = Q.array().colwise() * w.array();
   const Eigen::LLT<Eigen::MatrixXd> llt(Qw.transpose() * Q);
   if (llt.info() != Eigen::Success) return false;
   beta = llt.solve(Qw.transpose() * y);
   return beta.allFinite();
 }
+inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        const Eigen::VectorXd& w, Eigen::VectorXd& beta) {
+  Eigen::MatrixXd Qw;
+  return WeightedFit(Q, y, w, beta, Qw);
+}
 
-// Median of |v| (the mean of the two middle values for even n, as R's median).
-inline double MedianAbs(const Eigen::VectorXd& v) {
-  std::vector<double> a(v.data(), v.data() + v.size());
+// Median of |v| (the mean of the two middle values for even n, as R's median). `a`: workspace.
+inline double MedianAbs(const Eigen::VectorXd& v, std::vector<double>& a) {
+  a.assign(v.data(), v.data() + v.size());
   for (double& x : a) x = std::abs(x);
   const std::size_t mid = a.size() / 2;
   std::nth_element(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(mid), a.end());
   const double upper = a[mid];
   if (a.size() % 2 == 1) return upper;
   return 0.5 * (upper + *std::max_element(a.begin(), a.begin() + static_cast<std::ptrdiff_t>(mid)));
+}
+inline double MedianAbs(const Eigen::VectorXd& v) {
+  std::vector<double> a;
+  return MedianAbs(v, a);
 }
 
 // A uniform index in [0, bound) from the generator's raw output (rejection sampling): unlike the std
