@@ -7,7 +7,8 @@
 //                                                         double integrator's shear)
 //   (2) process noise  f^dn    = f_N * f^d                 a Gaussian f_N is the lattice kernel with the
 //                                                         exact covariance P_N (its spectrum, a lattice
-//                                                         characteristic function, grid_observer.cc),
+//                                                         characteristic function,
+//                                                         grid_observer_convolution.cc),
 //                                                         computed once per spacing and P_N: a direct
 //                                                         convolution when it has few taps, else an FFT
 //                                                         (Eigen FFT, zero padded); any other log-concave
