@@ -1,3 +1,5 @@
+// LogConcaveNoise (models/noise_density.h): the families' constants, parsing, and the closed-form tilted
+// moments (Gaussian; Laplace and Huber as mixtures of truncated normals) that choose the quadratures otherwise.
 #include "models/noise_density.h"
 
 #include <algorithm>
@@ -7,16 +9,18 @@
 #include <limits>
 #include <numbers>
 
-#include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <boost/math/quadrature/gauss.hpp>
 #include <boost/math/special_functions/erf.hpp>
 #include <boost/math/special_functions/gamma.hpp>
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "models/internal/noise_density_shared.h"
 
 namespace ident::models {
+
+using internal::Rho;
+
 namespace {
 
 constexpr double kNoiseNaN = std::numeric_limits<double>::quiet_NaN();
@@ -27,33 +31,6 @@ constexpr boost::math::policies::policy<boost::math::policies::promote_double<fa
 // A mixture piece whose log-weight bound is this far below the largest exact log-weight is left out: its
 // share e^{−80} ≈ 2e−35 moves the mean and variance by less than 1e−16 of theirs for |a| up to 1e8.
 constexpr double kNegligibleLogWeight = 80;
-
-// |r|^p for the generalised Gaussian, r ≥ 0: the shapes 1, 1.5 and 2 without std::pow.
-double GengaussPower(double r, double p) {
-  if (p == 1.5) return r * std::sqrt(r);
-  if (p == 2) return r * r;
-  if (p == 1) return r;
-  return std::pow(r, p);
-}
-
-// ρ(u) = −log f(u) − log_norm for each family (the unnormalised negative log-density).
-double Rho(LogConcaveNoise::Family family, double shape, double u) {
-  using F = LogConcaveNoise::Family;
-  const double au = std::abs(u);
-  switch (family) {
-    case F::kGaussian:
-      return 0.5 * u * u;
-    case F::kLaplace:
-      return au;
-    case F::kHuber:
-      return au <= shape ? 0.5 * u * u : shape * au - 0.5 * shape * shape;
-    case F::kLogistic:
-      return au + 2 * std::log1p(std::exp(-au));
-    case F::kGeneralizedGaussian:
-      return GengaussPower(au, shape);
-  }
-  return kNoiseNaN;
-}
 
 // One piece of a mixture: log of its weight (log C + log Z of its truncated normal) and its moments.
 struct Piece {
@@ -110,78 +87,9 @@ TiltedMoments UpperTailMoments(double x) noexcept {
 // log Q(x) ≤ this (Q(x) ≤ ½e^{−x²/2} for x ≥ 0, Q ≤ 1): the cheap bound that skips negligible pieces.
 double LogUpperTailBound(double x) { return x > 0 ? -0.5 * x * x - std::numbers::ln2 : 0.0; }
 
-// Probabilists' Gauss–Hermite rules, E g(X) ≈ Σ w_i g(x_i) for X ~ N(0, 1), exact for polynomials of degree
-// < 2n: nodes from the Jacobi matrix (Golub–Welsch) polished by Newton on the orthonormal recurrence
-// p_(k+1) = (x p_k − √k p_(k−1))/√(k+1), weights the Christoffel numbers 1/Σ_(k<n) p_k(x_i)². Built once.
-struct HermiteRule {
-  int n = 0;
-  std::array<double, 64> x{}, w{};
-};
-constexpr std::array<int, 9> kHermiteSizes = {8, 12, 16, 20, 24, 32, 40, 48, 64};
-
-const std::array<HermiteRule, 9>& HermiteRules() {
-  static const std::array<HermiteRule, 9> rules = [] {
-    std::array<HermiteRule, 9> out{};
-    for (std::size_t r = 0; r < kHermiteSizes.size(); ++r) {
-      const int n = kHermiteSizes[r];
-      Eigen::VectorXd diag = Eigen::VectorXd::Zero(n), sub(n - 1);
-      for (int k = 1; k < n; ++k) sub(k - 1) = std::sqrt(static_cast<double>(k));
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
-      eig.computeFromTridiagonal(diag, sub, Eigen::EigenvaluesOnly);
-      out[r].n = n;
-      for (int i = 0; i < n; ++i) {
-        double x = eig.eigenvalues()(i), norm = 0;
-        for (int it = 0; it < 3; ++it) {
-          double p0 = 1, p1 = x;
-          norm = 1 + x * x;
-          for (int k = 1; k + 1 < n; ++k) {
-            const double p2 = (x * p1 - std::sqrt(static_cast<double>(k)) * p0) / std::sqrt(k + 1.0);
-            p0 = p1;
-            p1 = p2;
-            norm += p1 * p1;
-          }
-          const double pn = (x * p1 - std::sqrt(n - 1.0) * p0) / std::sqrt(static_cast<double>(n));
-          x -= pn / (std::sqrt(static_cast<double>(n)) * p1);  // p_n' = √n p_(n−1)
-        }
-        out[r].x[i] = x;
-        out[r].w[i] = 1 / norm;
-      }
-      double total = 0;
-      for (int i = 0; i < n; ++i) total += out[r].w[i];
-      for (int i = 0; i < n; ++i) out[r].w[i] /= total;  // Σ w = 1 to rounding
-    }
-    return out;
-  }();
-  return rules;
-}
-
-// Largest prior variance v (in units of σ²) for each Gauss–Hermite rule of kHermiteSizes.
+// Largest prior variance v (in units of σ²) for each Gauss–Hermite rule of kHermiteSizes
+// (noise_density_quadrature.cc).
 constexpr std::array<double, 9> kHermiteMaxVariance = {0.015, 0.06, 0.12, 0.2, 0.25, 0.4, 0.55, 0.8, 1.0};
-
-// g(y, s) = f(y − s) as a projected measurement on a scalar state (the quadrature reference).
-class ResidualMeasurement final : public ProjectedMeasurement {
- public:
-  explicit ResidualMeasurement(const LogConcaveNoise& noise) : ProjectedMeasurement(Eigen::VectorXd::Ones(1)), noise_(noise) {}
-  std::string name() const override { return noise_.ToString(); }
-  double LogLikelihoodScalar(double y, double s) const override { return noise_.LogDensity(y - s); }
-  double ScalarStrength(double) const override { return 0.0; }
-  bool IsValidOutput(double y) const override { return std::isfinite(y); }
-
- protected:
-  Pieces SupportPieces(double y) const override {
-    Pieces p;
-    using F = LogConcaveNoise::Family;
-    if (noise_.family() == F::kLaplace || noise_.family() == F::kGeneralizedGaussian) p.kinks[0] = y;
-    if (noise_.family() == F::kHuber) {
-      p.kinks[0] = y - noise_.shape();
-      p.kinks[1] = y + noise_.shape();
-    }
-    return p;
-  }
-
- private:
-  const LogConcaveNoise& noise_;
-};
 
 // The median m of |u| under the density ∝ e^{−ρ(u)} (symmetric): P(|u| ≤ m) = 1/2, by bisection on a
 // Gauss–Legendre integral of the unnormalised density (construction only).
@@ -237,7 +145,7 @@ LogConcaveNoise::LogConcaveNoise(Family family, double shape) : family_(family),
       break;
     }
     case Family::kLogistic:
-      HermiteRules();  // built here, not in the first update
+      internal::BuildHermiteRules();  // built here, not in the first update
       shape_ = 0;
       log_norm_ = 0;  // e^{−u}/(1 + e^{−u})² integrates to 1
       median_abs_ = std::log(3.0);
@@ -249,7 +157,7 @@ LogConcaveNoise::LogConcaveNoise(Family family, double shape) : family_(family),
                     "Gaussian)",
                     shape);
       const double p = shape;
-      HermiteRules();
+      internal::BuildHermiteRules();
       log_norm_ = std::log(2.0) + std::lgamma(1 / p) - std::log(p);
       median_abs_ = std::pow(boost::math::gamma_p_inv(1 / p, 0.5), 1 / p);
       sd_ = std::exp(0.5 * (std::lgamma(3 / p) - std::lgamma(1 / p)));
@@ -399,114 +307,6 @@ TiltedMoments LogConcaveNoise::ResidualMoments(double a, double v) const noexcep
     }
   }
   return {};
-}
-
-TiltedMoments LogConcaveNoise::HermiteMoments(double a, double v, int rule_index) const noexcept {
-  // Z = E f(a + √v X) = e^{−ρ(a) − log_norm}·E e^{ρ(a) − ρ(r)}: the factor e^{−ρ(a)} taken out so that
-  // outliers do not underflow; logistic's e^{ρ(a) − ρ(r)} = e^{|a| − |r|}·(1 + e^{−|a|})²/(1 + e^{−|r|})².
-  const HermiteRule& rule = HermiteRules()[static_cast<std::size_t>(rule_index)];
-  const double sd = std::sqrt(v), aa = std::abs(a);
-  const bool logistic = family_ == Family::kLogistic;
-  const double ea = std::exp(-aa), p = shape_;
-  const double rho_a = logistic ? 0.0 : GengaussPower(aa, p);
-  double z = 0, m1 = 0, m2 = 0;
-  for (int i = 0; i < rule.n; ++i) {
-    const double d = sd * rule.x[i], ar = std::abs(a + d);
-    double value;
-    if (logistic) {
-      const double e_rel = std::exp(aa - ar), e = e_rel * ea;  // e^{−|r|}·e^{|a|}, e^{−|r|}
-      value = e_rel / ((1 + e) * (1 + e));
-    } else {
-      value = std::exp(rho_a - GengaussPower(ar, p));
-    }
-    const double wv = rule.w[i] * value;
-    z += wv;
-    m1 += wv * d;
-    m2 += wv * d * d;
-  }
-  if (!(z > 0) || !std::isfinite(z)) return {};
-  const double mean_d = m1 / z;
-  const double log_z = std::log(z) + (logistic ? -aa : -rho_a - log_norm_);
-  return {log_z, a + mean_d, std::max(0.0, m2 / z - mean_d * mean_d), true};
-}
-
-TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
-  // log h(r) = −ρ(r) − (r − a)²/(2v); h' = 0 at the mode, in [min(0, a), max(0, a)] since ψ(0) = 0 and ψ
-  // has the sign of r. Safeguarded Newton on the decreasing −ψ(r) − (r − a)/v.
-  const bool logistic = family_ == Family::kLogistic;
-  // ρ'' (logistic: (1 − tanh²(r/2))/2 ≤ 1/4; gengauss: p(p − 1)|r|^(p−2), evaluated at |r| ≥ 1/2 so
-  // that the kink of |r|^p at 0 does not shrink the width to nothing).
-  auto curvature = [&](double r) {
-    if (logistic) {
-      const double t = std::tanh(0.5 * r);
-      return 0.5 * (1 - t * t);
-    }
-    return shape_ * (shape_ - 1) * std::pow(std::max(std::abs(r), 0.5), shape_ - 2);
-  };
-  double lo = std::min(0.0, a), hi = std::max(0.0, a), r = std::clamp(a / (1 + 0.25 * v), lo, hi);
-  for (int i = 0; i < 200; ++i) {
-    const double g = -Score(r) - (r - a) / v;  // decreasing in r
-    if (g > 0) lo = r; else hi = r;
-    double next = r + g / (curvature(r) + 1 / v);
-    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    const bool done = std::abs(next - r) <= 1e-14 * (1 + std::abs(r)) || hi - lo <= 1e-15 * (1 + std::abs(r));
-    r = next;
-    if (done) break;
-  }
-  const double width = 1 / std::sqrt(curvature(r) + 1 / v);
-  const double log_peak = -Rho(family_, shape_, r) - 0.5 * (r - a) * (r - a) / v;
-  // log h is concave: ±16 widths, widened until log h has fallen by 45 from its peak at both ends (so the
-  // mass beyond is below e^{−45} of the peak's per unit slope), in panels of width at most 2 (f's own
-  // scale; 12 at least, 400 at most) of 10 Gauss–Legendre points.
-  // gengauss: a panel boundary at r = 0, where |r|^p is not smooth.
-  using Gauss = boost::math::quadrature::gauss<double, 10>;
-  const auto& x = Gauss::abscissa();
-  const auto& w = Gauss::weights();
-  auto log_h = [&](double u) { return -Rho(family_, shape_, u) - 0.5 * (u - a) * (u - a) / v; };
-  double half = 16 * width;
-  for (int i = 0; i < 40 && std::max(log_h(r - half), log_h(r + half)) > log_peak - 45; ++i) half *= 1.5;
-  constexpr int kMaxPanels = 400;
-  const int panels = std::clamp(static_cast<int>(std::ceil(half)), 12, kMaxPanels);
-  const double panel = 2 * half / panels;
-  std::array<double, kMaxPanels + 12> cuts{};
-  int n = 0;
-  for (int p = 0; p <= panels; ++p) cuts[n++] = r - half + p * panel;
-  if (!logistic && cuts[0] < 0 && cuts[panels] > 0) {
-    // |r|^p at 0: a boundary there and panels graded geometrically towards it (exponential convergence
-    // for the r^p singularity instead of GL's algebraic one).
-    cuts[n++] = 0;
-    for (double g = 0.25; g > 1e-3; g *= 0.25)
-      for (double c : {-g * panel, g * panel})
-        if (c > cuts[0] && c < cuts[panels]) cuts[n++] = c;
-    std::sort(cuts.begin(), cuts.begin() + n);
-  }
-  double z = 0, m1 = 0, m2 = 0;
-  for (int p = 0; p + 1 < n; ++p) {
-    const double centre = 0.5 * (cuts[p] + cuts[p + 1]), scale = 0.5 * (cuts[p + 1] - cuts[p]);
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      for (int side : {1, -1}) {
-        if (side < 0 && x[i] == 0) continue;
-        const double rr = centre + side * scale * x[i], d = rr - r;
-        const double h = scale * w[i] * std::exp(-Rho(family_, shape_, rr) - 0.5 * (rr - a) * (rr - a) / v - log_peak);
-        z += h;
-        m1 += h * d;
-        m2 += h * d * d;
-      }
-    }
-  }
-  if (!(z > 0) || !std::isfinite(z)) return {};
-  const double mean_d = m1 / z;
-  const double var = std::max(0.0, m2 / z - mean_d * mean_d);
-  // Z = ∫ f(r)·N(r; a, v) dr = e^{log_peak − log_norm}·z/√(2πv).
-  return {log_peak - log_norm_ + std::log(z) - 0.5 * std::log(2 * std::numbers::pi * v), r + mean_d, var, true};
-}
-
-TiltedMoments LogConcaveNoise::QuadratureResidualMoments(double a, double v) const {
-  // r = y − s with y = 0: r ~ N(a, v) ⇔ s ~ N(−a, v); the moments of r are those of −s.
-  const ResidualMeasurement measurement(*this);
-  const TiltedMoments t = measurement.QuadratureTilt(0.0, -a, v);
-  if (!t.ok) return t;
-  return {t.log_normalizer, -t.mean, t.variance, true};
 }
 
 }  // namespace ident::models

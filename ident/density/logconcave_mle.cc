@@ -182,66 +182,79 @@ class ActiveSet {
     // new knots is repeated with the single best one (the one-knot algorithm of [DHR], which stops when that
     // knot is rejected at once).
     bool single = false;
-    std::vector<char> is_knot(m_, 0);
     std::vector<int> added, before;
     while (iterations < o_.max_iterations) {
       const Eigen::VectorXd D = DirectionalDerivatives(x_, w_, phi);
-      std::fill(is_knot.begin(), is_knot.end(), 0);
-      for (int a : kn) is_knot[a] = 1;
-      added.clear();
-      int best = -1;
-      for (size_t a = 0; a + 1 < kn.size(); ++a) {
-        int local = -1;
-        for (int j = kn[a] + 1; j < kn[a + 1]; ++j)
-          if (D(j) > o_.tolerance * range && (local < 0 || D(j) > D(local))) local = j;
-        if (local < 0) continue;
-        added.push_back(local);
-        if (best < 0 || D(local) > D(best)) best = local;
-      }
+      const int best = NewKnots(D, kn, range, &added);
       if (o_.on_iteration) o_.on_iteration(iterations, best < 0 ? 0.0 : D(best) / range);
       if (best < 0) break;
       if (single) added.assign(1, best);
       ++iterations;
       before = kn;
       for (int j : added) kn.insert(std::upper_bound(kn.begin(), kn.end(), j), j);
-      bool stalled = false;
-      for (;;) {
-        const Eigen::VectorXd phi_new = LocalMle(kn, phi);
-        const Eigen::VectorXd conv_new = Convexity(kn, phi_new);
-        if (conv_new.maxCoeff() <= 0) {
-          phi = phi_new;
-          break;
-        }
-        // Step back from the concave phi towards phi_new until the first knot turns linear [DHR sec. 3.2].
-        // phi is concave: a positive slope change at a knot is rounding (at a new knot phi is linear).
-        const Eigen::VectorXd conv_old = Convexity(kn, phi).cwiseMin(0.0);
-        double lambda = 1;
-        for (int a = 0; a < conv_new.size(); ++a)
-          if (conv_new(a) > 0) lambda = std::min(lambda, conv_old(a) / (conv_old(a) - conv_new(a)));
-        phi = (1 - lambda) * phi + lambda * phi_new;
-        std::vector<int> kept;
-        for (int a = 0; a < static_cast<int>(kn.size()); ++a) {
-          const bool drop = conv_new(a) > 0 && conv_old(a) / (conv_old(a) - conv_new(a)) <= lambda * (1 + 1e-12);
-          if (!drop) kept.push_back(kn[a]);
-        }
-        if (single && lambda == 0 && kept.size() + 1 == kn.size() &&
-            std::find(kept.begin(), kept.end(), best) == kept.end()) {
-          stalled = true;  // the new knot is rejected at once: D(best) is at rounding level
-          kn = kept;
-          break;
-        }
-        if (kept.size() == kn.size() || ++iterations >= o_.max_iterations) {
-          // No knot dropped: NaN convexities at scales double cannot resolve (samples from 6e-322 to
-          // 2.5e260) would loop here for ever. FitLogConcaveMle's KKT check refuses the result.
-          stalled = true;
-          break;
-        }
-        kn = kept;
-      }
-      if (stalled) break;
+      if (RestoreConcavity(single, best, kn, phi, iterations)) break;
       // A round that kept none of its knots: the next one adds the single best knot.
       single = !single && kn == before;
     }
+    return Result(n, kn, phi, iterations);
+  }
+
+  // The candidate knots of a round into *added: between each pair of neighbouring knots kn the point with the
+  // largest D_j above tolerance · range; returns the best of them (−1: none).
+  int NewKnots(const Eigen::VectorXd& D, const std::vector<int>& kn, double range, std::vector<int>* added) const {
+    added->clear();
+    int best = -1;
+    for (size_t a = 0; a + 1 < kn.size(); ++a) {
+      int local = -1;
+      for (int j = kn[a] + 1; j < kn[a + 1]; ++j)
+        if (D(j) > o_.tolerance * range && (local < 0 || D(j) > D(local))) local = j;
+      if (local < 0) continue;
+      added->push_back(local);
+      if (best < 0 || D(local) > D(best)) best = local;
+    }
+    return best;
+  }
+
+  // The Newton/step-back loop after knots were added: the local MLE on kn, stepped back towards the concave
+  // phi and with the knots that turn linear dropped until it is concave; phi and kn become the result. True
+  // if the algorithm stalls: a single new knot (`best`) rejected at once, no knot dropped, or the iteration
+  // limit reached (each step back counts as an iteration).
+  bool RestoreConcavity(bool single, int best, std::vector<int>& kn, Eigen::VectorXd& phi, int& iterations) const {
+    for (;;) {
+      const Eigen::VectorXd phi_new = LocalMle(kn, phi);
+      const Eigen::VectorXd conv_new = Convexity(kn, phi_new);
+      if (conv_new.maxCoeff() <= 0) {
+        phi = phi_new;
+        return false;
+      }
+      // Step back from the concave phi towards phi_new until the first knot turns linear [DHR sec. 3.2].
+      // phi is concave: a positive slope change at a knot is rounding (at a new knot phi is linear).
+      const Eigen::VectorXd conv_old = Convexity(kn, phi).cwiseMin(0.0);
+      double lambda = 1;
+      for (int a = 0; a < conv_new.size(); ++a)
+        if (conv_new(a) > 0) lambda = std::min(lambda, conv_old(a) / (conv_old(a) - conv_new(a)));
+      phi = (1 - lambda) * phi + lambda * phi_new;
+      std::vector<int> kept;
+      for (int a = 0; a < static_cast<int>(kn.size()); ++a) {
+        const bool drop = conv_new(a) > 0 && conv_old(a) / (conv_old(a) - conv_new(a)) <= lambda * (1 + 1e-12);
+        if (!drop) kept.push_back(kn[a]);
+      }
+      if (single && lambda == 0 && kept.size() + 1 == kn.size() &&
+          std::find(kept.begin(), kept.end(), best) == kept.end()) {
+        kn = kept;  // the new knot is rejected at once: D(best) is at rounding level
+        return true;
+      }
+      if (kept.size() == kn.size() || ++iterations >= o_.max_iterations) {
+        // No knot dropped: NaN convexities at scales double cannot resolve (samples from 6e-322 to
+        // 2.5e260) would loop here for ever. FitLogConcaveMle's KKT check refuses the result.
+        return true;
+      }
+      kn = kept;
+    }
+  }
+
+  // The estimate with knots kn and log-density phi at the points, from a sample of n.
+  LogConcaveMle Result(int n, const std::vector<int>& kn, const Eigen::VectorXd& phi, int iterations) const {
     LogConcaveMle mle;
     mle.n = n;
     mle.x = x_;

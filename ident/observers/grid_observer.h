@@ -7,7 +7,8 @@
 //                                                         double integrator's shear)
 //   (2) process noise  f^dn    = f_N * f^d                 a Gaussian f_N is the lattice kernel with the
 //                                                         exact covariance P_N (its spectrum, a lattice
-//                                                         characteristic function, grid_observer.cc),
+//                                                         characteristic function,
+//                                                         grid_observer_convolution.cc),
 //                                                         computed once per spacing and P_N: a direct
 //                                                         convolution when it has few taps, else an FFT
 //                                                         (Eigen FFT, zero padded); any other log-concave
@@ -119,8 +120,46 @@ class GridObserver {
   // between the old grid's nodes (old_origin, old_spacing), zero outside the old grid.
   void PushForward(const Eigen::Ref<const Eigen::MatrixXd>& Ainv, const Eigen::Ref<const Eigen::VectorXd>& shift,
                    const std::array<double, 3>& old_origin, const std::array<double, 3>& old_spacing);
+  // Fractional old-grid indices of the moved grid's nodes under eq. (1): f_j = f0_j + Σ_i G_ji k_i for node
+  // indices k.
+  struct OldIndexMap {
+    std::array<double, 3> f0{};
+    std::array<std::array<double, 3>, 3> G{};
+  };
+  // Lines along axis 0 of the old grid with their cubic weights (up to 4^(dim−1)).
+  struct OldLines {
+    std::array<const double*, 16> rows{};
+    std::array<double, 16> weight{};
+    int count = 0;
+  };
+  // The old lines whose weighted sum a new line along axis 0 (indices jl on axes 1 …) interpolates from;
+  // none if the line maps outside the old grid.
+  OldLines LinesFeeding(const OldIndexMap& map, const std::array<int, 3>& jl) const;
+  // q on one line along axis 0 when lines map into lines: LinesFeeding, then a 1-D cubic along axis 0.
+  void PushForwardLine(const OldIndexMap& map, int line);
+  // out[j] += the cubic at old index j + a of the combined old lines (the same fraction for every node).
+  void ShiftLine(const OldLines& old, double a, double* out);
+  // out[j] = the cubic at old index a + b j of the combined old lines.
+  void InterpolateLine(const OldLines& old, double a, double b, double* out) const;
+  // The cubic over the 4^dim old nodes around node idx's image (any map); 0 outside the old grid.
+  double InterpolateNode(const OldIndexMap& map, int idx) const;
   // q ← f_N * q (eq. (2)).
   void Convolve(const Eigen::MatrixXd& noise_cov, const LogDensity* log_noise);
+  // Whether the cached Gaussian kernel is that of noise_cov on the current spacing.
+  bool KernelMatches(const Eigen::MatrixXd& noise_cov) const;
+  // q ← the direct convolution of q with the kernel's taps, zero outside the grid.
+  void ConvolveTaps();
+  // r's line `line` along axis 0 ← Σ_taps w · q(j − offset).
+  void ConvolveTapsLine(int line);
+  // q ← f_N * q by the FFT of the zero-padded grid: the Gaussian spectrum of noise_cov, or with log_noise
+  // the transform of f_N sampled at the grid offsets.
+  void ConvolveFft(const Eigen::MatrixXd& noise_cov, const LogDensity* log_noise);
+  // kernel_ ← the transform of f_N sampled at the wrapped grid offsets of the padded grid, normalised.
+  void SampledNoiseSpectrum(const LogDensity& log_noise);
+  // The signed offset (index k, or k − np for the upper half) along axis i of padded flat index `flat`.
+  int SignedPaddedIndex(int flat, int i) const;
+  // The padded flat index of grid index idx.
+  int PaddedIndex(int idx) const;
   // The lattice Gaussian kernel of noise_cov on the current spacing: its spectrum, and its taps if few.
   void BuildGaussianKernel(const Eigen::MatrixXd& noise_cov);
   // The lattice characteristic function of noise_cov on the padded grid (spectrum_).

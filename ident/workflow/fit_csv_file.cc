@@ -181,6 +181,67 @@ auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) 
   }
 }
 
+// The passes before the last of pass 3 (options.passes > 1), each over the estimation part; *passes and
+// *repeated count them as RunPasses does, or start again at 1 and 0, with the estimator reset, when the last
+// pass is not one more (internal::NextPass).
+void RunEarlierCsvPasses(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                         AnyRegressionEstimator& estimator, const FitOptions& options, Segment estimation,
+                         const Eigen::VectorXd& offset, const TimeCheck* filled, Eigen::VectorXd& row, int* passes,
+                         int* repeated) {
+  FitOptions earlier = options;
+  earlier.passes = options.passes - 1;
+  earlier.trace = nullptr;
+  earlier.on_update = {};
+  RunPasses(estimator, source, earlier, passes, repeated, [&](const FitOptions& o) {
+    Estimation estimating(source, estimator, o);
+    RecordRows reader(path, csv, filled);
+    for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
+      row -= offset;
+      estimating.Row(row, r);
+    }
+    return estimating.Finish(path);
+  });
+  if (*passes == options.passes - 1 && internal::NextPass(estimator, source, repeated)) {
+    ++*passes;
+  } else {
+    estimator.Reset();
+    source.ClearEstimate();
+    *passes = 1;
+    *repeated = 0;
+  }
+}
+
+// The time column's check as the rows arrive: the gaps found before (`filled`, then *time_column = −1), or
+// an empty check of the used columns' time column at index *time_column; none without one.
+std::optional<TimeCheck> ArrivingTimeColumn(const RecordRows& reader, const DataSource& source,
+                                            const TimeCheck* filled, int* time_column) {
+  std::optional<TimeCheck> time;
+  *time_column = -1;
+  if (filled != nullptr) {
+    time = *filled;
+  } else if ((*time_column = TimeColumnIndex(reader.names(), source.used_columns())) >= 0) {
+    time.emplace();
+    time->column = reader.names()[static_cast<std::size_t>(*time_column)];
+  }
+  return time;
+}
+
+// The end of the estimation part: the estimate summarised, with its passes, updates and rejections; throws if
+// it is not usable.
+FitResult FinishStreamedEstimation(Estimation& estimating, DataSource& source, AnyRegressionEstimator& estimator,
+                                   const CsvLayout& layout, int passes, int repeated, const std::string& path) {
+  FitResult result;
+  std::tie(result.updates, result.rejected) = estimating.Finish(path);
+  const int updates = result.updates, rejected = result.rejected;
+  result = Summarise(source, estimator, layout.estimation, layout.validation);
+  internal::CorrectRepeatedPasses(result, repeated);
+  result.passes = passes;
+  result.updates = updates;
+  result.rejected = rejected;
+  RequireUsable(result, estimator, path);
+  return result;
+}
+
 // Passes 3 and 4 of FitCsvFile (fit.h), given the layout (pass 1) and the detrending offsets (pass 2).
 FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                         AnyRegressionEstimator& estimator, const FitOptions& options, const CsvLayout& layout,
@@ -194,53 +255,19 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
   if (options.trace) WriteTraceHeader(options.trace, source.num_parameters());
   int passes = 1, repeated = 0;
   source.ClearEstimate();  // ARMAX/OE/BJ: no estimate from an earlier fit on this source
-  if (options.passes > 1) {
-    FitOptions earlier = options;
-    earlier.passes = options.passes - 1;
-    earlier.trace = nullptr;
-    earlier.on_update = {};
-    RunPasses(estimator, source, earlier, &passes, &repeated, [&](const FitOptions& o) {
-      Estimation estimating(source, estimator, o);
-      RecordRows reader(path, csv, filled);
-      for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
-        row -= offset;
-        estimating.Row(row, r);
-      }
-      return estimating.Finish(path);
-    });
-    if (passes == options.passes - 1 && internal::NextPass(estimator, source, &repeated)) {
-      ++passes;
-    } else {
-      estimator.Reset();
-      source.ClearEstimate();
-      passes = 1;
-      repeated = 0;
-    }
-  }
+  if (options.passes > 1)
+    RunEarlierCsvPasses(path, csv, source, estimator, options, estimation, offset, filled, row, &passes, &repeated);
   Estimation estimating(source, estimator, options);
   std::unique_ptr<Scoring> scoring;
   FitResult result;
   RecordRows reader(path, csv, filled);
   // The time column, checked as the rows arrive (unless its gaps were found, to be filled, before).
-  std::optional<TimeCheck> time;
   int time_column = -1;
+  std::optional<TimeCheck> time = ArrivingTimeColumn(reader, source, filled, &time_column);
   ArrivingTimeCheck arriving;
-  if (filled != nullptr) {
-    time = *filled;
-  } else if ((time_column = TimeColumnIndex(reader.names(), source.used_columns())) >= 0) {
-    time.emplace();
-    time->column = reader.names()[static_cast<std::size_t>(time_column)];
-  }
   int r = 0;
   auto finish_estimation = [&] {
-    std::tie(result.updates, result.rejected) = estimating.Finish(path);
-    const int updates = result.updates, rejected = result.rejected;
-    result = Summarise(source, estimator, estimation, validation);
-    internal::CorrectRepeatedPasses(result, repeated);
-    result.passes = passes;
-    result.updates = updates;
-    result.rejected = rejected;
-    RequireUsable(result, estimator, path);
+    result = FinishStreamedEstimation(estimating, source, estimator, layout, passes, repeated, path);
     scoring = std::make_unique<Scoring>(source, result.theta, validation.first);
   };
   while (reader.Next(row)) {

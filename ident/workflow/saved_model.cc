@@ -64,6 +64,81 @@ Eigen::VectorXd GetVector(const Json& rows, std::size_t index, const std::string
   return ToVector(rows.at(index), fmt::format("covariance[{}]", index), source);
 }
 
+// The "structure" object: a static regression or an ARX/ARMAX/OE/BJ structure.
+ModelSpec ReadStructure(const Json& s, const std::string& source) {
+  ModelSpec model;
+  const std::string kind = Get<std::string>(s, "kind", source);
+  model.output = Get<std::string>(s, "output", source);
+  if (kind == "static") {
+    model.regressors = Get<std::vector<std::string>>(s, "regressors", source);
+    model.intercept = Get<bool>(s, "intercept", source);
+  } else if (kind == "arx" || kind == "armax" || kind == "oe" || kind == "bj") {
+    model.inputs = Get<std::vector<std::string>>(s, "inputs", source);
+    model.na = Get<int>(s, "na", source);
+    model.nb = Get<std::vector<int>>(s, "nb", source);
+    model.nk = Get<std::vector<int>>(s, "nk", source);
+    if (kind != "arx") {
+      model.nc = Get<int>(s, "nc", source);
+      model.nd = Get<int>(s, "nd", source);
+      model.nf = Get<int>(s, "nf", source);
+      if (!model.polynomial())
+        throw DataError(fmt::format("{}: structure kind \"{}\" with nc = nd = nf = 0", source, kind));
+    }
+  } else {
+    throw DataError(fmt::format("{}: structure kind \"{}\"; need arx, armax, oe, bj or static", source, kind));
+  }
+  return model;
+}
+
+// The "covariance" rows: rho × rho numbers.
+Eigen::MatrixXd ReadCovariance(const Json& cov, Eigen::Index rho, const std::string& source) {
+  if (!cov.is_array() || static_cast<Eigen::Index>(cov.size()) != rho)
+    throw DataError(fmt::format("{}: \"covariance\" needs {} rows of {} numbers", source, rho, rho));
+  Eigen::MatrixXd covariance(rho, rho);
+  for (Eigen::Index r = 0; r < rho; ++r) {
+    const Eigen::VectorXd row = GetVector(cov, static_cast<std::size_t>(r), source);
+    if (row.size() != rho)
+      throw DataError(fmt::format("{}: \"covariance\" row {} has {} numbers; need {}", source, r + 1, row.size(), rho));
+    covariance.row(r) = row.transpose();
+  }
+  return covariance;
+}
+
+// The "detrend_means" object: {column: mean}, in its order.
+std::vector<std::pair<std::string, double>> ReadDetrendMeans(const Json& means, const std::string& source) {
+  if (!means.is_object()) throw DataError(fmt::format("{}: \"detrend_means\" is not an object", source));
+  std::vector<std::pair<std::string, double>> out;
+  for (const auto& item : means.items()) {
+    if (!item.value().is_number())
+      throw DataError(fmt::format("{}: detrend mean of '{}' is not a number", source, item.key()));
+    out.emplace_back(item.key(), item.value().get<double>());
+  }
+  return out;
+}
+
+// The "data.files" list: path, rows and checksum of each file read.
+std::vector<SavedModel::DataFile> ReadDataFiles(const Json& files, const std::string& source) {
+  if (!files.is_array()) throw DataError(fmt::format("{}: \"data.files\" is not a list", source));
+  std::vector<SavedModel::DataFile> out;
+  for (const Json& f : files)
+    out.push_back({.path = Get<std::string>(f, "path", source),
+                   .checksum = Get<std::string>(f, "fnv1a64", source),
+                   .rows = Get<long>(f, "rows", source)});
+  return out;
+}
+
+// The validation part's fit (percent) and RMS, one-step and, unless null, simulation.
+FitScores ReadValidationScores(const Json& fit, const Json& rms, const std::string& source) {
+  FitScores scores;
+  scores.one_step = GetNumber(fit, "one_step", source);
+  scores.rms_one_step = GetNumber(rms, "one_step", source);
+  if (!At(fit, "simulation", source).is_null()) {
+    scores.simulation = GetNumber(fit, "simulation", source);
+    scores.rms_simulation = GetNumber(rms, "simulation", source);
+  }
+  return scores;
+}
+
 }  // namespace
 
 OrderedJson SavedModel::ToJson() const {
@@ -127,54 +202,18 @@ SavedModel SavedModel::FromJson(const Json& j, const std::string& source) {
     throw DataError(fmt::format("{}: model version {} is not supported (this program reads version 1)", source,
                                 Get<int>(j, "version", source)));
   SavedModel m;
-  const Json& s = At(j, "structure", source);
-  const std::string kind = Get<std::string>(s, "kind", source);
-  m.model.output = Get<std::string>(s, "output", source);
-  if (kind == "static") {
-    m.model.regressors = Get<std::vector<std::string>>(s, "regressors", source);
-    m.model.intercept = Get<bool>(s, "intercept", source);
-  } else if (kind == "arx" || kind == "armax" || kind == "oe" || kind == "bj") {
-    m.model.inputs = Get<std::vector<std::string>>(s, "inputs", source);
-    m.model.na = Get<int>(s, "na", source);
-    m.model.nb = Get<std::vector<int>>(s, "nb", source);
-    m.model.nk = Get<std::vector<int>>(s, "nk", source);
-    if (kind != "arx") {
-      m.model.nc = Get<int>(s, "nc", source);
-      m.model.nd = Get<int>(s, "nd", source);
-      m.model.nf = Get<int>(s, "nf", source);
-      if (!m.model.polynomial())
-        throw DataError(fmt::format("{}: structure kind \"{}\" with nc = nd = nf = 0", source, kind));
-    }
-  } else {
-    throw DataError(fmt::format("{}: structure kind \"{}\"; need arx, armax, oe, bj or static", source, kind));
-  }
+  m.model = ReadStructure(At(j, "structure", source), source);
   m.structure_name = Get<std::string>(j, "structure_name", source);
   m.parameter_names = Get<std::vector<std::string>>(j, "parameter_names", source);
   m.theta = GetVector(j, "theta", source);
   if (!m.theta.allFinite()) throw DataError(fmt::format("{}: \"theta\" has entries that are not finite", source));
   m.theta_std = GetVector(j, "theta_std", source);
-  const Json& cov = At(j, "covariance", source);
-  const auto rho = m.theta.size();
-  if (!cov.is_array() || static_cast<Eigen::Index>(cov.size()) != rho)
-    throw DataError(fmt::format("{}: \"covariance\" needs {} rows of {} numbers", source, rho, rho));
-  m.covariance.resize(rho, rho);
-  for (Eigen::Index r = 0; r < rho; ++r) {
-    const Eigen::VectorXd row = GetVector(cov, static_cast<std::size_t>(r), source);
-    if (row.size() != rho)
-      throw DataError(fmt::format("{}: \"covariance\" row {} has {} numbers; need {}", source, r + 1, row.size(), rho));
-    m.covariance.row(r) = row.transpose();
-  }
+  m.covariance = ReadCovariance(At(j, "covariance", source), m.theta.size(), source);
   m.noise_std = GetNumber(j, "noise_std", source);
   m.detrend = Get<std::string>(j, "detrend", source);
   if (m.detrend != "mean" && m.detrend != "none")
     throw DataError(fmt::format("{}: \"detrend\" is \"{}\"; need mean or none", source, m.detrend));
-  const Json& means = At(j, "detrend_means", source);
-  if (!means.is_object()) throw DataError(fmt::format("{}: \"detrend_means\" is not an object", source));
-  for (const auto& item : means.items()) {
-    if (!item.value().is_number())
-      throw DataError(fmt::format("{}: detrend mean of '{}' is not a number", source, item.key()));
-    m.detrend_means.emplace_back(item.key(), item.value().get<double>());
-  }
+  m.detrend_means = ReadDetrendMeans(At(j, "detrend_means", source), source);
   const Json& e = At(j, "estimator", source);
   m.estimator = Get<std::string>(e, "name", source);
   m.kind = Get<std::string>(e, "kind", source);
@@ -183,26 +222,14 @@ SavedModel SavedModel::FromJson(const Json& j, const std::string& source) {
   m.data_path = Get<std::string>(d, "path", source);
   m.data_rows = Get<long>(d, "rows", source);
   m.data_checksum = Get<std::string>(d, "fnv1a64", source);
-  if (d.contains("files")) {
-    const Json& files = d["files"];
-    if (!files.is_array()) throw DataError(fmt::format("{}: \"data.files\" is not a list", source));
-    for (const Json& f : files)
-      m.data_files.push_back({.path = Get<std::string>(f, "path", source),
-                              .checksum = Get<std::string>(f, "fnv1a64", source),
-                              .rows = Get<long>(f, "rows", source)});
-  }
+  if (d.contains("files")) m.data_files = ReadDataFiles(d["files"], source);
   m.split = GetNumber(j, "split", source);
   const auto rows = Get<std::vector<int>>(j, "validation_rows", source);
   if (rows.size() != 2) throw DataError(fmt::format("{}: \"validation_rows\" needs [first, last]", source));
   m.validation = {rows[0] - 1, rows[1] - rows[0] + 1};
   const Json& fit = At(j, "fit_percent", source);
   const Json& rms = At(j, "rms", source);
-  m.validation_scores.one_step = GetNumber(fit, "one_step", source);
-  m.validation_scores.rms_one_step = GetNumber(rms, "one_step", source);
-  if (!At(fit, "simulation", source).is_null()) {
-    m.validation_scores.simulation = GetNumber(fit, "simulation", source);
-    m.validation_scores.rms_simulation = GetNumber(rms, "simulation", source);
-  }
+  m.validation_scores = ReadValidationScores(fit, rms, source);
   return m;
 }
 
