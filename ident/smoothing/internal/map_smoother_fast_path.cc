@@ -57,7 +57,7 @@ struct StepState {
   double R4[kN];                      // gradient residual
   double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
   double dx[kN];                      // state direction
-  double gf[kN];                      // g / (K + H g), g = P0 H' (the measurement's rank-one term)
+  double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)
   double P[kN * kN];                  // P_t = S_t^-1, S_t = D_t - E_t P_{t-1} E_t'
   double M[kN * kN];                  // P_t E_t: v_t = P_t b_t - M_t v_{t-1}
   double N[kN * kN];                  // P_t E_{t+1}': dx_t = v_t - N_t dx_{t+1}
@@ -439,7 +439,8 @@ class FastSolver {
       Reciprocals(s);
       const double islo = s.islo, ishi = s.ishi;
       const double ikd = c.m + s.qlo * islo + s.qhi * ishi;  // K = M + D, D = q/s (barrier curvature)
-      s.kd = 1.0 / ikd;
+      const double kd = 1.0 / ikd;
+      s.kd = kd;
       // S_t = Db_t - E_t P_{t-1} E_t' + K^-1 H'H. K^-1 grows to ~1/mu on the coordinates at a kink, where
       // inverting S_t directly cancels terms of order K^-2 (tested: the iteration then stalls near 1e-10).
       // The measurement's rank-one term enters the inverse with the factor K instead: with
@@ -460,12 +461,19 @@ class FastSolver {
         if (!(s11 > 0) || !(det > 0) || !std::isfinite(det)) return false;
         const double h1 = c.H[0], h2 = c.H[1];
         const double a1 = s22 * h1 - s12 * h2, a2 = s11 * h2 - s12 * h1;  // adj(S0) H'
-        const double id = 1.0 / (ikd * det + (h1 * a1 + h2 * a2));
-        P[0] = (ikd * s22 + h2 * h2) * id;
-        P[1] = P[2] = -(ikd * s12 + h1 * h2) * id;
-        P[3] = (ikd * s11 + h1 * h1) * id;
-        gf[0] = a1 * id;  // P_t H' K^-1 = adj(S0) H' / (K det(S0) + H adj(S0) H')
-        gf[1] = a2 * id;
+        double id = 1.0 / (ikd * det + (h1 * a1 + h2 * a2)), bid = id;
+        double a = ikd, b = 1;
+        if (!(ikd <= 1e150)) {  // K S0 could overflow: numerator and denominator divided by K
+          a = 1;
+          b = kd;
+          id = 1.0 / (det + kd * (h1 * a1 + h2 * a2));
+          bid = kd * id;
+        }
+        P[0] = (a * s22 + b * (h2 * h2)) * id;
+        P[1] = P[2] = -(a * s12 + b * (h1 * h2)) * id;
+        P[3] = (a * s11 + b * (h1 * h1)) * id;
+        gf[0] = a1 * bid;  // P_t H' K^-1 = adj(S0) H' / (K det(S0) + H adj(S0) H')
+        gf[1] = a2 * bid;
       } else {
         for (int i = 0; i < kN * kN; ++i) P[i] = c.Db[i];
         if (t > 0) {
