@@ -58,7 +58,6 @@ struct StepState {
   double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
   double dx[kN];                      // state direction
   double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)
-  double P[kN * kN];                  // P_t = S_t^-1, S_t = D_t - E_t P_{t-1} E_t'
   double M[kN * kN];                  // P_t E_t: v_t = P_t b_t - M_t v_{t-1}
   double N[kN * kN];                  // P_t E_{t+1}': dx_t = v_t - N_t dx_{t+1}
 };
@@ -393,22 +392,17 @@ class FastSolver {
 
   // rt3 = R3 - e,  e = S_hi^-1 (-R2_hi + Q_hi R1_hi) - S_lo^-1 (-R2_lo + Q_lo R1_lo)  (general path's
   // RightHandSide), then v_t = P_t (b_t - E_t v_{t-1}) = P_t b_t - M_t v_{t-1} with b_t = -R4_t + H' K^-1 rt3,
-  // where P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1). Stores rt3 and v_t, also in v
-  // (which may be v_prev).
-  template <bool kCorrector>
+  // where P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1); the predictor's R2 = s .* q.
+  // P_t = S_t^-1 (S_t = D_t - E_t P_{t-1} E_t') is not stored. Stores rt3 and v_t, also in v (which may be v_prev).
   [[gnu::always_inline]] inline void ForwardRightHandSide(const StepConstants<kN>& c, StepState<kN>& s,
                                                           const double* P, const double* M, const double* gf,
                                                           double islo, double ishi, const double* v_prev,
-                                                          double target, double* v) {
+                                                          double* v) {
     const double u = s.u, slo = s.slo, shi = s.shi, qlo = s.qlo, qhi = s.qhi;
     double R4[kN];
     for (int i = 0; i < kN; ++i) R4[i] = s.R4[i];
     const double r1hi = u + shi - c.hi, r1lo = -u + slo + c.lo;
-    double r2lo = slo * qlo - target, r2hi = shi * qhi - target;
-    if constexpr (kCorrector) {
-      r2lo += s.dslo * s.dqlo;
-      r2hi += s.dshi * s.dqhi;
-    }
+    const double r2lo = slo * qlo, r2hi = shi * qhi;
     const double e = (-r2hi + qhi * r1hi) * ishi - (-r2lo + qlo * r1lo) * islo;
     const double rt3 = s.r3 - e;
     double vt[kN];
@@ -518,21 +512,34 @@ class FastSolver {
           s.N[i + j * kN] = n;
         }
       for (int i = 0; i < kN * kN; ++i) {
-        s.P[i] = P[i];
         s.M[i] = M[i];
         Pp[i] = P[i];
       }
       for (int i = 0; i < kN; ++i) s.gf[i] = gf[i];
-      ForwardRightHandSide<false>(c, s, P, M, gf, islo, ishi, t > 0 ? vp : nullptr, 0.0, vp);
+      ForwardRightHandSide(c, s, P, M, gf, islo, ishi, t > 0 ? vp : nullptr, vp);
     }
     return true;
   }
 
+  // The corrector's right-hand side differs from the predictor's only in R2, by -target + ds_aff .* dq_aff:
+  // rt3 changes by d_t = (target - ds_lo dq_lo) / s_lo - (target - ds_hi dq_hi) / s_hi and, the forward
+  // substitution being linear, v_t by dv_t = d_t gf_t - M_t dv_{t-1} (no products with P_t and R4_t).
   void CorrectorForward(double target) {
-    double vp[kN] = {};
+    double dvp[kN] = {};
     for (int t = 0; t <= T_; ++t) {
       StepState<kN>& s = steps_[t];
-      ForwardRightHandSide<true>(Constants(t), s, s.P, s.M, s.gf, s.islo, s.ishi, t > 0 ? vp : nullptr, target, vp);
+      const double d = (target - s.dslo * s.dqlo) * s.islo - (target - s.dshi * s.dqhi) * s.ishi;
+      double dv[kN];
+      for (int i = 0; i < kN; ++i) {
+        double mv = 0;
+        for (int k = 0; k < kN; ++k) mv += s.M[i + k * kN] * dvp[k];
+        dv[i] = d * s.gf[i] - mv;
+      }
+      for (int i = 0; i < kN; ++i) {
+        s.v[i] += dv[i];
+        dvp[i] = dv[i];
+      }
+      s.rt3 += d;
     }
   }
 
