@@ -407,14 +407,14 @@ class FastSolver {
     const double rt3 = s.r3 - e;
     double vt[kN];
     for (int i = 0; i < kN; ++i) {
-      double pb = 0;
-      for (int k = 0; k < kN; ++k) pb -= P[i + k * kN] * R4[k];
-      vt[i] = pb + rt3 * gf[i];
+      double pb = P[i] * R4[0];  // the sums start at their first term: no + 0.0 (which does not fold)
+      for (int k = 1; k < kN; ++k) pb += P[i + k * kN] * R4[k];
+      vt[i] = rt3 * gf[i] - pb;
     }
     if (v_prev)  // the recurrence: one level of products
       for (int i = 0; i < kN; ++i) {
-        double mv = 0;
-        for (int k = 0; k < kN; ++k) mv += M[i + k * kN] * v_prev[k];
+        double mv = M[i] * v_prev[0];
+        for (int k = 1; k < kN; ++k) mv += M[i + k * kN] * v_prev[k];
         vt[i] -= mv;
       }
     for (int i = 0; i < kN; ++i) s.v[i] = v[i] = vt[i];
@@ -499,14 +499,15 @@ class FastSolver {
         for (int i = 0; i < kN; ++i) gf[i] = f * g[i];
       }
       // M_t = P_t E_t and N_t = P_t E_{t+1}': the substitutions' recurrences then take one product level.
-      const double* En = t < T_ ? Constants(t + 1).E : nullptr;
+      static constexpr double kZero[kN * kN] = {};
+      const double* En = t < T_ ? Constants(t + 1).E : kZero;  // E_{T+1} = 0
       double M[kN * kN];
       for (int j = 0; j < kN; ++j)
         for (int i = 0; i < kN; ++i) {
-          double m = 0, n = 0;
-          for (int k = 0; k < kN; ++k) {
+          double m = P[i] * c.E[j * kN], n = P[i] * En[j];
+          for (int k = 1; k < kN; ++k) {
             m += P[i + k * kN] * c.E[k + j * kN];
-            if (En) n += P[i + k * kN] * En[j + k * kN];
+            n += P[i + k * kN] * En[j + k * kN];
           }
           M[i + j * kN] = m;
           s.N[i + j * kN] = n;
@@ -531,8 +532,8 @@ class FastSolver {
       const double d = (target - s.dslo * s.dqlo) * s.islo - (target - s.dshi * s.dqhi) * s.ishi;
       double dv[kN];
       for (int i = 0; i < kN; ++i) {
-        double mv = 0;
-        for (int k = 0; k < kN; ++k) mv += s.M[i + k * kN] * dvp[k];
+        double mv = s.M[i] * dvp[0];
+        for (int k = 1; k < kN; ++k) mv += s.M[i + k * kN] * dvp[k];
         dv[i] = d * s.gf[i] - mv;
       }
       for (int i = 0; i < kN; ++i) {
@@ -556,8 +557,8 @@ class FastSolver {
       for (int i = 0; i < kN; ++i) dx[i] = s.v[i];
       if (t < T_)
         for (int i = 0; i < kN; ++i) {
-          double nd = 0;
-          for (int k = 0; k < kN; ++k) nd += s.N[i + k * kN] * dxn[k];
+          double nd = s.N[i] * dxn[0];
+          for (int k = 1; k < kN; ++k) nd += s.N[i + k * kN] * dxn[k];
           dx[i] -= nd;
         }
       double hdx = 0;
