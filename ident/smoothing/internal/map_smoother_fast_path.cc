@@ -40,6 +40,9 @@ struct StepConstants {
   double W[kN * kN];   // W_t = B'K^-1 B of the process penalty f_t (bound-free: u = K^-1 (B r - b) implicitly)
   double c0[kN];       // c0 = p - B'K^-1 b: p + B'u = c0 + W r
   double H[kN];        // H_t (1 x n)
+  // n = 2: E_t P E_t' for a symmetric P as (E P E')_ij = EPE[3k] p11 + EPE[3k+1] p12 + EPE[3k+2] p22,
+  // ij = 11, 12, 22 (k = 0, 1, 2): one level of products on the factorisation's recurrence.
+  double EPE[9];
   double lo, hi, m;    // measurement penalty: box [lo, hi], M = m
 };
 
@@ -54,9 +57,29 @@ struct StepState {
   double R4[kN];                      // gradient residual
   double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
   double dx[kN];                      // state direction
-  double gf[kN];                      // g / (K + H g), g = P0 H' (the measurement's rank-one term)
-  double P[kN * kN];                  // P_t = S_t^-1, S_t = D_t - E_t P_{t-1} E_t'
+  double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)
+  double M[kN * kN];                  // P_t E_t: v_t = P_t b_t - M_t v_{t-1}
+  double N[kN * kN];                  // P_t E_{t+1}': dx_t = v_t - N_t dx_{t+1}
 };
+
+// 1/s_lo, 1/s_hi, 1/q_lo, 1/q_hi by one division, 1/(s_lo s_hi q_lo q_hi), when that product is a normal
+// number (four divisions otherwise): the divider, not the arithmetic, bounds the factorisation pass.
+template <int kN>
+[[gnu::always_inline]] inline void Reciprocals(StepState<kN>& s) {
+  const double ss = s.slo * s.shi, qq = s.qlo * s.qhi, all = ss * qq;
+  if (all >= std::numeric_limits<double>::min() && all <= std::numeric_limits<double>::max()) {
+    const double inv = 1.0 / all, iss = qq * inv, iqq = ss * inv;
+    s.islo = s.shi * iss;
+    s.ishi = s.slo * iss;
+    s.iqlo = s.qhi * iqq;
+    s.iqhi = s.qlo * iqq;
+  } else {
+    s.islo = 1.0 / s.slo;
+    s.ishi = 1.0 / s.shi;
+    s.iqlo = 1.0 / s.qlo;
+    s.iqhi = 1.0 / s.qhi;
+  }
+}
 
 // In-place inverse of a symmetric positive definite kN x kN matrix (column-major); false if a pivot is not
 // positive. n = 1, 2 in closed form (one reciprocal), Gauss-Jordan without pivoting beyond.
@@ -279,6 +302,15 @@ class FastSolver {
     Eigen::Map<MatN>(c->W) = W;
     Eigen::Map<VecN>(c->c0) = f.c0;
     Eigen::Map<VecN>(c->H) = p_.Ht(t).row(0).transpose();
+    if constexpr (kN == 2) {
+      const int ij[3][2] = {{0, 0}, {0, 1}, {1, 1}};
+      for (int k = 0; k < 3; ++k) {
+        const int i = ij[k][0], j = ij[k][1];
+        c->EPE[3 * k] = E(i, 0) * E(j, 0);
+        c->EPE[3 * k + 1] = E(i, 0) * E(j, 1) + E(i, 1) * E(j, 0);
+        c->EPE[3 * k + 2] = E(i, 1) * E(j, 1);
+      }
+    }
     const PlqForm& g = p_.gt(t).plq();
     c->lo = g.lo(0) / sigma_;  // in the unit σ
     c->hi = g.hi(0) / sigma_;
@@ -287,84 +319,106 @@ class FastSolver {
 
   const StepConstants<kN>& Constants(int t) const { return constants_[ConstantIndex(t)]; }
 
+  // Every pass keeps the values it carries from one step to the next (x_{t-1}, P_{t-1}, v_{t-1}, dx_{t+1}) and the
+  // values it computes for the current step in locals, and reads from the step records only what an earlier
+  // pass wrote: a vector load of a field written by scalar stores a few instructions earlier cannot be
+  // forwarded from the store buffer and stalls the recurrence.
+
   // Applies the pending step x, u, s, q += alpha d (alpha = 0: none), then R3 = r - m u - (q_hi - q_lo) and
   // R4 = sum J'(p + B'u) (process: c0 + W r on x_t - F x_{t-1}; measurement: -H'u), in one forward pass.
   Residuals StepAndResiduals(double alpha) {
     Residuals out;
+    double xp[kN] = {}, R4p[kN] = {};  // x_{t-1}, and R4_{t-1} until F_{t-1}' v_t completes it
     for (int t = 0; t <= T_; ++t) {
       const StepConstants<kN>& c = Constants(t);
       StepState<kN>& s = steps_[t];
       double* xt = x_ + t * kN;
+      double x[kN];
+      for (int i = 0; i < kN; ++i) x[i] = xt[i];
+      double u = s.u, slo = s.slo, shi = s.shi, qlo = s.qlo, qhi = s.qhi;
       if (alpha > 0) {
-        for (int i = 0; i < kN; ++i) xt[i] += alpha * s.dx[i];
-        s.u += alpha * s.du;
-        s.slo += alpha * s.dslo;
-        s.shi += alpha * s.dshi;
-        s.qlo += alpha * s.dqlo;
-        s.qhi += alpha * s.dqhi;
+        for (int i = 0; i < kN; ++i) xt[i] = x[i] += alpha * s.dx[i];
+        s.u = u += alpha * s.du;
+        s.slo = slo += alpha * s.dslo;
+        s.shi = shi += alpha * s.dshi;
+        s.qlo = qlo += alpha * s.dqlo;
+        s.qhi = qhi += alpha * s.dqhi;
       }
       double r[kN], v[kN];
-      for (int i = 0; i < kN; ++i) r[i] = xt[i];
+      for (int i = 0; i < kN; ++i) r[i] = x[i];
       if (t > 0)
         for (int j = 0; j < kN; ++j)
-          for (int i = 0; i < kN; ++i) r[i] -= c.F[i + j * kN] * xt[j - kN];
+          for (int i = 0; i < kN; ++i) r[i] -= c.F[i + j * kN] * xp[j];
       for (int i = 0; i < kN; ++i) v[i] = c.c0[i];
       for (int j = 0; j < kN; ++j)
         for (int i = 0; i < kN; ++i) v[i] += c.W[i + j * kN] * r[j];
-      double hx = 0;
+      double hx = 0, R4[kN];
       for (int i = 0; i < kN; ++i) {
         out.objective_scale += std::abs(v[i] * r[i]);
-        out.xmax = std::max(out.xmax, std::abs(xt[i]));
+        out.xmax = std::max(out.xmax, std::abs(x[i]));
         out.v_scale = std::max(out.v_scale, std::abs(v[i]));
-        s.R4[i] = v[i] - c.H[i] * s.u;
-        hx += c.H[i] * xt[i];
+        R4[i] = v[i] - c.H[i] * u;
+        hx += c.H[i] * x[i];
       }
       if (t > 0) {  // R4_{t-1} -= F_{t-1}' v: now complete
         StepState<kN>& prev = steps_[t - 1];
         for (int j = 0; j < kN; ++j) {
           double fv = 0;
           for (int i = 0; i < kN; ++i) fv += c.F[i + j * kN] * v[i];
-          prev.R4[j] -= fv;
+          prev.R4[j] = R4p[j] - fv;
           out.r4max = std::max(out.r4max, std::abs(prev.R4[j]));
         }
       }
-      const double au = std::abs(s.u);
+      for (int i = 0; i < kN; ++i) {
+        R4p[i] = R4[i];
+        xp[i] = x[i];
+      }
+      const double au = std::abs(u);
       out.v_scale = std::max(out.v_scale, au);
       out.umax = std::max(out.umax, au);
-      s.r3 = z_[t] - hx - c.m * s.u - (s.qhi - s.qlo);
-      out.r3max = std::max(out.r3max, std::abs(s.r3));
-      out.objective_scale += std::abs(s.u * (z_[t] - hx));
-      out.complementarity += s.slo * s.qlo + s.shi * s.qhi;
-      out.qmax = std::max({out.qmax, s.qlo, s.qhi});
+      const double r3 = z_[t] - hx - c.m * u - (qhi - qlo);
+      s.r3 = r3;
+      out.r3max = std::max(out.r3max, std::abs(r3));
+      out.objective_scale += std::abs(u * (z_[t] - hx));
+      out.complementarity += slo * qlo + shi * qhi;
+      out.qmax = std::max({out.qmax, qlo, qhi});
     }
-    for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(steps_[T_].R4[i]));
+    for (int i = 0; i < kN; ++i) {
+      steps_[T_].R4[i] = R4p[i];
+      out.r4max = std::max(out.r4max, std::abs(R4p[i]));
+    }
     return out;
   }
 
   // rt3 = R3 - e,  e = S_hi^-1 (-R2_hi + Q_hi R1_hi) - S_lo^-1 (-R2_lo + Q_lo R1_lo)  (general path's
-  // RightHandSide), then v_t = P_t (b_t - E_t v_{t-1}) with b_t = -R4_t + H' K^-1 rt3, where
-  // P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1).
-  template <bool kCorrector>
+  // RightHandSide), then v_t = P_t (b_t - E_t v_{t-1}) = P_t b_t - M_t v_{t-1} with b_t = -R4_t + H' K^-1 rt3,
+  // where P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1); the predictor's R2 = s .* q.
+  // P_t = S_t^-1 (S_t = D_t - E_t P_{t-1} E_t') is not stored. Stores rt3 and v_t, also in v (which may be v_prev).
   [[gnu::always_inline]] inline void ForwardRightHandSide(const StepConstants<kN>& c, StepState<kN>& s,
-                                                          const double* v_prev, double target) {
-    const double r1hi = s.u + s.shi - c.hi, r1lo = -s.u + s.slo + c.lo;
-    double r2lo = s.slo * s.qlo - target, r2hi = s.shi * s.qhi - target;
-    if constexpr (kCorrector) {
-      r2lo += s.dslo * s.dqlo;
-      r2hi += s.dshi * s.dqhi;
-    }
-    const double e = (-r2hi + s.qhi * r1hi) * s.ishi - (-r2lo + s.qlo * r1lo) * s.islo;
-    s.rt3 = s.r3 - e;
-    double b[kN];
-    for (int i = 0; i < kN; ++i) b[i] = -s.R4[i];
-    if (v_prev)
-      for (int j = 0; j < kN; ++j)
-        for (int i = 0; i < kN; ++i) b[i] -= c.E[i + j * kN] * v_prev[j];
+                                                          const double* P, const double* M, const double* gf,
+                                                          double islo, double ishi, const double* v_prev,
+                                                          double* v) {
+    const double u = s.u, slo = s.slo, shi = s.shi, qlo = s.qlo, qhi = s.qhi;
+    double R4[kN];
+    for (int i = 0; i < kN; ++i) R4[i] = s.R4[i];
+    const double r1hi = u + shi - c.hi, r1lo = -u + slo + c.lo;
+    const double r2lo = slo * qlo, r2hi = shi * qhi;
+    const double e = (-r2hi + qhi * r1hi) * ishi - (-r2lo + qlo * r1lo) * islo;
+    const double rt3 = s.r3 - e;
+    double vt[kN];
     for (int i = 0; i < kN; ++i) {
-      double pb = 0;
-      for (int k = 0; k < kN; ++k) pb += s.P[i + k * kN] * b[k];
-      s.v[i] = pb + s.rt3 * s.gf[i];
+      double pb = P[i] * R4[0];  // the sums start at their first term: no + 0.0 (which does not fold)
+      for (int k = 1; k < kN; ++k) pb += P[i + k * kN] * R4[k];
+      vt[i] = rt3 * gf[i] - pb;
     }
+    if (v_prev)  // the recurrence: one level of products
+      for (int i = 0; i < kN; ++i) {
+        double mv = M[i] * v_prev[0];
+        for (int k = 1; k < kN; ++k) mv += M[i + k * kN] * v_prev[k];
+        vt[i] -= mv;
+      }
+    for (int i = 0; i < kN; ++i) s.v[i] = v[i] = vt[i];
+    s.rt3 = rt3;
   }
 
   // Block LDL' of the Newton matrix (D_t = Db_t + K^-1 H'H, E_t) fused with the predictor's forward
@@ -372,107 +426,165 @@ class FastSolver {
   // stored and the large K^-1 of coordinates at a kink never multiplies a vector. False if a Schur complement S_t is
   // not numerically positive definite.
   bool FactorAndForward() {
+    double Pp[kN * kN] = {}, vp[kN] = {};  // P_{t-1}, v_{t-1}
     for (int t = 0; t <= T_; ++t) {
       const StepConstants<kN>& c = Constants(t);
       StepState<kN>& s = steps_[t];
-      s.islo = 1.0 / s.slo;
-      s.ishi = 1.0 / s.shi;
-      s.iqlo = 1.0 / s.qlo;
-      s.iqhi = 1.0 / s.qhi;
-      const double ikd = c.m + s.qlo * s.islo + s.qhi * s.ishi;  // K = M + D, D = q/s (barrier curvature)
-      s.kd = 1.0 / ikd;
-      // S_t = Db_t - E_t P_{t-1} E_t' + K^-1 H'H. The measurement term is added to the inverse by
-      // Sherman-Morrison, P_t = P0 - g g' / (K + H g) with P0 = (Db_t - E_t P_{t-1} E_t')^-1, g = P0 H':
-      // K^-1 grows to ~1/mu on the coordinates at a kink, where inverting S_t directly cancels terms of
-      // order K^-2 (tested: the iteration then stalls near 1e-10). P0 is the inverse of a matrix of the
-      // process terms' size.
-      double* P = s.P;
-      for (int i = 0; i < kN * kN; ++i) P[i] = c.Db[i];
-      if (t > 0) {
-        const double* Pp = steps_[t - 1].P;
-        double PE[kN * kN];  // P_{t-1} E_t'
+      Reciprocals(s);
+      const double islo = s.islo, ishi = s.ishi;
+      const double ikd = c.m + s.qlo * islo + s.qhi * ishi;  // K = M + D, D = q/s (barrier curvature)
+      const double kd = 1.0 / ikd;
+      s.kd = kd;
+      // S_t = Db_t - E_t P_{t-1} E_t' + K^-1 H'H. K^-1 grows to ~1/mu on the coordinates at a kink, where
+      // inverting S_t directly cancels terms of order K^-2 (tested: the iteration then stalls near 1e-10).
+      // The measurement's rank-one term enters the inverse with the factor K instead: with
+      // S0 = Db_t - E_t P_{t-1} E_t' (of the process terms' size),
+      //   n = 2: P_t = (K adj(S0) + adj(H'H)) / (K det(S0) + H adj(S0) H')   (adj is linear for 2 x 2,
+      //          det(S0 + k h h') = det(S0) + k h'adj(S0)h), one division, no differences of large terms;
+      //   else:  Sherman-Morrison, P_t = P0 - g g' / (K + H g), P0 = S0^-1, g = P0 H'.
+      double P[kN * kN], gf[kN];
+      if constexpr (kN == 2) {
+        double s11 = c.Db[0], s12 = c.Db[1], s22 = c.Db[3];
+        if (t > 0) {
+          const double p11 = Pp[0], p12 = Pp[1], p22 = Pp[3];
+          s11 -= c.EPE[0] * p11 + c.EPE[1] * p12 + c.EPE[2] * p22;
+          s12 -= c.EPE[3] * p11 + c.EPE[4] * p12 + c.EPE[5] * p22;
+          s22 -= c.EPE[6] * p11 + c.EPE[7] * p12 + c.EPE[8] * p22;
+        }
+        const double det = s11 * s22 - s12 * s12;
+        if (!(s11 > 0) || !(det > 0) || !std::isfinite(det)) return false;
+        const double h1 = c.H[0], h2 = c.H[1];
+        const double a1 = s22 * h1 - s12 * h2, a2 = s11 * h2 - s12 * h1;  // adj(S0) H'
+        double id = 1.0 / (ikd * det + (h1 * a1 + h2 * a2)), bid = id;
+        double a = ikd, b = 1;
+        if (!(ikd <= 1e150)) {  // K S0 could overflow: numerator and denominator divided by K
+          a = 1;
+          b = kd;
+          id = 1.0 / (det + kd * (h1 * a1 + h2 * a2));
+          bid = kd * id;
+        }
+        P[0] = (a * s22 + b * (h2 * h2)) * id;
+        P[1] = P[2] = -(a * s12 + b * (h1 * h2)) * id;
+        P[3] = (a * s11 + b * (h1 * h1)) * id;
+        gf[0] = a1 * bid;  // P_t H' K^-1 = adj(S0) H' / (K det(S0) + H adj(S0) H')
+        gf[1] = a2 * bid;
+      } else {
+        for (int i = 0; i < kN * kN; ++i) P[i] = c.Db[i];
+        if (t > 0) {
+          double PE[kN * kN];  // P_{t-1} E_t'
+          for (int j = 0; j < kN; ++j)
+            for (int i = 0; i < kN; ++i) {
+              double pe = 0;
+              for (int k = 0; k < kN; ++k) pe += Pp[i + k * kN] * c.E[j + k * kN];
+              PE[i + j * kN] = pe;
+            }
+          for (int j = 0; j < kN; ++j)
+            for (int i = 0; i < kN; ++i) {
+              double epe = 0;
+              for (int k = 0; k < kN; ++k) epe += c.E[i + k * kN] * PE[k + j * kN];
+              P[i + j * kN] -= epe;
+            }
+        }
+        if (!InvertSpd<kN>(P)) return false;
+        double g[kN], hg = 0;
+        for (int i = 0; i < kN; ++i) {
+          double gi = 0;
+          for (int k = 0; k < kN; ++k) gi += P[i + k * kN] * c.H[k];
+          g[i] = gi;
+          hg += c.H[i] * gi;
+        }
+        const double f = 1.0 / (ikd + hg);
         for (int j = 0; j < kN; ++j)
-          for (int i = 0; i < kN; ++i) {
-            double pe = 0;
-            for (int k = 0; k < kN; ++k) pe += Pp[i + k * kN] * c.E[j + k * kN];
-            PE[i + j * kN] = pe;
-          }
-        for (int j = 0; j < kN; ++j)
-          for (int i = 0; i < kN; ++i) {
-            double epe = 0;
-            for (int k = 0; k < kN; ++k) epe += c.E[i + k * kN] * PE[k + j * kN];
-            P[i + j * kN] -= epe;
-          }
+          for (int i = 0; i < kN; ++i) P[i + j * kN] -= f * g[i] * g[j];
+        for (int i = 0; i < kN; ++i) gf[i] = f * g[i];
       }
-      if (!InvertSpd<kN>(P)) return false;
-      double g[kN], hg = 0;
-      for (int i = 0; i < kN; ++i) {
-        double gi = 0;
-        for (int k = 0; k < kN; ++k) gi += P[i + k * kN] * c.H[k];
-        g[i] = gi;
-        hg += c.H[i] * gi;
-      }
-      const double f = 1.0 / (ikd + hg);
+      // M_t = P_t E_t and N_t = P_t E_{t+1}': the substitutions' recurrences then take one product level.
+      static constexpr double kZero[kN * kN] = {};
+      const double* En = t < T_ ? Constants(t + 1).E : kZero;  // E_{T+1} = 0
+      double M[kN * kN];
       for (int j = 0; j < kN; ++j)
-        for (int i = 0; i < kN; ++i) P[i + j * kN] -= f * g[i] * g[j];
-      for (int i = 0; i < kN; ++i) s.gf[i] = f * g[i];
-      ForwardRightHandSide<false>(c, s, t > 0 ? steps_[t - 1].v : nullptr, 0.0);
+        for (int i = 0; i < kN; ++i) {
+          double m = P[i] * c.E[j * kN], n = P[i] * En[j];
+          for (int k = 1; k < kN; ++k) {
+            m += P[i + k * kN] * c.E[k + j * kN];
+            n += P[i + k * kN] * En[j + k * kN];
+          }
+          M[i + j * kN] = m;
+          s.N[i + j * kN] = n;
+        }
+      for (int i = 0; i < kN * kN; ++i) {
+        s.M[i] = M[i];
+        Pp[i] = P[i];
+      }
+      for (int i = 0; i < kN; ++i) s.gf[i] = gf[i];
+      ForwardRightHandSide(c, s, P, M, gf, islo, ishi, t > 0 ? vp : nullptr, vp);
     }
     return true;
   }
 
+  // The corrector's right-hand side differs from the predictor's only in R2, by -target + ds_aff .* dq_aff:
+  // rt3 changes by d_t = (target - ds_lo dq_lo) / s_lo - (target - ds_hi dq_hi) / s_hi and, the forward
+  // substitution being linear, v_t by dv_t = d_t gf_t - M_t dv_{t-1} (no products with P_t and R4_t).
   void CorrectorForward(double target) {
-    for (int t = 0; t <= T_; ++t)
-      ForwardRightHandSide<true>(Constants(t), steps_[t], t > 0 ? steps_[t - 1].v : nullptr, target);
+    double dvp[kN] = {};
+    for (int t = 0; t <= T_; ++t) {
+      StepState<kN>& s = steps_[t];
+      const double d = (target - s.dslo * s.dqlo) * s.islo - (target - s.dshi * s.dqhi) * s.ishi;
+      double dv[kN];
+      for (int i = 0; i < kN; ++i) {
+        double mv = s.M[i] * dvp[0];
+        for (int k = 1; k < kN; ++k) mv += s.M[i + k * kN] * dvp[k];
+        dv[i] = d * s.gf[i] - mv;
+      }
+      for (int i = 0; i < kN; ++i) {
+        s.v[i] += dv[i];
+        dvp[i] = dv[i];
+      }
+      s.rt3 += d;
+    }
   }
 
-  // dx_t = v_t - P_t E_{t+1}' dx_{t+1} (backward substitution), then du = K^-1 (rt3 - H dx),
+  // dx_t = v_t - P_t E_{t+1}' dx_{t+1} = v_t - N_t dx_{t+1} (backward substitution), then du = K^-1 (rt3 - H dx),
   // ds, dq (general path's Direction), the largest step keeping s, q > 0 and the complementarity sums.
   Backward BackwardAndRecover(double target, bool corrector) {
     Backward out;
     double max_ratio = 0;  // max -d/v over components: the step limit is 1 / max_ratio
+    double dxn[kN] = {};   // dx_{t+1}
     for (int t = T_; t >= 0; --t) {
       const StepConstants<kN>& c = Constants(t);
       StepState<kN>& s = steps_[t];
       double dx[kN];
       for (int i = 0; i < kN; ++i) dx[i] = s.v[i];
-      if (t < T_) {
-        const double* En = Constants(t + 1).E;
-        const double* dxn = steps_[t + 1].dx;
-        double e[kN];
+      if (t < T_)
         for (int i = 0; i < kN; ++i) {
-          double ed = 0;
-          for (int k = 0; k < kN; ++k) ed += En[k + i * kN] * dxn[k];
-          e[i] = ed;
+          double nd = s.N[i] * dxn[0];
+          for (int k = 1; k < kN; ++k) nd += s.N[i + k * kN] * dxn[k];
+          dx[i] -= nd;
         }
-        for (int i = 0; i < kN; ++i) {
-          double pe = 0;
-          for (int k = 0; k < kN; ++k) pe += s.P[i + k * kN] * e[k];
-          dx[i] -= pe;
-        }
-      }
       double hdx = 0;
       for (int i = 0; i < kN; ++i) {
-        s.dx[i] = dx[i];
+        s.dx[i] = dxn[i] = dx[i];
         hdx += c.H[i] * dx[i];
       }
+      const double u = s.u, slo = s.slo, shi = s.shi, qlo = s.qlo, qhi = s.qhi;
+      const double islo = s.islo, ishi = s.ishi;
       const double du = s.kd * (s.rt3 - hdx);
-      const double r1hi = s.u + s.shi - c.hi, r1lo = -s.u + s.slo + c.lo;
-      double r2lo = s.slo * s.qlo - target, r2hi = s.shi * s.qhi - target;
+      const double r1hi = u + shi - c.hi, r1lo = -u + slo + c.lo;
+      double r2lo = slo * qlo - target, r2hi = shi * qhi - target;
       if (corrector) {
         r2lo += s.dslo * s.dqlo;
         r2hi += s.dshi * s.dqhi;
       }
       const double dshi = -r1hi - du, dslo = -r1lo + du;
-      const double dqhi = (-r2hi - s.qhi * dshi) * s.ishi, dqlo = (-r2lo - s.qlo * dslo) * s.islo;
+      const double dqhi = (-r2hi - qhi * dshi) * ishi, dqlo = (-r2lo - qlo * dslo) * islo;
       s.du = du;
       s.dshi = dshi;
       s.dslo = dslo;
       s.dqhi = dqhi;
       s.dqlo = dqlo;
-      max_ratio = std::max({max_ratio, -dslo * s.islo, -dshi * s.ishi, -dqlo * s.iqlo, -dqhi * s.iqhi});
+      max_ratio = std::max({max_ratio, -dslo * islo, -dshi * ishi, -dqlo * s.iqlo, -dqhi * s.iqhi});
       if (!corrector) {
-        out.sum1 += s.slo * dqlo + s.qlo * dslo + s.shi * dqhi + s.qhi * dshi;
+        out.sum1 += slo * dqlo + qlo * dslo + shi * dqhi + qhi * dshi;
         out.sum2 += dslo * dqlo + dshi * dqhi;
       }
     }
