@@ -40,6 +40,72 @@ int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
   return o.lock_in_window > 0 ? o.lock_in_window : std::max(100, 20 * std::max(rho, 1));
 }
 
+// The window's rows without a regressor coordinate beyond kLeverage robust scales of its column (a gross
+// output outlier entering later ARX regressors is such a row), as long as at least 2ρ+1 rows remain.
+Eigen::MatrixXd OrdinaryRows(const Eigen::Ref<const Eigen::MatrixXd>& window,
+                             Eigen::Array<bool, Eigen::Dynamic, 1>& keep) {
+  const Eigen::Index rho = window.cols() - 1, n = window.rows();
+  keep = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(n, true);
+  for (Eigen::Index j = 1; j <= rho; ++j) {
+    Eigen::VectorXd column = window.col(j);
+    std::nth_element(column.data(), column.data() + n / 2, column.data() + n);
+    const double median = column(n / 2), scale = RobustScale(window.col(j));
+    keep = keep && ((window.col(j).array() - median).abs() <= SafeStudentRegression::kLeverage * scale);
+  }
+  if (keep.count() < 2 * rho + 1) keep.setConstant(true);
+  Eigen::MatrixXd kept(keep.count(), rho + 1);
+  for (Eigen::Index i = 0, k = 0; i < n; ++i)
+    if (keep(i)) kept.row(k++) = window.row(i);
+  return kept;
+}
+
+// Throws InvalidArgument unless the fit rests on its inliers in every direction: the information of the
+// weighted rows, M_w, against that of all kept rows, M_0 = Z'Z/n, generalised eigenvalues ≥ kInlierShare
+// (a direction that only a few rows carry, such as a binary input that has switched twice, can be left to
+// rows the fit calls outliers, and a start there would be arbitrary); nor may a direction rest on one row:
+// every weighted leverage w_i z_i'(Z'WZ)⁻¹z_i ≤ kMaxLeverage (a binary input that has switched once in the
+// window leaves the row of the switch to decide its coefficients alone — and to fit a gross outlier there
+// exactly). Only a rank-deficient window fails when not `strict`.
+void RequireInlierSupport(const Eigen::Ref<const Eigen::MatrixXd>& Z, const Eigen::VectorXd& w,
+                          const Eigen::MatrixXd& M, bool strict) {
+  constexpr double kInlierShare = 0.1, kMaxLeverage = 0.8;
+  const Eigen::Index rho = Z.cols();
+  const Eigen::MatrixXd M0 = Z.transpose() * Z / static_cast<double>(Z.rows());
+  const Eigen::LLT<Eigen::MatrixXd> chol(M0);
+  IDENT_REQUIRE(chol.info() == Eigen::Success, "the window's regressors are rank-deficient");
+  const Eigen::MatrixXd Linv = chol.matrixL().solve(Eigen::MatrixXd::Identity(rho, rho));
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> relative(Linv * M * Linv.transpose(), Eigen::EigenvaluesOnly);
+  IDENT_REQUIRE(relative.eigenvalues()(0) >= kInlierShare || !strict, "a direction rests on the fit's outliers");
+  const Eigen::LLT<Eigen::MatrixXd> information(Z.transpose() * w.asDiagonal() * Z);
+  for (Eigen::Index i = 0; i < Z.rows(); ++i) {
+    const Eigen::VectorXd zi = Z.row(i).transpose();
+    IDENT_REQUIRE(w(i) * zi.dot(information.solve(zi)) <= kMaxLeverage || !strict, "a direction rests on a few rows");
+  }
+}
+
+// Each window row's influence on Θ_r, for the propagated variance of the replay (PropagatedVariance):
+// δΘ_r ≈ (Σψ'_j z_j z_j')⁻¹ Σ ψ_i z_i, in the scalar form ψ_i/Σψ'_j, with the Cauchy score ψ = w·r and its
+// slope ψ' = 2(1−u)/(1+u)², u = r²/γ² (Huber 1981, §7.6); rows left out (`keep` false) have none. Returns
+// the seed of the propagation: Σ x_i²·q_i/ρ, q_i = z_i'M_w⁻¹z_i.
+double WindowInfluence(const Eigen::Ref<const Eigen::MatrixXd>& Z, const Eigen::VectorXd& r, const Eigen::VectorXd& w,
+                       double gamma2, const Eigen::MatrixXd& M, const Eigen::Array<bool, Eigen::Dynamic, 1>& keep,
+                       Eigen::VectorXd& influence) {
+  const Eigen::Index rho = Z.cols();
+  const Eigen::ArrayXd u = r.array().square() / gamma2;
+  const double slope = (2 * (1 - u) / (1 + u).square()).sum();
+  const Eigen::ArrayXd score = w.array() * r.array() / std::max(slope, 0.25 * w.sum());
+  influence.setZero(keep.size());
+  for (Eigen::Index i = 0, k = 0; i < keep.size(); ++i)
+    if (keep(i)) influence(i) = score(k++);
+  const Eigen::LLT<Eigen::MatrixXd> metric(M);
+  double seed = 0;
+  for (Eigen::Index i = 0; i < Z.rows(); ++i) {
+    const Eigen::VectorXd zi = Z.row(i).transpose();
+    seed += score(i) * score(i) * zi.dot(metric.solve(zi)) / static_cast<double>(rho);
+  }
+  return seed;
+}
+
 // The prior after a high-breakdown fit of a window of samples (rows (y, z')): Cauchy maximum likelihood from
 // elemental-subset starts (ident/regression/batch_regression.h) gives Θ_r, γ and the weights w_i = 2/(1 + r_i²/γ²) of
 // its residuals r_i. The prior is the class member [spec §2] of ν0 pseudo-samples centred there (ν0 = W at
@@ -48,29 +114,15 @@ int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
 // σ0 = G^{(k+1)/(2k)}·s_e with s_e = RobustScale of the residuals (spec §8's safe side), or s_y without
 // `refine_scale`. So the first replayed samples are weighed against Θ_r, not against a vague prior that the
 // first few of them would decide. A window that does not determine every coefficient from its inliers
-// has no such start: nullopt (see the checks below and the header comment).
+// has no such start: nullopt (RequireInlierSupport, and the header comment).
 // With `strict` = false (the end of the data: no later window can do better) only a rank-deficient window
 // has no start.
 std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::MatrixXd>& window,
                                                  const SafeStudentOptions& options, double nu0, double growth,
                                                  bool strict, Eigen::VectorXd& influence, double& seed) {
   const Eigen::Index rho = window.cols() - 1;
-  // Rows with a regressor coordinate beyond kLeverage robust scales of its column are left out of the fit
-  // and of M_w (a gross output outlier entering later ARX regressors is such a row), as long as at least
-  // 2ρ+1 rows remain.
-  constexpr double kLeverage = SafeStudentRegression::kLeverage, kInlierShare = 0.1, kMaxLeverage = 0.8;
-  const Eigen::Index n = window.rows();
-  Eigen::Array<bool, Eigen::Dynamic, 1> keep = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(n, true);
-  for (Eigen::Index j = 1; j <= rho; ++j) {
-    Eigen::VectorXd column = window.col(j);
-    std::nth_element(column.data(), column.data() + n / 2, column.data() + n);
-    const double median = column(n / 2), scale = RobustScale(window.col(j));
-    keep = keep && ((window.col(j).array() - median).abs() <= kLeverage * scale);
-  }
-  if (keep.count() < 2 * rho + 1) keep.setConstant(true);
-  Eigen::MatrixXd kept(keep.count(), rho + 1);
-  for (Eigen::Index i = 0, k = 0; i < n; ++i)
-    if (keep(i)) kept.row(k++) = window.row(i);
+  Eigen::Array<bool, Eigen::Dynamic, 1> keep;
+  const Eigen::MatrixXd kept = OrdinaryRows(window, keep);
   const auto Z = kept.rightCols(rho);
   try {
     CauchyMlOptions search;  // a window of tens of rows: fewer starts than a whole record needs
@@ -88,24 +140,7 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
     const Eigen::VectorXd w = 2 / (1 + r.array().square() / gamma2);
     Eigen::MatrixXd M = Z.transpose() * w.asDiagonal() * Z / w.sum();
     M = 0.5 * (M + M.transpose());
-    // The fit must rest on its inliers in every direction: the information of the weighted rows, M_w,
-    // against that of all kept rows, M_0 = Z'Z/n, generalised eigenvalues ≥ kInlierShare. A direction
-    // that only a few rows carry (a binary input that has switched twice) can be left to rows the
-    // fit calls outliers, and a start there would be arbitrary.
-    const Eigen::MatrixXd M0 = Z.transpose() * Z / static_cast<double>(Z.rows());
-    const Eigen::LLT<Eigen::MatrixXd> chol(M0);
-    IDENT_REQUIRE(chol.info() == Eigen::Success, "the window's regressors are rank-deficient");
-    const Eigen::MatrixXd Linv = chol.matrixL().solve(Eigen::MatrixXd::Identity(rho, rho));
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> relative(Linv * M * Linv.transpose(), Eigen::EigenvaluesOnly);
-    IDENT_REQUIRE(relative.eigenvalues()(0) >= kInlierShare || !strict, "a direction rests on the fit's outliers");
-    // Nor may a direction rest on one row: every weighted leverage w_i z_i'(Z'WZ)⁻¹z_i ≤ kMaxLeverage (a
-    // binary input that has switched once in the window leaves the row of the switch to decide its
-    // coefficients alone — and to fit a gross outlier there exactly).
-    const Eigen::LLT<Eigen::MatrixXd> information(Z.transpose() * w.asDiagonal() * Z);
-    for (Eigen::Index i = 0; i < Z.rows(); ++i) {
-      const Eigen::VectorXd zi = Z.row(i).transpose();
-      IDENT_REQUIRE(w(i) * zi.dot(information.solve(zi)) <= kMaxLeverage || !strict, "a direction rests on a few rows");
-    }
+    RequireInlierSupport(Z, w, M, strict);
     const double sigma0 = options.refine_scale && se > 0 ? growth * se : RobustScale(window.col(0));
     RegressionPrior prior;
     prior.nu0 = nu0;
@@ -115,22 +150,7 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
     prior.V0.topRightCorner(1, rho) = prior.V0.bottomLeftCorner(rho, 1).transpose();
     prior.V0(0, 0) = sigma0 * sigma0 + fit.theta.dot(M * fit.theta);
     prior.Validate();
-    // Each row's influence on Θ_r, for the propagated variance of the replay (PropagatedVariance):
-    // δΘ_r ≈ (Σψ'_j z_j z_j')⁻¹ Σ ψ_i z_i, in the scalar form ψ_i/Σψ'_j, with the Cauchy score
-    // ψ = w·r and its slope ψ' = 2(1−u)/(1+u)², u = r²/γ² (Huber 1981, §7.6); rows left out have none.
-    const Eigen::ArrayXd u = r.array().square() / gamma2;
-    const double slope = (2 * (1 - u) / (1 + u).square()).sum();
-    const Eigen::ArrayXd score = w.array() * r.array() / std::max(slope, 0.25 * w.sum());
-    influence.setZero(n);
-    for (Eigen::Index i = 0, k = 0; i < n; ++i)
-      if (keep(i)) influence(i) = score(k++);
-    // The seed of the propagation: Σ x_i²·q_i/ρ, q_i = z_i'M_w⁻¹z_i (PropagatedVariance).
-    const Eigen::LLT<Eigen::MatrixXd> metric(M);
-    seed = 0;
-    for (Eigen::Index i = 0; i < Z.rows(); ++i) {
-      const Eigen::VectorXd zi = Z.row(i).transpose();
-      seed += score(i) * score(i) * zi.dot(metric.solve(zi)) / static_cast<double>(rho);
-    }
+    seed = WindowInfluence(Z, r, w, gamma2, M, keep, influence);
     return prior;
   } catch (const InvalidArgument&) {
     return std::nullopt;
