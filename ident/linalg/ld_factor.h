@@ -183,6 +183,41 @@ class LdFactor {
     if (l_bound_ == l_bound_) l_bound_ = GrownBound(l_bound_, a_max);  // (NaN: stale, recomputed on demand)
   }
 
+  // SolveTransposed(g, g) that also keeps the partial sums a_i^(j) (g_i after row j, i < j), which
+  // CommitUpdate(a) would form again, for CommitSolved().
+  template <class DerivedG>
+  void SolveTransposedKeep(Eigen::MatrixBase<DerivedG>& g_in) noexcept {
+    const Eigen::Index n = d_.size();
+    double* __restrict g = g_in.derived().data();
+    double* __restrict kept = L_saved_.data();
+#pragma GCC unroll 8
+    for (Eigen::Index j = n - 1; j > 0; --j) {
+      const double gj = g[j];
+      if (gj == 0.0) continue;
+      const double* __restrict row = L_.data() + j * n;
+      double* __restrict row_kept = kept + j * n;
+      for (Eigen::Index i = 0; i < j; ++i) {
+        g[i] -= gj * row[i];
+        row_kept[i] = g[i];
+      }
+    }
+  }
+  // CommitUpdate(a) from the partial sums kept by SolveTransposedKeep(a → g) before the last plan: the same
+  // L, ~n² flops instead of ~2n². `g` = the solution it left.
+  template <class DerivedG>
+  void CommitSolved(const Eigen::MatrixBase<DerivedG>& g, double a_max) noexcept {
+    const Eigen::Index n = d_.size();
+    for (Eigen::Index j = n - 1; j >= std::max<Eigen::Index>(1, sweep_end_); --j) {
+      if (g(j) == 0.0) continue;  // CommitUpdate's a_j at row j is g_j
+      const double b = b_(j);
+      double* __restrict row = L_.data() + j * n;
+      const double* __restrict row_kept = L_saved_.data() + j * n;
+      for (Eigen::Index i = 0; i < j; ++i) row[i] += b * row_kept[i];
+    }
+    d_.swap(d_next_);
+    if (l_bound_ == l_bound_) l_bound_ = GrownBound(l_bound_, a_max);
+  }
+
   // PlanUpdate(s, c, g = L'⁻¹a) and CommitUpdate(a) in one sweep, for a c known before g: the back
   // substitution, the prefix-sum plan and the rank-one update of L share the row loop (row j's plan needs
   // only g_j, final once rows > j are done). ~2n² flops where the two phases take ~3n² (the back
@@ -413,7 +448,7 @@ class LdFactor {
   }
 
   Matrix L_;
-  Matrix L_saved_;  // PlanFused: the rows of L before the update (strict lower triangle)
+  Matrix L_saved_;  // strict lower triangle: PlanFused's old rows of L, SolveTransposedKeep's partial sums
   Vector d_, d_next_;
   Vector b_;                         // PlanUpdate -> CommitUpdate workspace
   Vector a_work_;                    // PlanFused's fallback: a copy of a

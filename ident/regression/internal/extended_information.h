@@ -99,6 +99,7 @@ class ExtendedInformation {
     // g and h are both written from (y, z) (not g copied from h: a wide load of h just after its
     // narrow stores cannot be store-forwarded and stalls the update's critical path).
     LoadSample(y, z);
+    kept_ = WithXi;
     if constexpr (!WithXi) {
       V_.SolveTransposed(g_, g_);
       constexpr double nan = std::numeric_limits<double>::quiet_NaN();
@@ -109,7 +110,7 @@ class ExtendedInformation {
     const auto& d = V_.d();
     const Eigen::Index n = g_.size();
     for (Eigen::Index i = 0; i < n; ++i) inv_d_(i) = 1 / d(i);
-    V_.SolveTransposed(g_, g_);
+    V_.SolveTransposedKeep(g_);  // partial sums kept for CommitApply()
     double zeta = 0;
     for (Eigen::Index i = n - 1; i >= 1; --i) {
       zeta += g_(i) * g_(i) * inv_d_(i);
@@ -142,9 +143,14 @@ class ExtendedInformation {
       return V_.PlanUpdate(1 - beta, beta, g_);
   }
   // `h_bound` ≥ max_i |h_i| (e.g. the 2-norm of h), for the factor's bound on max|L|.
+  // After Prepare<true>() the commit reuses the back substitution's partial sums (LdFactor::CommitSolved).
   void CommitApply(double nu_new, double h_bound) noexcept {
-    g_ = h_;
-    V_.CommitUpdate(g_, h_bound);
+    if (kept_) {
+      V_.CommitSolved(g_, h_bound);
+    } else {
+      g_ = h_;
+      V_.CommitUpdate(g_, h_bound);
+    }
     nu_ = nu_new;
     theta_valid_ = false;
   }
@@ -256,6 +262,7 @@ class ExtendedInformation {
   mutable ParamVector theta_;
   mutable bool theta_valid_ = false;
   Vector inv_d_, q_sum_;  // Prepare<true>: 1/d_i and Σ_{j≥i} g_j²/d_j, for PlanApply<true>
+  bool kept_ = false;     // the last Prepare() kept the partial sums of its back substitution
 };
 
 }  // namespace ident
