@@ -92,17 +92,18 @@ class LdFactor {
     IDENT_REQUIRE(V.allFinite(), "matrix V has a non-finite entry");
     const double scale = V.cwiseAbs().maxCoeff();
     IDENT_REQUIRE(((V - V.transpose()).cwiseAbs().array() <= 1e-12 * scale).all(), "matrix V is not symmetric");
-    L_.setIdentity(n, n);
+    Matrix& L = L_;
+    L.setIdentity(n, n);
     d_.resize(n);
     for (Eigen::Index j = n - 1; j >= 0; --j) {
       double dj = V(j, j);
-      for (Eigen::Index k = j + 1; k < n; ++k) dj -= d_(k) * L_(k, j) * L_(k, j);
+      for (Eigen::Index k = j + 1; k < n; ++k) dj -= d_(k) * L(k, j) * L(k, j);
       IDENT_REQUIRE(dj > 0 && std::isfinite(dj), "matrix V is not positive definite (pivot {} is {})", j, dj);
       d_(j) = dj;
       for (Eigen::Index i = 0; i < j; ++i) {
         double s = V(i, j);
-        for (Eigen::Index k = j + 1; k < n; ++k) s -= d_(k) * L_(k, i) * L_(k, j);
-        L_(j, i) = s / dj;
+        for (Eigen::Index k = j + 1; k < n; ++k) s -= d_(k) * L(k, i) * L(k, j);
+        L(j, i) = s / dj;
       }
     }
     Workspace(static_cast<int>(n));
@@ -182,6 +183,106 @@ class LdFactor {
     if (l_bound_ == l_bound_) l_bound_ = GrownBound(l_bound_, a_max);  // (NaN: stale, recomputed on demand)
   }
 
+  // SolveTransposed(g, g) that also keeps the partial sums a_i^(j) (g_i after row j, i < j), which
+  // CommitUpdate(a) would form again, for CommitSolved().
+  template <class DerivedG>
+  void SolveTransposedKeep(Eigen::MatrixBase<DerivedG>& g_in) noexcept {
+    const Eigen::Index n = d_.size();
+    double* __restrict g = g_in.derived().data();
+    double* __restrict kept = L_saved_.data();
+#pragma GCC unroll 8
+    for (Eigen::Index j = n - 1; j > 0; --j) {
+      const double gj = g[j];
+      if (gj == 0.0) continue;
+      const double* __restrict row = L_.data() + j * n;
+      double* __restrict row_kept = kept + j * n;
+      for (Eigen::Index i = 0; i < j; ++i) {
+        g[i] -= gj * row[i];
+        row_kept[i] = g[i];
+      }
+    }
+  }
+  // CommitUpdate(a) from the partial sums kept by SolveTransposedKeep(a → g) before the last plan: the same
+  // L, ~n² flops instead of ~2n². `g` = the solution it left.
+  template <class DerivedG>
+  void CommitSolved(const Eigen::MatrixBase<DerivedG>& g, double a_max) noexcept {
+    const Eigen::Index n = d_.size();
+    for (Eigen::Index j = n - 1; j >= std::max<Eigen::Index>(1, sweep_end_); --j) {
+      if (g(j) == 0.0) continue;  // CommitUpdate's a_j at row j is g_j
+      const double b = b_(j);
+      double* __restrict row = L_.data() + j * n;
+      const double* __restrict row_kept = L_saved_.data() + j * n;
+      for (Eigen::Index i = 0; i < j; ++i) row[i] += b * row_kept[i];
+    }
+    d_.swap(d_next_);
+    if (l_bound_ == l_bound_) l_bound_ = GrownBound(l_bound_, a_max);
+  }
+
+  // PlanUpdate(s, c, g = L'⁻¹a) and CommitUpdate(a) in one sweep, for a c known before g: the back
+  // substitution, the prefix-sum plan and the rank-one update of L share the row loop (row j's plan needs
+  // only g_j, final once rows > j are done). ~2n² flops where the two phases take ~3n² (the back
+  // substitution is done once). L is updated in place and its old rows kept, d is left as it is: the
+  // caller judges the plan, then CommitFused() or RollbackFused() (the factor bit-identical to before).
+  // Until then L is the new one; OffDiagonalBound() still bounds the old L (GrownBound() the new one).
+  // On entry `g` holds a; on return g = L'⁻¹a. `a` (not aliasing g) is read only if the prefix sum
+  // overflows (then the c-form plan and its sweep are used, as PlanUpdate does). The same numbers as
+  // the two phases, bit for bit.
+  template <class DerivedG, class DerivedA>
+  Plan PlanFused(double s, double c, Eigen::MatrixBase<DerivedG>& g_in, const Eigen::MatrixBase<DerivedA>& a) noexcept {
+    const Eigen::Index n = d_.size();
+    if (!(l_bound_ == l_bound_)) l_bound_ = MaxAbsOffDiagonal();  // of the old L
+    l_bound_before_ = l_bound_;
+    double* __restrict L = L_.data();
+    double* __restrict saved = L_saved_.data();
+    double* __restrict g = g_in.derived().data();
+    Plan p;
+    p.min_d = std::numeric_limits<double>::infinity();
+    sweep_end_ = 0;
+    double u_next = 1 / c, ru_next = c;  // as PlanPrefixSum
+#pragma GCC unroll 8
+    for (Eigen::Index j = n - 1; j >= 0; --j) {
+      const double dj = d_(j) * s;
+      const double gj = g[j];
+      double b = 0, dn = dj;
+      double* __restrict row = L + j * n;
+      double* __restrict row_saved = saved + j * n;
+      if (gj != 0.0) {
+        const double w = 1 / dj;
+        const double u = u_next + gj * gj * w;
+        const double ru = 1 / u;
+        dn = dj * u * ru_next;
+        b = gj * w * ru;
+        u_next = u, ru_next = ru;
+        for (Eigen::Index i = 0; i < j; ++i) {
+          const double l = row[i];
+          row_saved[i] = l;
+          g[i] -= gj * l;
+          row[i] = l + b * g[i];
+        }
+      } else {
+        for (Eigen::Index i = 0; i < j; ++i) row_saved[i] = row[i];
+      }
+      Record(p, j, dn, b, gj);
+    }
+    if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) [[unlikely]]
+      p = FusedChained(s, c, g_in, a);
+    plan_ = p;
+    return p;
+  }
+
+  // Takes the d of the last PlanFused() (its L is in place). `a_max` as for CommitUpdate.
+  void CommitFused(double a_max) noexcept {
+    d_.swap(d_next_);
+    if (l_bound_ == l_bound_) l_bound_ = GrownBound(l_bound_, a_max);
+  }
+  // Back to the factor before the last PlanFused(), bit for bit (`committed`: CommitFused() was called).
+  void RollbackFused(bool committed) noexcept {
+    const Eigen::Index n = d_.size();
+    for (Eigen::Index j = 1; j < n; ++j) L_.row(j).head(j) = L_saved_.row(j).head(j);
+    if (committed) d_.swap(d_next_);
+    l_bound_ = l_bound_before_;
+  }
+
   // The bound on max|L| after committing the last plan, if it is M now (see CommitUpdate).
   double GrownBound(double M, double a_max) const noexcept {
     return (M + plan_.max_b * (a_max + plan_.g_abs_sum * M)) * kRoundingSlack;
@@ -245,6 +346,7 @@ class LdFactor {
   // Covers the rounding of the ~2n operations behind each L entry (relative 2^-52 each) many times over.
   static constexpr double kRoundingSlack = 1 + 0x1p-20;
 
+
   // Stores the new d_j and b_j of a plan sweep and adds them to the plan's by-products.
   void Record(Plan& p, Eigen::Index j, double dn, double b, double gj) noexcept {
     d_next_(j) = dn;
@@ -259,6 +361,8 @@ class LdFactor {
   void Workspace(int n) {
     d_next_.resize(n);
     b_.resize(n);
+    a_work_.resize(n);
+    L_saved_.resize(n, n);
   }
 
   template <class Derived>
@@ -309,6 +413,28 @@ class LdFactor {
     return p;
   }
 
+  // PlanFused's fallback: the c-form plan from the final g, and CommitUpdate's sweep on the old L (restored
+  // from the kept rows) with a copy of a (rare: out of line).
+  template <class DerivedG, class DerivedA>
+  [[gnu::noinline, gnu::cold]] Plan FusedChained(double s, double c, const Eigen::MatrixBase<DerivedG>& g,
+                                                 const Eigen::MatrixBase<DerivedA>& a) noexcept {
+    const Plan p = PlanChained(s, c, g);
+    const Eigen::Index n = d_.size();
+    for (Eigen::Index j = 1; j < n; ++j) L_.row(j).head(j) = L_saved_.row(j).head(j);
+    a_work_ = a;
+    for (Eigen::Index j = n - 1; j >= std::max<Eigen::Index>(1, sweep_end_); --j) {
+      const double aj = a_work_(j);
+      if (aj == 0.0) continue;
+      const double b = b_(j);
+      double* row = L_.data() + j * n;
+      for (Eigen::Index i = 0; i < j; ++i) {
+        a_work_(i) -= aj * row[i];
+        row[i] += b * a_work_(i);
+      }
+    }
+    return p;
+  }
+
   double MaxAbsOffDiagonal() const {
     const Eigen::Index n = d_.size();
     double m = 0;
@@ -322,11 +448,14 @@ class LdFactor {
   }
 
   Matrix L_;
-  Vector d_;
-  Vector d_next_, b_;                // PlanUpdate -> CommitUpdate workspace
+  Matrix L_saved_;  // strict lower triangle: PlanFused's old rows of L, SolveTransposedKeep's partial sums
+  Vector d_, d_next_;
+  Vector b_;                         // PlanUpdate -> CommitUpdate workspace
+  Vector a_work_;                    // PlanFused's fallback: a copy of a
   Eigen::Index sweep_end_ = 0;       // rows below this keep their L (the sweep's c reached 0)
   Plan plan_;                        // the last PlanUpdate()
   mutable double l_bound_ = kStale;  // ≥ max |L_ij| off the diagonal; NaN = recompute
+  double l_bound_before_ = kStale;   // PlanFused: l_bound_ before the update
 };
 
 }  // namespace ident

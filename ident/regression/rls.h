@@ -11,12 +11,14 @@
 // loops in ident/regression/internal/step_driver.h, step_guard.h, extended_information.h and ld_factor.h):
 //   input check |h|² = y² + |z|², |h|               2ρ + 2
 //   ν̃ = λν, ν = ν̃ + 1, β = 1/ν, n ← λn + 1          5
-//   back substitution L'g = h, ê = g_0               m(m−1)          [spec §6]
-//   plan: new d, b_j (prefix-sum form), Σd, Σ|g|     12m + 2         (O(m): ld_factor.h PlanUpdate)
-//   guard verdict (bound on max|L|, Θ̂)              5               (step_guard.h; no copy)
-//   rank-one update of L (Agee–Turner), bound        2m(m−1) + 5     [spec §6]
-//   total, exponential forgetting                    3m² + 9m + 2ρ + 19 = 3ρ² + 17ρ + 31
-//                                                    (ρ = 4: 147 flops, plus ≈ 4m comparisons)
+//   one sweep (β = 1/ν is known first; ld_factor.h PlanFused):
+//     back substitution L'g = h, ê = g_0             m(m−1)          [spec §6]
+//     plan: new d, b_j (prefix-sum form), Σd, Σ|g|   12m + 2
+//     rank-one update of L (Agee–Turner), in place   m(m−1)          [spec §6] (old rows kept: m(m−1)/2 stores)
+//   guard verdict (bound on max|L|, Θ̂), commit      5 + 5           (step_guard.h; no copy; a refused
+//                                                                     step puts the kept rows back)
+//   total, exponential forgetting                    2m² + 10m + 2ρ + 19 = 2ρ² + 16ρ + 31
+//                                                    (ρ = 4: 127 flops, plus ≈ 4m comparisons)
 //   stabilised forgetting adds a copy of L, d and m  ≈ (2/3)m³ + 4m²   (O(ρ³); ρ = 4: ≈ 190 more)
 //   sparse rank-one updates with the rows of L_a [spec §7b]
 //   a step the O(m) guard cannot prove healthy       + a copy of L, d and Σ|L| (O(m²); rare: extreme scales)

@@ -14,7 +14,9 @@
 //            β = 1/ν, except that the back substitution also forms r_i = 1/d_i and the running sums
 //            Q_j = Σ_{i≥j} g_i² r_i (ξ_z = 1 − Q_1, ξ = 1 − Q_0; m divisions, 3m + 2 adds/multiplies) and
 //            the plan of the update is taken from them (LdFactor::PlanUpdateFromSums: 11m + 1 instead of
-//            12m + 2, m divisions instead of 2m + 1) — 3ρ² + 20ρ + 34 flops (ρ = 4: 162), 2m divisions —
+//            12m + 2, m divisions instead of 2m + 1), and the update of L reuses the back substitution's
+//            partial sums (LdFactor::CommitSolved: m(m−1) flops, not 2m(m−1)) — 2ρ² + 19ρ + 34 flops
+//            (ρ = 4: 142), 2m divisions —
 //            plus the weighting-cubic root, a ρ-independent cost (a bracketed iteration, usually one
 //            Householder step; approx/weight_fast_path.h, inline); stabilised forgetting adds
 //            ≈ (2/3)m³ + 4m² and a copy of L, d. No allocation after construction (also not at the

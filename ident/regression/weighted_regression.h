@@ -7,6 +7,8 @@
 //
 //   struct MyRule {
 //     static constexpr bool kNeedsXi = true;  // the rule reads in.xi, in.xi_z (one more back substitution)
+//     // optional, for a rule of ν alone (in all NaN): β first, then innovation and update in one sweep
+//     static constexpr bool kNeedsInnovation = false;
 //     double operator()(double nu, const Innovation& in) const noexcept;  // β ∈ (0, 1); else the step is refused
 //   };
 //
@@ -51,6 +53,7 @@ struct RlsOptions {
 // β = 1/ν: every sample weighs the same, recursive least squares [spec §7c].
 struct LeastSquaresWeight {
   static constexpr bool kNeedsXi = false;
+  static constexpr bool kNeedsInnovation = false;  // β from ν alone: taken before the innovation (one sweep)
   double operator()(double nu, const Innovation&) const noexcept { return 1 / nu; }
 };
 
@@ -82,7 +85,7 @@ class BasicWeightedRegression {
   template <class Derived>
   StepReport Update(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
     if (!enabled_) return {StepStatus::kSkipped};
-    const DrivenStep s = driver_.template Run<Rule::kNeedsXi>(
+    const DrivenStep s = driver_.template Run<Rule::kNeedsXi, !NeedsInnovation()>(
         stats_, {options_.forgetting.factor, options_.forgetting.stabilised, kWindupFloor}, prior_.nu0, prior_factor_,
         y, z, rule_);
     if (s.report.updated()) samples_ = s.lambda * samples_ + 1;
@@ -148,6 +151,13 @@ class BasicWeightedRegression {
   }
 
  private:
+  // Whether the rule reads its Innovation argument: yes unless it declares kNeedsInnovation = false.
+  static constexpr bool NeedsInnovation() {
+    if constexpr (requires { Rule::kNeedsInnovation; })
+      return Rule::kNeedsInnovation || Rule::kNeedsXi;
+    else
+      return true;
+  }
   static const RlsOptions& Checked(int num_parameters, const RlsOptions& options) {
     const std::string error = options.Validate(num_parameters);
     IDENT_REQUIRE(error.empty(), "{}", error);

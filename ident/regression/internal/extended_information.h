@@ -98,10 +98,8 @@ class ExtendedInformation {
   Innovation Prepare(double y, const Eigen::MatrixBase<Derived>& z) {
     // g and h are both written from (y, z) (not g copied from h: a wide load of h just after its
     // narrow stores cannot be store-forwarded and stalls the update's critical path).
-    h_(0) = y;
-    h_.tail(h_.size() - 1) = z;
-    g_(0) = y;
-    g_.tail(g_.size() - 1) = z;
+    LoadSample(y, z);
+    kept_ = WithXi;
     if constexpr (!WithXi) {
       V_.SolveTransposed(g_, g_);
       constexpr double nan = std::numeric_limits<double>::quiet_NaN();
@@ -112,7 +110,7 @@ class ExtendedInformation {
     const auto& d = V_.d();
     const Eigen::Index n = g_.size();
     for (Eigen::Index i = 0; i < n; ++i) inv_d_(i) = 1 / d(i);
-    V_.SolveTransposed(g_, g_);
+    V_.SolveTransposedKeep(g_);  // partial sums kept for CommitApply()
     double zeta = 0;
     for (Eigen::Index i = n - 1; i >= 1; --i) {
       zeta += g_(i) * g_(i) * inv_d_(i);
@@ -145,10 +143,39 @@ class ExtendedInformation {
       return V_.PlanUpdate(1 - beta, beta, g_);
   }
   // `h_bound` ≥ max_i |h_i| (e.g. the 2-norm of h), for the factor's bound on max|L|.
+  // After Prepare<true>() the commit reuses the back substitution's partial sums (LdFactor::CommitSolved).
   void CommitApply(double nu_new, double h_bound) noexcept {
-    g_ = h_;
-    V_.CommitUpdate(g_, h_bound);
+    if (kept_) {
+      V_.CommitSolved(g_, h_bound);
+    } else {
+      g_ = h_;
+      V_.CommitUpdate(g_, h_bound);
+    }
     nu_ = nu_new;
+    theta_valid_ = false;
+  }
+  // Steps 3 and 5 in one sweep, for a β known before the innovation (RLS: β = 1/ν): h = [y; z], the back
+  // substitution (ê = g_0, returned in `prediction_error`), the plan and the new L (LdFactor::PlanFused: the
+  // numbers of Prepare<false>() and PlanApply<false>(β), one O(ρ²) pass fewer). Then CommitFused(), or
+  // RollbackFused() for the state bit-identical to before (L is updated in place, its old rows kept).
+  template <class Derived>
+  typename LdFactor<Dim>::Plan PrepareAndPlan(double y, const Eigen::MatrixBase<Derived>& z, double beta,
+                                              double& prediction_error) noexcept {
+    LoadSample(y, z);
+    const auto plan = V_.PlanFused(1 - beta, beta, g_, h_);
+    prediction_error = g_(0);
+    return plan;
+  }
+  // Commits the last PrepareAndPlan(); ν ← nu_new, `h_bound` as for CommitApply().
+  void CommitFused(double nu_new, double h_bound) noexcept {
+    V_.CommitFused(h_bound);
+    nu_ = nu_new;
+    theta_valid_ = false;
+  }
+  // Undoes the last PrepareAndPlan() (and CommitFused(), if `committed`); ν ← nu.
+  void RollbackFused(double nu, bool committed) noexcept {
+    V_.RollbackFused(committed);
+    nu_ = nu;
     theta_valid_ = false;
   }
   // ν only (undoes ForgetExponential).
@@ -215,12 +242,27 @@ class ExtendedInformation {
   Eigen::MatrixXd V() const { return V_.Reconstruct(); }
 
  private:
+  // h = g = [y; z] (fixed-size copies when Dim is fixed).
+  template <class Derived>
+  void LoadSample(double y, const Eigen::MatrixBase<Derived>& z) noexcept {
+    h_(0) = y;
+    g_(0) = y;
+    if constexpr (Dim == Eigen::Dynamic) {
+      h_.tail(h_.size() - 1) = z;
+      g_.tail(g_.size() - 1) = z;
+    } else {
+      h_.template tail<Dim - 1>() = z;
+      g_.template tail<Dim - 1>() = z;
+    }
+  }
+
   double nu_ = 0;
   LdFactor<Dim> V_;
   Vector h_, g_;
   mutable ParamVector theta_;
   mutable bool theta_valid_ = false;
   Vector inv_d_, q_sum_;  // Prepare<true>: 1/d_i and Σ_{j≥i} g_j²/d_j, for PlanApply<true>
+  bool kept_ = false;     // the last Prepare() kept the partial sums of its back substitution
 };
 
 }  // namespace ident

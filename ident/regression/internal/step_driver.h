@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -54,7 +55,10 @@ class StepDriver {
   // it is called once per attempt and may record details of the step. (ν_a, V_a): the stabilised
   // forgetting's target (the prior), unused otherwise.
   // WithXi = false: the weight needs only ν (RLS); ξ, ξ_z are then NaN and not computed.
-  template <bool WithXi = true, class Derived, class Weight>
+  // BetaFirst = true: the weight reads only ν (its Innovation argument is all NaN), so β is taken first and
+  // the innovation, plan and new L come from one sweep (ExtendedInformation::PrepareAndPlan); the same
+  // numbers and reports as BetaFirst = false.
+  template <bool WithXi = true, bool BetaFirst = false, class Derived, class Weight>
   DrivenStep Run(ExtendedInformation<Dim>& stats, const StepSettings& s, double nu_a, const LdFactor<Dim>& Va, double y,
                  const Eigen::MatrixBase<Derived>& z, Weight&& weight) noexcept {
     // |h|² = y² + |z|² is finite iff every entry is and nothing overflows (squares cannot cancel).
@@ -63,12 +67,18 @@ class StepDriver {
       return {{StepStatus::kRejectedInvalid}, s.lambda};
     const Sample<Derived> sample{y, z, std::sqrt(h_norm2)};
     const bool windup = s.lambda < 1 && s.windup_floor > 0;
-    Outcome o = Attempt<WithXi>(stats, s.stabilised, s.lambda, windup ? s.windup_floor : StepGuard<Dim>::kNormalMin,
-                                nu_a, Va, sample, weight);
-    if (windup && o.unhealthy)
-      return {Attempt<WithXi>(stats, s.stabilised, 1.0, StepGuard<Dim>::kNormalMin, nu_a, Va, sample, weight).report,
-              1.0};
-    return {o.report, s.lambda};
+    // The report is carried field by field and built once: a report assembled in memory on one path and
+    // copied whole on another is reloaded wider than it was stored, which stalls until the step retires.
+    const Outcome o = Attempt<WithXi, BetaFirst>(stats, s.stabilised, s.lambda,
+                                                 windup ? s.windup_floor : StepGuard<Dim>::kNormalMin, nu_a, Va, sample,
+                                                 weight);
+    StepStatus status = o.report.status;
+    double beta = o.report.weight, nu = o.report.nu, e = o.report.prediction_error, lambda = s.lambda;
+    if (windup && o.unhealthy) [[unlikely]] {
+      const StepReport r = Retry<WithXi, BetaFirst>(stats, s.stabilised, nu_a, Va, sample, weight);
+      status = r.status, beta = r.weight, nu = r.nu, e = r.prediction_error, lambda = 1.0;
+    }
+    return {{status, beta, nu, e}, lambda};
   }
 
  private:
@@ -83,8 +93,19 @@ class StepDriver {
     bool unhealthy = false;  // failed the health check (not: β refused)
   };
 
-  template <bool WithXi, class Derived, class Weight>
-  Outcome Attempt(ExtendedInformation<Dim>& stats, bool stabilised, double lambda, double d_min, double nu_a,
+  // The windup retry with λ = 1 (rare: out of line, so that the common path's Attempt is inlined).
+  template <bool WithXi, bool BetaFirst, class Derived, class Weight>
+  [[gnu::noinline]] StepReport Retry(ExtendedInformation<Dim>& stats, bool stabilised, double nu_a,
+                                     const LdFactor<Dim>& Va, const Sample<Derived>& x, Weight& weight) noexcept {
+    return Attempt<WithXi, BetaFirst>(stats, stabilised, 1.0, StepGuard<Dim>::kNormalMin, nu_a, Va, x, weight).report;
+  }
+
+  // Inlined into the estimator's Update(): an out-of-line call returns the report through memory, whose
+  // reload after the call waits for the whole step (the narrow stores cannot be forwarded to a wide load).
+  // Inlined into the estimator's Update(): returned from a call, the report would be reloaded wider than it
+  // was stored, and such a load waits until the whole step has retired.
+  template <bool WithXi, bool BetaFirst, class Derived, class Weight>
+  [[gnu::always_inline]] inline Outcome Attempt(ExtendedInformation<Dim>& stats, bool stabilised, double lambda, double d_min, double nu_a,
                   const LdFactor<Dim>& Va, const Sample<Derived>& x, Weight& weight) noexcept {
     const double nu_before = stats.nu();
     if (stabilised) {
@@ -94,6 +115,42 @@ class StepDriver {
       stats.ForgetExponential(lambda);  // ν only
     }
     const double nu = stats.nu() + 1;
+    if constexpr (BetaFirst) {
+      constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+      const double beta = weight(nu, Innovation{nan, nan, nan});
+      if (!(beta > 0 && beta < 1)) {
+        const double e = stats.template Prepare<false>(x.y, x.z).prediction_error;
+        Undo(stats, stabilised, nu_before);
+        return {{StepStatus::kNumericalFailure, beta, nu, e}};
+      }
+      double e;
+      const auto plan = stats.PrepareAndPlan(x.y, x.z, beta, e);
+      // L is already the new one (its old rows kept): a refused step rolls it back.
+      bool healthy = true;
+      switch (guard_.Judge(stats, plan, nu, x.h_norm, d_min)) {
+        case StepGuard<Dim>::Verdict::kHealthy:
+          stats.CommitFused(nu, x.h_norm);
+          break;
+        case StepGuard<Dim>::Verdict::kUnknown:
+          stats.CommitFused(nu, x.h_norm);
+          healthy = guard_.Healthy(stats, d_min);
+          if (!healthy) {
+            if (stabilised)
+              guard_.Restore(stats, nu_before);
+            else
+              stats.RollbackFused(nu_before, /*committed=*/true);
+          }
+          break;
+        case StepGuard<Dim>::Verdict::kUnhealthy:
+          if (stabilised)
+            guard_.Restore(stats, nu_before);
+          else
+            stats.RollbackFused(nu_before, /*committed=*/false);
+          healthy = false;
+          break;
+      }
+      return {{healthy ? StepStatus::kUpdated : StepStatus::kNumericalFailure, beta, nu, e}, !healthy};
+    }
     const Innovation in = stats.template Prepare<WithXi>(x.y, x.z);
     const double beta = weight(nu, in);
     Outcome o{{StepStatus::kUpdated, beta, nu, in.prediction_error}};
