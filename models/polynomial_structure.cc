@@ -58,6 +58,10 @@ std::vector<std::string> PolynomialStructure::ParameterNames() const {
 }
 
 bool MonicStable(const double* p, int n, double* work) {
+  // Σ|a_j| < 1 suffices (|z^n| > Σ|a_j||z|^{n−j} on |z| ≥ 1, so no root there) and costs no division.
+  double sum = 0;
+  for (int j = 0; j < n; ++j) sum += std::abs(p[j]);
+  if (sum < 1) return true;
   // a^(n) = p; step down a^(i−1)_j = (a^(i)_j − k_i a^(i)_{i−j}) / (1 − k_i²), k_i = a^(i)_i.
   for (int j = 0; j < n; ++j) work[j] = p[j];  // work[j] = a_{j+1}
   for (int i = n; i >= 1; --i) {
