@@ -149,11 +149,7 @@ class Solver {
   MapSmootherResult Run() {
     MapSmootherResult res;
     const double z_scale = 1 + z_.cwiseAbs().maxCoeff();
-    double bound_scale = 1;
-    for (int c : bounded_) {
-      if (has_lo_[c]) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
-      if (has_hi_[c]) bound_scale = std::max(bound_scale, std::abs(hi_(c)));
-    }
+    const double bound_scale = BoundScale();
     BalanceOneSidedMultipliers();
     res.status = MapSmootherStatus::kMaxIterations;
     int iter = 0;
@@ -166,58 +162,12 @@ class Solver {
       const double v_scale = Residuals();
       mu = num_constraints_ ? Complementarity(0) / num_constraints_ : 0.0;
       if (iter == 0) mu_scale = std::max(1.0, mu);
-      const double r3max = r3_.size() ? r3_.cwiseAbs().maxCoeff() : 0.0;
-      const double r4max = R4_.cwiseAbs().maxCoeff();
-      // R4's round-off floor: the dual values c0 + W r of the quadratic terms are computed from residuals
-      // r = x_t - F x_{t-1}, z_t - H x_t whose rounding is eps times the states' size, which for long
-      // records (a double integrator: |x| ~ T^1.5) exceeds tolerance × the dual values. A residual at that
-      // floor counts as met (the certificate of FinishMapSmootherResult measures the accuracy reached).
-      const double x_scale = x_.cwiseAbs().maxCoeff();
-      const double r4_floor = kFloorFactor * std::numeric_limits<double>::epsilon() * matrix_scale_ *
-                              (constant_weight_scale_ * matrix_scale_ * (x_scale + z_scale) + v_scale);
-      // The relative KKT residual: the complementarity s'q (the iterate's duality gap up to the residuals)
-      // relative to the objective's size, since the unit σ need not be the residuals' size (a double
-      // integrator's data steps are its velocity; 1e-12 per constraint stands in for an objective of zero);
-      // R3 relative to the data; R4 relative to the dual values it sums (R4 sums products of H_t, F_t with
-      // p + B'u), or its round-off floor.
-      // R3 = B r - b - M u - (q_hi - q_lo) has a floor of eps times its largest term (multipliers of a
-      // domain bound far from the residuals start large, BalanceOneSidedMultipliers).
-      double qmax = 0;
-      for (int c : bounded_) qmax = std::max({qmax, qlo_(c), qhi_(c)});
-      const double r3_floor =
-          kResidualFloorFactor * std::numeric_limits<double>::epsilon() * (z_scale * matrix_scale_ + bound_scale + qmax);
-      const double kkt = RelativeKktResidual(mu * num_constraints_, objective_scale_, num_constraints_,
-                                             r3max / std::max(1 + qmax, r3_floor / o_.tolerance),
-                                             r4max / std::max(v_scale * matrix_scale_, r4_floor / o_.tolerance));
+      double r4_floor = 0, x_scale = 0;
+      const double kkt = KktResidual(v_scale, z_scale, bound_scale, mu, &r4_floor, &x_scale);
       res.kkt_residual = kkt;
       history.push_back(kkt);
       if (o_.on_iteration) o_.on_iteration(iter, kkt);
-      if (kkt <= o_.tolerance) {
-        res.status = MapSmootherStatus::kConverged;
-        break;
-      }
-      if (iter >= o_.max_iterations) break;
-      if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
-        res.status = MapSmootherStatus::kStalled;
-        res.message = fmt::format(
-            "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
-            "round-off floor is {:.1e} for states of size {:.1e})",
-            iter, kkt, kStallWindow, r4_floor / (v_scale * matrix_scale_), sigma_ * x_scale);
-        break;
-      }
-      if (u_.size() && u_.cwiseAbs().maxCoeff() > 1e10 * bound_scale * z_scale) {
-        Eigen::Index c = 0;
-        const double umax = u_.cwiseAbs().maxCoeff(&c);
-        int t = -1;
-        for (const Term& term : active_)
-          if (term.offset <= c && c < term.offset + term.prep->k) t = term.t;
-        res.status = MapSmootherStatus::kInfeasible;
-        res.message = fmt::format(
-            "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
-            "the data): no state sequence keeps every residual inside its penalty's domain",
-            sigma_ * umax, t, umax / (bound_scale * z_scale));
-        break;
-      }
+      if (Stops(iter, kkt, history, r4_floor / (v_scale * matrix_scale_), x_scale, bound_scale, z_scale, &res)) break;
       AssembleNewtonMatrix();
       if (!FactorizeBlockTridiagonal(n_, T_ + 1, D_.data(), E_.data(), C_.data(), G_.data(), chol_work_)) {
         // Near the solution K = M + D spans many orders of magnitude; if the Newton matrix breaks down
@@ -226,23 +176,7 @@ class Solver {
             kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged : MapSmootherStatus::kNumericalFailure;
         break;
       }
-      if (num_constraints_ == 0) {  // all penalties quadratic: one Newton step solves (P) exactly
-        Direction(0.0, false);
-        Step(1.0);
-        continue;
-      }
-      // Mehrotra predictor-corrector: affine direction, centring sigma = (mu_aff / mu)^3, then the
-      // corrected direction with the second-order term ds_aff .* dq_aff.
-      Direction(0.0, false);
-      const double alpha_aff = std::min(1.0, MaxStep());
-      const double mu_aff = Complementarity(alpha_aff) / num_constraints_;
-      const double sigma = std::pow(std::clamp(mu_aff / mu, 0.0, 1.0), 3);
-      for (int c : bounded_) {
-        xlo_(c) = dslo_(c) * dqlo_(c);
-        xhi_(c) = dshi_(c) * dqhi_(c);
-      }
-      Direction(sigma * mu, true);
-      Step(std::min(1.0, o_.step_fraction * MaxStep()));
+      NewtonStep(mu);
     }
     res.iterations = iter;
     Finish(&res, z_scale, mu);
@@ -250,6 +184,102 @@ class Solver {
   }
 
  private:
+  // The largest finite bound of the penalties' multipliers (at least 1).
+  double BoundScale() const {
+    double bound_scale = 1;
+    for (int c : bounded_) {
+      if (has_lo_[c]) bound_scale = std::max(bound_scale, std::abs(lo_(c)));
+      if (has_hi_[c]) bound_scale = std::max(bound_scale, std::abs(hi_(c)));
+    }
+    return bound_scale;
+  }
+
+  // The relative KKT residual of the iterate after Residuals() (v_scale: its scale of p + B'u); also R4's
+  // round-off floor and the states' size.
+  double KktResidual(double v_scale, double z_scale, double bound_scale, double mu, double* r4_floor_out,
+                     double* x_scale_out) const {
+    const double r3max = r3_.size() ? r3_.cwiseAbs().maxCoeff() : 0.0;
+    const double r4max = R4_.cwiseAbs().maxCoeff();
+    // R4's round-off floor: the dual values c0 + W r of the quadratic terms are computed from residuals
+    // r = x_t - F x_{t-1}, z_t - H x_t whose rounding is eps times the states' size, which for long
+    // records (a double integrator: |x| ~ T^1.5) exceeds tolerance × the dual values. A residual at that
+    // floor counts as met (the certificate of FinishMapSmootherResult measures the accuracy reached).
+    const double x_scale = x_.cwiseAbs().maxCoeff();
+    const double r4_floor = kFloorFactor * std::numeric_limits<double>::epsilon() * matrix_scale_ *
+                            (constant_weight_scale_ * matrix_scale_ * (x_scale + z_scale) + v_scale);
+    // The relative KKT residual: the complementarity s'q (the iterate's duality gap up to the residuals)
+    // relative to the objective's size, since the unit σ need not be the residuals' size (a double
+    // integrator's data steps are its velocity; 1e-12 per constraint stands in for an objective of zero);
+    // R3 relative to the data; R4 relative to the dual values it sums (R4 sums products of H_t, F_t with
+    // p + B'u), or its round-off floor.
+    // R3 = B r - b - M u - (q_hi - q_lo) has a floor of eps times its largest term (multipliers of a
+    // domain bound far from the residuals start large, BalanceOneSidedMultipliers).
+    double qmax = 0;
+    for (int c : bounded_) qmax = std::max({qmax, qlo_(c), qhi_(c)});
+    const double r3_floor =
+        kResidualFloorFactor * std::numeric_limits<double>::epsilon() * (z_scale * matrix_scale_ + bound_scale + qmax);
+    *r4_floor_out = r4_floor;
+    *x_scale_out = x_scale;
+    return RelativeKktResidual(mu * num_constraints_, objective_scale_, num_constraints_,
+                               r3max / std::max(1 + qmax, r3_floor / o_.tolerance),
+                               r4max / std::max(v_scale * matrix_scale_, r4_floor / o_.tolerance));
+  }
+
+  // The stopping rule before a Newton step: converged, out of iterations, stalled (relative_floor: R4's
+  // round-off floor relative to the dual values), or diverging multipliers (beyond 1e10 times the bounds' and
+  // the data's size); sets res's status and message and returns true if the iteration stops.
+  bool Stops(int iter, double kkt, const std::vector<double>& history, double relative_floor, double x_scale,
+             double bound_scale, double z_scale, MapSmootherResult* res) const {
+    if (kkt <= o_.tolerance) {
+      res->status = MapSmootherStatus::kConverged;
+      return true;
+    }
+    if (iter >= o_.max_iterations) return true;
+    if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
+      res->status = MapSmootherStatus::kStalled;
+      res->message = fmt::format(
+          "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
+          "round-off floor is {:.1e} for states of size {:.1e})",
+          iter, kkt, kStallWindow, relative_floor, sigma_ * x_scale);
+      return true;
+    }
+    if (u_.size() && u_.cwiseAbs().maxCoeff() > 1e10 * bound_scale * z_scale) {
+      Eigen::Index c = 0;
+      const double umax = u_.cwiseAbs().maxCoeff(&c);
+      int t = -1;
+      for (const Term& term : active_)
+        if (term.offset <= c && c < term.offset + term.prep->k) t = term.t;
+      res->status = MapSmootherStatus::kInfeasible;
+      res->message = fmt::format(
+          "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
+          "the data): no state sequence keeps every residual inside its penalty's domain",
+          sigma_ * umax, t, umax / (bound_scale * z_scale));
+      return true;
+    }
+    return false;
+  }
+
+  // One step on the factored Newton matrix.
+  void NewtonStep(double mu) {
+    if (num_constraints_ == 0) {  // all penalties quadratic: one Newton step solves (P) exactly
+      Direction(0.0, false);
+      Step(1.0);
+      return;
+    }
+    // Mehrotra predictor-corrector: affine direction, centring sigma = (mu_aff / mu)^3, then the
+    // corrected direction with the second-order term ds_aff .* dq_aff.
+    Direction(0.0, false);
+    const double alpha_aff = std::min(1.0, MaxStep());
+    const double mu_aff = Complementarity(alpha_aff) / num_constraints_;
+    const double sigma = std::pow(std::clamp(mu_aff / mu, 0.0, 1.0), 3);
+    for (int c : bounded_) {
+      xlo_(c) = dslo_(c) * dqlo_(c);
+      xhi_(c) = dshi_(c) * dqhi_(c);
+    }
+    Direction(sigma * mu, true);
+    Step(std::min(1.0, o_.step_fraction * MaxStep()));
+  }
+
   int n() const { return kN > 0 ? kN : n_; }
 
   static std::unique_ptr<Prepared> Prepare(const Penalty& pen, double sigma) {
