@@ -25,7 +25,7 @@ struct StepConstants {
   // n = 2: E_t P E_t' for a symmetric P as (E P E')_ij = EPE[3k] p11 + EPE[3k+1] p12 + EPE[3k+2] p22,
   // ij = 11, 12, 22 (k = 0, 1, 2): one level of products on the factorisation's recurrence.
   double EPE[9];
-  double lo, hi, m;    // measurement penalty: box [lo, hi], M = m
+  double lo, hi, m;  // measurement penalty: box [lo, hi], M = m
 };
 
 // The iterate and work values of one time step (nz = 1: one PLQ coordinate per step).
