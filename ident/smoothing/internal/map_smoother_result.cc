@@ -160,8 +160,9 @@ double DualStatesDoubleDouble(const MapSmootherProblem& p, MapSmootherResult* re
 // tolerance): the dual point is shrunk towards 0, (u, y) -> s (u, y) with the largest s in (0, 1] that puts
 // every y_t in its box. A'y = H'u is linear, so s (u, y) is exactly dual feasible when every box of dom g*
 // and dom f* contains 0 (l1, Huber, Vapnik, quantile, box, Gaussian): a true, slightly looser certificate.
+template <int kN>
 void ShrinkDualIntoDomain(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo) {
-  const int T = p.T(), n = p.state_dim(), nz = p.measurement_dim();
+  const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
   double shrink = 1;
   bool zero_inside = true;
   for (int t = 0; t <= T; ++t) {
@@ -186,12 +187,14 @@ void ShrinkDualIntoDomain(const MapSmootherProblem& p, MapSmootherResult* res, E
 // y(u) outside dom f_t* by round-off is projected: the moved amount enters the bound as
 // sum |x_t| |dy_t| (the size of x - x* taken as at most that of x, added to *error_bound); beyond 1e-8
 // relative, no finite certificate (returns false).
+template <int kN>
 bool ProjectDualStates(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo,
                        double* error_bound) {
+  const int n = kN > 0 ? kN : p.state_dim();
   bool certified = true;
   for (int t = 0; t <= p.T(); ++t) {
     const double before = res->y.col(t).cwiseAbs().maxCoeff();
-    const double moved = ProjectIntoConjugateDomain(p.ft(t), res->y.col(t).data(), p.state_dim(), res);
+    const double moved = ProjectIntoConjugateDomain(p.ft(t), res->y.col(t).data(), n, res);
     if (moved > 0) {
       y_lo->col(t).setZero();
       *error_bound += res->x.col(t).cwiseAbs().sum() * moved;
@@ -203,9 +206,10 @@ bool ProjectDualStates(const MapSmootherProblem& p, MapSmootherResult* res, Eige
 
 // Objectives and the gap as compensated sums of per-term values; S sums the magnitudes each term is
 // computed from, for the running error bound gamma S (Higham, sec. 3.3).
+template <int kN>
 void EvaluateCertificate(const MapSmootherProblem& p, double z_scale, const Eigen::MatrixXd& r,
                          const Eigen::MatrixXd& y_lo, double error_bound, bool certified, MapSmootherResult* res) {
-  const int T = p.T(), n = p.state_dim(), nz = p.measurement_dim();
+  const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
   CompensatedSum primal, gap;
   double magnitudes = 0;
   const double domain_tolerance = 1e-8 * z_scale;
@@ -294,9 +298,9 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const 
     ProjectIntoConjugateDomain(p.gt(t), res->u.col(t).data(), p.measurement_dim(), res);
   Eigen::MatrixXd y_lo;
   double error_bound = DualStatesDoubleDouble<kN>(p, res, &y_lo);
-  ShrinkDualIntoDomain(p, res, &y_lo);
-  const bool certified = ProjectDualStates(p, res, &y_lo, &error_bound);
-  EvaluateCertificate(p, z_scale, r, y_lo, error_bound, certified, res);
+  ShrinkDualIntoDomain<kN>(p, res, &y_lo);
+  const bool certified = ProjectDualStates<kN>(p, res, &y_lo, &error_bound);
+  EvaluateCertificate<kN>(p, z_scale, r, y_lo, error_bound, certified, res);
   ReconstructFromDual<kN>(p, mu, res);
 }
 
