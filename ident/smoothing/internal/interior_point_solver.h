@@ -77,27 +77,7 @@ class Solver {
     new (&E_) Eigen::Map<Eigen::MatrixXd>(e_changes_ ? arena_->Take(blocks) : base_E_.data(), n_,
                                           static_cast<Eigen::Index>(nN));
     chol_work_ = arena_->Take(n_);
-    has_lo_.assign(K, 0);
-    has_hi_.assign(K, 0);
-    for (const Term& term : active_) {
-      const PlqForm& f = *term.prep->plq;
-      for (int i = 0; i < f.rows(); ++i) {
-        const int c = term.offset + i;
-        lo_(c) = f.lo(i);
-        hi_(c) = f.hi(i);
-        has_lo_[c] = std::isfinite(lo_(c));
-        has_hi_[c] = std::isfinite(hi_(c));
-        const bool has_lo = has_lo_[c], has_hi = has_hi_[c];
-        // A strictly interior start, so that C'u + s = c holds exactly from the first iterate.
-        u_(c) = has_lo && has_hi ? 0.5 * (lo_(c) + hi_(c)) : has_lo ? lo_(c) + 1 : has_hi ? hi_(c) - 1 : 0.0;
-        slo_(c) = has_lo ? u_(c) - lo_(c) : 1.0;
-        shi_(c) = has_hi ? hi_(c) - u_(c) : 1.0;
-        qlo_(c) = has_lo ? 1.0 : 0.0;
-        qhi_(c) = has_hi ? 1.0 : 0.0;
-        num_constraints_ += has_lo + has_hi;
-        if (has_lo || has_hi) bounded_.push_back(c);
-      }
-    }
+    StartPoint(K);
     for (const auto& F : p.F) matrix_scale_ = std::max(matrix_scale_, 1 + F.cwiseAbs().maxCoeff());
     for (const auto& H : p.H) matrix_scale_ = std::max(matrix_scale_, 1 + H.cwiseAbs().maxCoeff());
     for (auto& [_, prep] : prepared_)
@@ -120,6 +100,32 @@ class Solver {
   MapSmootherResult Run();
 
  private:
+  // The bounds per coordinate and a strictly interior start u, s, q for the K coordinates of the terms with
+  // a finite bound.
+  void StartPoint(std::size_t K) {
+    has_lo_.assign(K, 0);
+    has_hi_.assign(K, 0);
+    for (const Term& term : active_) {
+      const PlqForm& f = *term.prep->plq;
+      for (int i = 0; i < f.rows(); ++i) {
+        const int c = term.offset + i;
+        lo_(c) = f.lo(i);
+        hi_(c) = f.hi(i);
+        has_lo_[c] = std::isfinite(lo_(c));
+        has_hi_[c] = std::isfinite(hi_(c));
+        const bool has_lo = has_lo_[c], has_hi = has_hi_[c];
+        // A strictly interior start, so that C'u + s = c holds exactly from the first iterate.
+        u_(c) = has_lo && has_hi ? 0.5 * (lo_(c) + hi_(c)) : has_lo ? lo_(c) + 1 : has_hi ? hi_(c) - 1 : 0.0;
+        slo_(c) = has_lo ? u_(c) - lo_(c) : 1.0;
+        shi_(c) = has_hi ? hi_(c) - u_(c) : 1.0;
+        qlo_(c) = has_lo ? 1.0 : 0.0;
+        qhi_(c) = has_hi ? 1.0 : 0.0;
+        num_constraints_ += has_lo + has_hi;
+        if (has_lo || has_hi) bounded_.push_back(c);
+      }
+    }
+  }
+
   // The iteration's steps (interior_point.cc).
   double BoundScale() const;
   double KktResidual(double v_scale, double z_scale, double bound_scale, double mu, double* r4_floor_out,
