@@ -13,6 +13,7 @@
 
 #include "common/error.h"
 #include "ident/linalg/work_arena.h"
+#include "ident/smoothing/internal/map_smoother_fast_path_steps.h"
 #include "ident/smoothing/internal/map_smoother_result.h"
 
 namespace ident::internal {
@@ -20,6 +21,11 @@ namespace {
 
 using models::Penalty;
 using models::PlqForm;
+using fast_path::FillStepConstants;
+using fast_path::Reciprocals;
+using fast_path::StepConstants;
+using fast_path::StepInverse;
+using fast_path::StepState;
 
 bool HasFiniteBound(const PlqForm& f) { return f.lo.array().isFinite().any() || f.hi.array().isFinite().any(); }
 
@@ -28,92 +34,6 @@ bool IsScalarBoxTerm(const Penalty& g) {
   const PlqForm& f = g.plq();
   return g.dim() == 1 && f.rows() == 1 && f.B(0, 0) == 1.0 && f.b(0) == 0.0 && f.p(0) == 0.0 &&
          std::isfinite(f.lo(0)) && std::isfinite(f.hi(0)) && f.M(0, 0) >= 0.0;
-}
-
-// The data of one time step that does not change between iterations. Time-invariant problems share three
-// of these (t = 0, 0 < t < T, t = T); time-varying ones have one per step.
-template <int kN>
-struct StepConstants {
-  double Db[kN * kN];  // constant Newton block D_t = W_t + F_t' W_{t+1} F_t (process terms)
-  double E[kN * kN];   // sub-diagonal block E_t = -W_t F_{t-1} (t >= 1)
-  double F[kN * kN];   // F_{t-1} (t >= 1)
-  double W[kN * kN];   // W_t = B'K^-1 B of the process penalty f_t (bound-free: u = K^-1 (B r - b) implicitly)
-  double c0[kN];       // c0 = p - B'K^-1 b: p + B'u = c0 + W r
-  double H[kN];        // H_t (1 x n)
-  // n = 2: E_t P E_t' for a symmetric P as (E P E')_ij = EPE[3k] p11 + EPE[3k+1] p12 + EPE[3k+2] p22,
-  // ij = 11, 12, 22 (k = 0, 1, 2): one level of products on the factorisation's recurrence.
-  double EPE[9];
-  double lo, hi, m;    // measurement penalty: box [lo, hi], M = m
-};
-
-// The iterate and work values of one time step (nz = 1: one PLQ coordinate per step).
-template <int kN>
-struct StepState {
-  double u, slo, shi, qlo, qhi;       // multiplier of g_t, slacks and multipliers of lo <= u <= hi
-  double du, dslo, dshi, dqlo, dqhi;  // Newton direction
-  double islo, ishi, iqlo, iqhi;      // reciprocals (once per iteration: no divisions in the other passes)
-  double kd;                          // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
-  double r3, rt3;                     // R3 and R3 - e of the current direction
-  double R4[kN];                      // gradient residual
-  double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
-  double dx[kN];                      // state direction
-  double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)
-  double M[kN * kN];                  // P_t E_t: v_t = P_t b_t - M_t v_{t-1}
-  double N[kN * kN];                  // P_t E_{t+1}': dx_t = v_t - N_t dx_{t+1}
-};
-
-// 1/s_lo, 1/s_hi, 1/q_lo, 1/q_hi by one division, 1/(s_lo s_hi q_lo q_hi), when that product is a normal
-// number (four divisions otherwise): the divider, not the arithmetic, bounds the factorisation pass.
-template <int kN>
-[[gnu::always_inline]] inline void Reciprocals(StepState<kN>& s) {
-  const double ss = s.slo * s.shi, qq = s.qlo * s.qhi, all = ss * qq;
-  if (all >= std::numeric_limits<double>::min() && all <= std::numeric_limits<double>::max()) {
-    const double inv = 1.0 / all, iss = qq * inv, iqq = ss * inv;
-    s.islo = s.shi * iss;
-    s.ishi = s.slo * iss;
-    s.iqlo = s.qhi * iqq;
-    s.iqhi = s.qlo * iqq;
-  } else {
-    s.islo = 1.0 / s.slo;
-    s.ishi = 1.0 / s.shi;
-    s.iqlo = 1.0 / s.qlo;
-    s.iqhi = 1.0 / s.qhi;
-  }
-}
-
-// In-place inverse of a symmetric positive definite kN x kN matrix (column-major); false if a pivot is not
-// positive. n = 1, 2 in closed form (one reciprocal), Gauss-Jordan without pivoting beyond.
-template <int kN>
-[[gnu::always_inline]] inline bool InvertSpd(double* A) {
-  if constexpr (kN == 1) {
-    if (!(A[0] > 0) || !std::isfinite(A[0])) return false;
-    A[0] = 1.0 / A[0];
-    return true;
-  } else if constexpr (kN == 2) {
-    const double a = A[0], b = A[1], d = A[3];
-    const double det = a * d - b * b;
-    if (!(a > 0) || !(det > 0) || !std::isfinite(det)) return false;
-    const double idet = 1.0 / det;
-    A[0] = d * idet;
-    A[1] = A[2] = -b * idet;
-    A[3] = a * idet;
-    return true;
-  } else {
-    for (int k = 0; k < kN; ++k) {
-      const double pivot = A[k + k * kN];
-      if (!(pivot > 0) || !std::isfinite(pivot)) return false;
-      const double ip = 1.0 / pivot;
-      A[k + k * kN] = 1.0;
-      for (int j = 0; j < kN; ++j) A[k + j * kN] *= ip;
-      for (int i = 0; i < kN; ++i) {
-        if (i == k) continue;
-        const double f = A[i + k * kN];
-        A[i + k * kN] = 0.0;
-        for (int j = 0; j < kN; ++j) A[i + j * kN] -= f * A[k + j * kN];
-      }
-    }
-    return true;
-  }
 }
 
 template <int kN>
@@ -138,7 +58,9 @@ class FastSolver {
     constants_.resize(num_constants);
     for (int t = 0; t <= T_; ++t) {
       const int i = ConstantIndex(t);
-      if (t == 0 || !invariant_ || (i == 1 && t == 1) || t == T_) FillConstants(t, &constants_[i]);
+      if (t == 0 || !invariant_ || (i == 1 && t == 1) || t == T_)
+        FillStepConstants<kN>(p, t, Process(t).W, Process(t).c0, t < T_ ? &Process(t + 1).W : nullptr, sigma_,
+                              &constants_[i]);
     }
     const std::size_t N = T_ + 1;
     const std::size_t state_doubles = (sizeof(StepState<kN>) + sizeof(double) - 1) / sizeof(double);
@@ -173,85 +95,21 @@ class FastSolver {
       const Residuals r = StepAndResiduals(alpha);
       mu = r.complementarity / num_constraints;
       if (iter == 0) mu_scale = std::max(1.0, mu);
-      // R4's round-off floor and the relative KKT residual: the general path's.
-      const double r4_floor = kFloorFactor * std::numeric_limits<double>::epsilon() * matrix_scale_ *
-                              (weight_scale_ * matrix_scale_ * (r.xmax + z_scale) + r.v_scale);
-      const double kkt =
-          RelativeKktResidual(r.complementarity, r.objective_scale, num_constraints,
-                              r.r3max / std::max(1 + r.qmax, kResidualFloorFactor * std::numeric_limits<double>::epsilon() *
-                                                              (z_scale * matrix_scale_ + bound_scale_ + r.qmax) /
-                                                              o_.tolerance),
-                              r.r4max / std::max(r.v_scale * matrix_scale_, r4_floor / o_.tolerance));
+      double r4_floor = 0;
+      const double kkt = KktResidual(r, z_scale, num_constraints, &r4_floor);
       res.kkt_residual = kkt;
       history.push_back(kkt);
       if (o_.on_iteration) o_.on_iteration(iter, kkt);
-      if (kkt <= o_.tolerance) {
-        res.status = MapSmootherStatus::kConverged;
-        break;
-      }
-      if (iter >= o_.max_iterations) break;
-      if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
-        res.status = MapSmootherStatus::kStalled;
-        res.message = fmt::format(
-            "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
-            "round-off floor is {:.1e} for states of size {:.1e})",
-            iter, kkt, kStallWindow, r4_floor / (r.v_scale * matrix_scale_), sigma_ * r.xmax);
-        break;
-      }
-      if (r.umax > 1e10 * bound_scale_ * z_scale) {
-        int t = 0;
-        for (int s = 0; s <= T_; ++s)
-          if (std::abs(steps_[s].u) > std::abs(steps_[t].u)) t = s;
-        res.status = MapSmootherStatus::kInfeasible;
-        res.message = fmt::format(
-            "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
-            "the data): no state sequence keeps every residual inside its penalty's domain",
-            sigma_ * r.umax, t, r.umax / (bound_scale_ * z_scale));
-        break;
-      }
+      if (Stops(iter, kkt, r, r4_floor, z_scale, history, &res)) break;
       if (!FactorAndForward()) {  // as the general path: accept a breakdown at the precision limit
         res.status =
             kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged : MapSmootherStatus::kNumericalFailure;
         break;
       }
-      // Mehrotra predictor-corrector: affine direction, centring sigma = (mu_aff / mu)^3, then the
-      // corrected direction with the second-order term ds_aff .* dq_aff.
-      const Backward affine = BackwardAndRecover(0.0, false);
-      const double alpha_aff = std::min(1.0, affine.max_step);
-      const double mu_aff = (r.complementarity + alpha_aff * (affine.sum1 + alpha_aff * affine.sum2)) / num_constraints;
-      const double sigma = std::pow(std::clamp(mu_aff / mu, 0.0, 1.0), 3);
-      CorrectorForward(sigma * mu);
-      const Backward corrected = BackwardAndRecover(sigma * mu, true);
-      alpha = std::min(1.0, o_.step_fraction * corrected.max_step);
+      alpha = PredictorCorrector(r.complementarity, mu, num_constraints);
     }
     res.iterations = iter;
-    res.x = sigma_ * Eigen::Map<const Eigen::MatrixXd>(x_, kN, T_ + 1);  // back in the data's unit
-    res.u.resize(1, T_ + 1);
-    // The dual values and Newton weights of the iterate for the certificate's dual polish: the process
-    // duals c0 + W r and their W, the measurement's K^-1 = 1 / (m + q_lo/s_lo + q_hi/s_hi).
-    MapSmootherDualIterate dual;
-    dual.process_dual.resize(kN, T_ + 1);
-    dual.process_weight.resize(kN * kN, T_ + 1);
-    dual.measurement_weight.resize(1, T_ + 1);
-    for (int t = 0; t <= T_; ++t) {
-      const StepConstants<kN>& c = Constants(t);
-      const StepState<kN>& s = steps_[t];
-      res.u(0, t) = sigma_ * s.u;  // p + B'u = u (identity B, p = 0)
-      const double* xt = x_ + t * kN;
-      double w[kN];
-      for (int i = 0; i < kN; ++i) w[i] = xt[i];
-      if (t > 0)
-        for (int j = 0; j < kN; ++j)
-          for (int i = 0; i < kN; ++i) w[i] -= c.F[i + j * kN] * xt[j - kN];
-      for (int i = 0; i < kN; ++i) {
-        double v = c.c0[i];
-        for (int j = 0; j < kN; ++j) v += c.W[i + j * kN] * w[j];
-        dual.process_dual(i, t) = sigma_ * v;
-      }
-      for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, t) = c.W[i];
-      dual.measurement_weight(0, t) = 1.0 / (c.m + s.qlo / s.slo + s.qhi / s.shi);
-    }
-    FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, &res);
+    Finish(z_scale, mu, &res);
     return res;
   }
 
@@ -269,6 +127,92 @@ class FastSolver {
     double sum1 = 0, sum2 = 0;  // sum s.*dq + q.*ds, sum ds.*dq (complementarity after a step)
   };
 
+  // R4's round-off floor (into *r4_floor) and the relative KKT residual: the general path's.
+  double KktResidual(const Residuals& r, double z_scale, double num_constraints, double* r4_floor) const {
+    *r4_floor = kFloorFactor * std::numeric_limits<double>::epsilon() * matrix_scale_ *
+                (weight_scale_ * matrix_scale_ * (r.xmax + z_scale) + r.v_scale);
+    return RelativeKktResidual(r.complementarity, r.objective_scale, num_constraints,
+                               r.r3max / std::max(1 + r.qmax, kResidualFloorFactor * std::numeric_limits<double>::epsilon() *
+                                                               (z_scale * matrix_scale_ + bound_scale_ + r.qmax) /
+                                                               o_.tolerance),
+                               r.r4max / std::max(r.v_scale * matrix_scale_, *r4_floor / o_.tolerance));
+  }
+
+  // The stopping rule before a Newton step (the general path's): converged, out of iterations, stalled, or
+  // diverging multipliers; sets res's status and message and returns true if the iteration stops.
+  bool Stops(int iter, double kkt, const Residuals& r, double r4_floor, double z_scale,
+             const std::vector<double>& history, MapSmootherResult* res) const {
+    if (kkt <= o_.tolerance) {
+      res->status = MapSmootherStatus::kConverged;
+      return true;
+    }
+    if (iter >= o_.max_iterations) return true;
+    if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
+      res->status = MapSmootherStatus::kStalled;
+      res->message = fmt::format(
+          "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
+          "round-off floor is {:.1e} for states of size {:.1e})",
+          iter, kkt, kStallWindow, r4_floor / (r.v_scale * matrix_scale_), sigma_ * r.xmax);
+      return true;
+    }
+    if (r.umax > 1e10 * bound_scale_ * z_scale) {
+      int t = 0;
+      for (int s = 0; s <= T_; ++s)
+        if (std::abs(steps_[s].u) > std::abs(steps_[t].u)) t = s;
+      res->status = MapSmootherStatus::kInfeasible;
+      res->message = fmt::format(
+          "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
+          "the data): no state sequence keeps every residual inside its penalty's domain",
+          sigma_ * r.umax, t, r.umax / (bound_scale_ * z_scale));
+      return true;
+    }
+    return false;
+  }
+
+  // Mehrotra predictor-corrector on the factored Newton matrix: affine direction, centring
+  // sigma = (mu_aff / mu)^3, then the corrected direction with the second-order term ds_aff .* dq_aff.
+  // Returns the step length of the corrected direction (applied by the next StepAndResiduals).
+  double PredictorCorrector(double complementarity, double mu, double num_constraints) {
+    const Backward affine = BackwardAndRecover(0.0, false);
+    const double alpha_aff = std::min(1.0, affine.max_step);
+    const double mu_aff = (complementarity + alpha_aff * (affine.sum1 + alpha_aff * affine.sum2)) / num_constraints;
+    const double sigma = std::pow(std::clamp(mu_aff / mu, 0.0, 1.0), 3);
+    CorrectorForward(sigma * mu);
+    const Backward corrected = BackwardAndRecover(sigma * mu, true);
+    return std::min(1.0, o_.step_fraction * corrected.max_step);
+  }
+
+  // The states and multipliers back in the data's unit, and the dual values and Newton weights of the
+  // iterate for the certificate's dual polish: the process duals c0 + W r and their W, the measurement's
+  // K^-1 = 1 / (m + q_lo/s_lo + q_hi/s_hi); then the common finish.
+  void Finish(double z_scale, double mu, MapSmootherResult* res) const {
+    res->x = sigma_ * Eigen::Map<const Eigen::MatrixXd>(x_, kN, T_ + 1);
+    res->u.resize(1, T_ + 1);
+    MapSmootherDualIterate dual;
+    dual.process_dual.resize(kN, T_ + 1);
+    dual.process_weight.resize(kN * kN, T_ + 1);
+    dual.measurement_weight.resize(1, T_ + 1);
+    for (int t = 0; t <= T_; ++t) {
+      const StepConstants<kN>& c = Constants(t);
+      const StepState<kN>& s = steps_[t];
+      res->u(0, t) = sigma_ * s.u;  // p + B'u = u (identity B, p = 0)
+      const double* xt = x_ + t * kN;
+      double w[kN];
+      for (int i = 0; i < kN; ++i) w[i] = xt[i];
+      if (t > 0)
+        for (int j = 0; j < kN; ++j)
+          for (int i = 0; i < kN; ++i) w[i] -= c.F[i + j * kN] * xt[j - kN];
+      for (int i = 0; i < kN; ++i) {
+        double v = c.c0[i];
+        for (int j = 0; j < kN; ++j) v += c.W[i + j * kN] * w[j];
+        dual.process_dual(i, t) = sigma_ * v;
+      }
+      for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, t) = c.W[i];
+      dual.measurement_weight(0, t) = 1.0 / (c.m + s.qlo / s.slo + s.qhi / s.shi);
+    }
+    FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, res);
+  }
+
   int ConstantIndex(int t) const {
     if (!invariant_) return t;
     return t == 0 ? 0 : t == T_ ? std::min(T_, 2) : 1;
@@ -279,42 +223,6 @@ class FastSolver {
     for (const ProcessPenalty& q : process_)
       if (q.penalty == f) return q;
     return process_.front();  // not reached: every f_t was prepared
-  }
-
-  void FillConstants(int t, StepConstants<kN>* c) const {
-    using MatN = Eigen::Matrix<double, kN, kN>;
-    using VecN = Eigen::Matrix<double, kN, 1>;
-    const ProcessPenalty& f = Process(t);
-    const MatN W = f.W;
-    MatN Db = W, E = MatN::Zero(), F = MatN::Zero();
-    if (t < T_) {
-      const ProcessPenalty& next = Process(t + 1);
-      const MatN Fn = p_.Ft(t);
-      Db += Fn.transpose() * MatN(next.W) * Fn;
-    }
-    if (t > 0) {
-      F = p_.Ft(t - 1);
-      E = -W * F;
-    }
-    Eigen::Map<MatN>(c->Db) = Db;
-    Eigen::Map<MatN>(c->E) = E;
-    Eigen::Map<MatN>(c->F) = F;
-    Eigen::Map<MatN>(c->W) = W;
-    Eigen::Map<VecN>(c->c0) = f.c0;
-    Eigen::Map<VecN>(c->H) = p_.Ht(t).row(0).transpose();
-    if constexpr (kN == 2) {
-      const int ij[3][2] = {{0, 0}, {0, 1}, {1, 1}};
-      for (int k = 0; k < 3; ++k) {
-        const int i = ij[k][0], j = ij[k][1];
-        c->EPE[3 * k] = E(i, 0) * E(j, 0);
-        c->EPE[3 * k + 1] = E(i, 0) * E(j, 1) + E(i, 1) * E(j, 0);
-        c->EPE[3 * k + 2] = E(i, 1) * E(j, 1);
-      }
-    }
-    const PlqForm& g = p_.gt(t).plq();
-    c->lo = g.lo(0) / sigma_;  // in the unit σ
-    c->hi = g.hi(0) / sigma_;
-    c->m = g.M(0, 0);
   }
 
   const StepConstants<kN>& Constants(int t) const { return constants_[ConstantIndex(t)]; }
@@ -435,69 +343,9 @@ class FastSolver {
       const double ikd = c.m + s.qlo * islo + s.qhi * ishi;  // K = M + D, D = q/s (barrier curvature)
       const double kd = 1.0 / ikd;
       s.kd = kd;
-      // S_t = Db_t - E_t P_{t-1} E_t' + K^-1 H'H. K^-1 grows to ~1/mu on the coordinates at a kink, where
-      // inverting S_t directly cancels terms of order K^-2 (tested: the iteration then stalls near 1e-10).
-      // The measurement's rank-one term enters the inverse with the factor K instead: with
-      // S0 = Db_t - E_t P_{t-1} E_t' (of the process terms' size),
-      //   n = 2: P_t = (K adj(S0) + adj(H'H)) / (K det(S0) + H adj(S0) H')   (adj is linear for 2 x 2,
-      //          det(S0 + k h h') = det(S0) + k h'adj(S0)h), one division, no differences of large terms;
-      //   else:  Sherman-Morrison, P_t = P0 - g g' / (K + H g), P0 = S0^-1, g = P0 H'.
+      // P_t = S_t^-1 with the measurement's rank-one term entering with the factor K (StepInverse).
       double P[kN * kN], gf[kN];
-      if constexpr (kN == 2) {
-        double s11 = c.Db[0], s12 = c.Db[1], s22 = c.Db[3];
-        if (t > 0) {
-          const double p11 = Pp[0], p12 = Pp[1], p22 = Pp[3];
-          s11 -= c.EPE[0] * p11 + c.EPE[1] * p12 + c.EPE[2] * p22;
-          s12 -= c.EPE[3] * p11 + c.EPE[4] * p12 + c.EPE[5] * p22;
-          s22 -= c.EPE[6] * p11 + c.EPE[7] * p12 + c.EPE[8] * p22;
-        }
-        const double det = s11 * s22 - s12 * s12;
-        if (!(s11 > 0) || !(det > 0) || !std::isfinite(det)) return false;
-        const double h1 = c.H[0], h2 = c.H[1];
-        const double a1 = s22 * h1 - s12 * h2, a2 = s11 * h2 - s12 * h1;  // adj(S0) H'
-        double id = 1.0 / (ikd * det + (h1 * a1 + h2 * a2)), bid = id;
-        double a = ikd, b = 1;
-        if (!(ikd <= 1e150)) {  // K S0 could overflow: numerator and denominator divided by K
-          a = 1;
-          b = kd;
-          id = 1.0 / (det + kd * (h1 * a1 + h2 * a2));
-          bid = kd * id;
-        }
-        P[0] = (a * s22 + b * (h2 * h2)) * id;
-        P[1] = P[2] = -(a * s12 + b * (h1 * h2)) * id;
-        P[3] = (a * s11 + b * (h1 * h1)) * id;
-        gf[0] = a1 * bid;  // P_t H' K^-1 = adj(S0) H' / (K det(S0) + H adj(S0) H')
-        gf[1] = a2 * bid;
-      } else {
-        for (int i = 0; i < kN * kN; ++i) P[i] = c.Db[i];
-        if (t > 0) {
-          double PE[kN * kN];  // P_{t-1} E_t'
-          for (int j = 0; j < kN; ++j)
-            for (int i = 0; i < kN; ++i) {
-              double pe = 0;
-              for (int k = 0; k < kN; ++k) pe += Pp[i + k * kN] * c.E[j + k * kN];
-              PE[i + j * kN] = pe;
-            }
-          for (int j = 0; j < kN; ++j)
-            for (int i = 0; i < kN; ++i) {
-              double epe = 0;
-              for (int k = 0; k < kN; ++k) epe += c.E[i + k * kN] * PE[k + j * kN];
-              P[i + j * kN] -= epe;
-            }
-        }
-        if (!InvertSpd<kN>(P)) return false;
-        double g[kN], hg = 0;
-        for (int i = 0; i < kN; ++i) {
-          double gi = 0;
-          for (int k = 0; k < kN; ++k) gi += P[i + k * kN] * c.H[k];
-          g[i] = gi;
-          hg += c.H[i] * gi;
-        }
-        const double f = 1.0 / (ikd + hg);
-        for (int j = 0; j < kN; ++j)
-          for (int i = 0; i < kN; ++i) P[i + j * kN] -= f * g[i] * g[j];
-        for (int i = 0; i < kN; ++i) gf[i] = f * g[i];
-      }
+      if (!StepInverse<kN>(c, t > 0 ? Pp : nullptr, ikd, kd, P, gf)) return false;
       // M_t = P_t E_t and N_t = P_t E_{t+1}': the substitutions' recurrences then take one product level.
       static constexpr double kZero[kN * kN] = {};
       const double* En = t < T_ ? Constants(t + 1).E : kZero;  // E_{T+1} = 0

@@ -82,16 +82,14 @@ double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dua
   return rho_max;
 }
 
-// Everything of the result after the iteration, from res->x and res->u (see
-// ident/smoothing/internal/map_smoother_fast_path.h).
+// The primal residuals w_t = x_t - F_{t-1} x_{t-1} (into res->w) and r_t = z_t - H_t x_t (into *r) by
+// compensated dot products: their round-off is relative to w and r, not to the (possibly far larger) states.
 template <int kN>
-void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const MapSmootherDualIterate* dual,
-                  MapSmootherResult* res) {
+void PrimalResiduals(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* r_out) {
   const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
-  // w_t = x_t - F_{t-1} x_{t-1} and r_t = z_t - H_t x_t by compensated dot products: their round-off is
-  // relative to w and r, not to the (possibly far larger) states.
+  Eigen::MatrixXd& r = *r_out;
   res->w.resize(n, T + 1);
-  Eigen::MatrixXd r(nz, T + 1);
+  r.resize(nz, T + 1);
   for (int t = 0; t <= T; ++t) {
     for (int i = 0; i < n; ++i) {
       DoubleDouble d;
@@ -107,27 +105,31 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const 
       r(i, t) = d.value();
     }
   }
-  if (dual != nullptr) {
-    Eigen::MatrixXd v = dual->process_dual;
-    PolishDual<kN>(p, *dual, &v, &res->u);
+}
+
+// Projects v (size entries) into the penalty's dom of the conjugate (rounding can leave it a hair outside a
+// box); records the largest move in res->dual_infeasibility and returns it.
+double ProjectIntoConjugateDomain(const Penalty& pen, double* v, int size, MapSmootherResult* res) {
+  double violation = 0;
+  for (int i = 0; i < size; ++i) {
+    const double c = std::clamp(v[i], pen.conjugate_lo()(i), pen.conjugate_hi()(i));
+    violation = std::max(violation, std::abs(c - v[i]));
+    v[i] = c;
   }
-  // Dual point: u projected into dom g* (rounding can leave it a hair outside a box), y = y(u) by the
-  // dynamics of (D) in double-double (exact A'y = H'u up to O(eps^2)).
-  auto project = [&](const Penalty& pen, double* v, int size) {
-    double violation = 0;
-    for (int i = 0; i < size; ++i) {
-      const double c = std::clamp(v[i], pen.conjugate_lo()(i), pen.conjugate_hi()(i));
-      violation = std::max(violation, std::abs(c - v[i]));
-      v[i] = c;
-    }
-    res->dual_infeasibility = std::max(res->dual_infeasibility, violation);
-    return violation;
-  };
-  for (int t = 0; t <= T; ++t) project(p.gt(t), res->u.col(t).data(), nz);
+  res->dual_infeasibility = std::max(res->dual_infeasibility, violation);
+  return violation;
+}
+
+// y = y(u) by the dynamics of (D) in double-double (exact A'y = H'u up to O(eps^2)): res->y holds the
+// leading parts, *y_lo_out the trailing ones. Returns the recursion's error bound on the gap.
+template <int kN>
+double DualStatesDoubleDouble(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo_out) {
+  const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
+  Eigen::MatrixXd& y_lo = *y_lo_out;
   res->y.resize(n, T + 1);
-  Eigen::MatrixXd y_lo(n, T + 1);
+  y_lo.resize(n, T + 1);
   // The local residual of the double-double recursion is at most 4 (n + nz) eps^2 times the magnitudes
-  // summed; its effect on the gap is sum |x_t| |rho_t| (below).
+  // summed; its effect on the gap is sum |x_t| |rho_t| (EvaluateCertificate).
   double error_bound = 0;
   std::vector<DoubleDouble> next(n), cur(n);
   for (int t = T; t >= 0; --t) {  // y_T = H_T'u_T, y_t = F_t'y_{t+1} + H_t'u_t   [BCW Thm 2.5, A'y = H'u]
@@ -151,46 +153,63 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const 
     }
     std::swap(next, cur);
   }
-  // y(u) farther outside dom f_t* than round-off (the interior point's dual is feasible only to its
-  // tolerance): the dual point is shrunk towards 0, (u, y) -> s (u, y) with the largest s in (0, 1] that puts
-  // every y_t in its box. A'y = H'u is linear, so s (u, y) is exactly dual feasible when every box of dom g*
-  // and dom f* contains 0 (l1, Huber, Vapnik, quantile, box, Gaussian): a true, slightly looser certificate.
-  {
-    double shrink = 1;
-    bool zero_inside = true;
-    for (int t = 0; t <= T; ++t) {
-      const Penalty& f = p.ft(t);
-      for (int i = 0; i < n; ++i) {
-        const double v = res->y(i, t), lo = f.conjugate_lo()(i), hi = f.conjugate_hi()(i);
-        if (v <= hi && v >= lo) continue;
-        if (v - hi <= 1e-8 * (1 + std::abs(v)) && lo - v <= 1e-8 * (1 + std::abs(v))) continue;  // round-off
-        if (lo > 0 || hi < 0) zero_inside = false;
-        shrink = std::min(shrink, v > hi ? hi / v : lo / v);
-      }
-      for (int j = 0; j < nz; ++j)
-        if (p.gt(t).conjugate_lo()(j) > 0 || p.gt(t).conjugate_hi()(j) < 0) zero_inside = false;
-    }
-    if (shrink < 1 && shrink > 0 && zero_inside) {
-      res->u *= shrink;
-      res->y *= shrink;
-      y_lo *= shrink;
-    }
-  }
-  // y(u) outside dom f_t* by round-off is projected: the moved amount enters the bound as
-  // sum |x_t| |dy_t| (the size of x - x* taken as at most that of x); beyond 1e-8 relative, no finite
-  // certificate.
-  bool certified = true;
+  return error_bound;
+}
+
+// y(u) farther outside dom f_t* than round-off (the interior point's dual is feasible only to its
+// tolerance): the dual point is shrunk towards 0, (u, y) -> s (u, y) with the largest s in (0, 1] that puts
+// every y_t in its box. A'y = H'u is linear, so s (u, y) is exactly dual feasible when every box of dom g*
+// and dom f* contains 0 (l1, Huber, Vapnik, quantile, box, Gaussian): a true, slightly looser certificate.
+template <int kN>
+void ShrinkDualIntoDomain(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo) {
+  const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
+  double shrink = 1;
+  bool zero_inside = true;
   for (int t = 0; t <= T; ++t) {
+    const Penalty& f = p.ft(t);
+    for (int i = 0; i < n; ++i) {
+      const double v = res->y(i, t), lo = f.conjugate_lo()(i), hi = f.conjugate_hi()(i);
+      if (v <= hi && v >= lo) continue;
+      if (v - hi <= 1e-8 * (1 + std::abs(v)) && lo - v <= 1e-8 * (1 + std::abs(v))) continue;  // round-off
+      if (lo > 0 || hi < 0) zero_inside = false;
+      shrink = std::min(shrink, v > hi ? hi / v : lo / v);
+    }
+    for (int j = 0; j < nz; ++j)
+      if (p.gt(t).conjugate_lo()(j) > 0 || p.gt(t).conjugate_hi()(j) < 0) zero_inside = false;
+  }
+  if (shrink < 1 && shrink > 0 && zero_inside) {
+    res->u *= shrink;
+    res->y *= shrink;
+    *y_lo *= shrink;
+  }
+}
+
+// y(u) outside dom f_t* by round-off is projected: the moved amount enters the bound as
+// sum |x_t| |dy_t| (the size of x - x* taken as at most that of x, added to *error_bound); beyond 1e-8
+// relative, no finite certificate (returns false).
+template <int kN>
+bool ProjectDualStates(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo,
+                       double* error_bound) {
+  const int n = kN > 0 ? kN : p.state_dim();
+  bool certified = true;
+  for (int t = 0; t <= p.T(); ++t) {
     const double before = res->y.col(t).cwiseAbs().maxCoeff();
-    const double moved = project(p.ft(t), res->y.col(t).data(), n);
+    const double moved = ProjectIntoConjugateDomain(p.ft(t), res->y.col(t).data(), n, res);
     if (moved > 0) {
-      y_lo.col(t).setZero();
-      error_bound += res->x.col(t).cwiseAbs().sum() * moved;
+      y_lo->col(t).setZero();
+      *error_bound += res->x.col(t).cwiseAbs().sum() * moved;
       if (moved > 1e-8 * (1 + before)) certified = false;
     }
   }
-  // Objectives and the gap as compensated sums of per-term values; S sums the magnitudes each term is
-  // computed from, for the running error bound gamma S (Higham, sec. 3.3).
+  return certified;
+}
+
+// Objectives and the gap as compensated sums of per-term values; S sums the magnitudes each term is
+// computed from, for the running error bound gamma S (Higham, sec. 3.3).
+template <int kN>
+void EvaluateCertificate(const MapSmootherProblem& p, double z_scale, const Eigen::MatrixXd& r,
+                         const Eigen::MatrixXd& y_lo, double error_bound, bool certified, MapSmootherResult* res) {
+  const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
   CompensatedSum primal, gap;
   double magnitudes = 0;
   const double domain_tolerance = 1e-8 * z_scale;
@@ -230,7 +249,12 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const 
   res->relative_gap_bound = certified && std::isfinite(res->gap) && std::isfinite(res->gap_error_bound)
                                 ? (std::max(res->gap, 0.0) + res->gap_error_bound) / std::max(1.0, std::abs(res->primal))
                                 : std::numeric_limits<double>::infinity();
-  // Reconstruction w_t in d f_t*(y_t), then x_0 = w_0, x_{t+1} = F_t x_t + w_{t+1}  [BCW sec. 3].
+}
+
+// Reconstruction w_t in d f_t*(y_t), then x_0 = w_0, x_{t+1} = F_t x_t + w_{t+1}  [BCW sec. 3].
+template <int kN>
+void ReconstructFromDual(const MapSmootherProblem& p, double mu, MapSmootherResult* res) {
+  const int T = p.T(), n = kN > 0 ? kN : p.state_dim();
   res->x_from_dual.resize(n, T + 1);
   res->nonunique_steps.clear();
   // The interior point locates a dual state that is degenerate on a kink of f_t* only to O(sqrt(mu)),
@@ -258,78 +282,48 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const 
   res->max_abs_x_difference = (res->x_from_dual - res->x).cwiseAbs().maxCoeff();
 }
 
-}  // namespace
-
-double MapSmootherDataUnit(const MapSmootherProblem& problem) {
-  const Eigen::MatrixXd& z = problem.z;
-  std::vector<double> steps;
-  if (z.cols() > 1) {
-    steps.reserve(static_cast<std::size_t>(z.rows()) * (z.cols() - 1));
-    for (Eigen::Index t = 0; t + 1 < z.cols(); ++t)
-      for (Eigen::Index i = 0; i < z.rows(); ++i) steps.push_back(std::abs(z(i, t + 1) - z(i, t)));
+// Everything of the result after the iteration, from res->x and res->u (see
+// ident/smoothing/internal/map_smoother_fast_path.h): residuals, the polished and projected dual point
+// (u, y(u)), the certificate, and the reconstruction of x from the dual.
+template <int kN>
+void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const MapSmootherDualIterate* dual,
+                  MapSmootherResult* res) {
+  Eigen::MatrixXd r;
+  PrimalResiduals<kN>(p, res, &r);
+  if (dual != nullptr) {
+    Eigen::MatrixXd v = dual->process_dual;
+    PolishDual<kN>(p, *dual, &v, &res->u);
   }
-  if (!steps.empty()) {
-    const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-    std::nth_element(steps.begin(), mid, steps.end());
-    if (*mid > 0 && std::isfinite(*mid)) return *mid;
-    double mean = 0;
-    for (double d : steps) mean += d / static_cast<double>(steps.size());
-    if (mean > 0 && std::isfinite(mean)) return mean;
-  }
-  const double largest = z.size() ? z.cwiseAbs().maxCoeff() : 0.0;
-  if (largest > 0 && std::isfinite(largest)) return largest;
-  // Measurements all zero: the penalties' own scale, the largest finite bound, offset or linear term of
-  // their PLQ forms (all in the unit of the residuals).
-  double bound = 0;
-  auto take = [&](const Eigen::VectorXd& v) {
-    for (double x : v)
-      if (std::isfinite(x)) bound = std::max(bound, std::abs(x));
-  };
-  for (const std::vector<models::Penalty>* penalties : {&problem.process, &problem.measurement})
-    for (const models::Penalty& f : *penalties) {
-      take(f.plq().lo);
-      take(f.plq().hi);
-      take(f.plq().b);
-      take(f.plq().p);
-    }
-  return bound > 0 ? bound : 1.0;
+  for (int t = 0; t <= p.T(); ++t)
+    ProjectIntoConjugateDomain(p.gt(t), res->u.col(t).data(), p.measurement_dim(), res);
+  Eigen::MatrixXd y_lo;
+  double error_bound = DualStatesDoubleDouble<kN>(p, res, &y_lo);
+  ShrinkDualIntoDomain<kN>(p, res, &y_lo);
+  const bool certified = ProjectDualStates<kN>(p, res, &y_lo, &error_bound);
+  EvaluateCertificate<kN>(p, z_scale, r, y_lo, error_bound, certified, res);
+  ReconstructFromDual<kN>(p, mu, res);
 }
 
-void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptions& options, double z_scale,
-                             double mu, const MapSmootherDualIterate* dual, MapSmootherResult* res) {
-  if (!res->x.allFinite() || !res->u.allFinite()) {  // overflow or NaN in the iteration: nothing to evaluate
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    res->status = MapSmootherStatus::kNumericalFailure;
-    res->message = fmt::format(
-        "the iterate is not finite after {} iterations (values too large or too far apart "
-        "in scale: rescale the data or the model)",
-        res->iterations);
-    res->primal = res->dual = res->gap = res->relative_gap = res->dual_infeasibility = nan;
-    res->gap_error_bound = res->relative_gap_bound = nan;
-    res->max_abs_x_difference = nan;
-    res->w.setConstant(res->x.rows(), res->x.cols(), nan);
-    res->y.setConstant(res->x.rows(), res->x.cols(), nan);
-    res->x_from_dual.setConstant(res->x.rows(), res->x.cols(), nan);
-    res->nonunique_steps.clear();
-    res->reconstruction_unique = false;
-    return;
-  }
-  switch (p.state_dim()) {
-    case 1:
-      FinishResult<1>(p, z_scale, mu, dual, res);
-      break;
-    case 2:
-      FinishResult<2>(p, z_scale, mu, dual, res);
-      break;
-    case 3:
-      FinishResult<3>(p, z_scale, mu, dual, res);
-      break;
-    case 4:
-      FinishResult<4>(p, z_scale, mu, dual, res);
-      break;
-    default:
-      FinishResult<0>(p, z_scale, mu, dual, res);
-  }
+// A non-finite iterate (overflow or NaN in the iteration): nothing to evaluate, every figure NaN.
+void MarkNotFinite(MapSmootherResult* res) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  res->status = MapSmootherStatus::kNumericalFailure;
+  res->message = fmt::format(
+      "the iterate is not finite after {} iterations (values too large or too far apart "
+      "in scale: rescale the data or the model)",
+      res->iterations);
+  res->primal = res->dual = res->gap = res->relative_gap = res->dual_infeasibility = nan;
+  res->gap_error_bound = res->relative_gap_bound = nan;
+  res->max_abs_x_difference = nan;
+  res->w.setConstant(res->x.rows(), res->x.cols(), nan);
+  res->y.setConstant(res->x.rows(), res->x.cols(), nan);
+  res->x_from_dual.setConstant(res->x.rows(), res->x.cols(), nan);
+  res->nonunique_steps.clear();
+  res->reconstruction_unique = false;
+}
+
+// The final status and message from the iteration's status and the certificate.
+void SetStatusAndMessage(const MapSmootherOptions& options, MapSmootherResult* res) {
   // A converged iterate whose objectives overflow (e.g. the dual states y_t = F_t'y_{t+1} + H_t'u_t under
   // dynamics of 1e86) certifies nothing: reported as a numerical failure, never as converged.
   if (res->status == MapSmootherStatus::kConverged && !(std::isfinite(res->primal) && std::isfinite(res->dual))) {
@@ -384,6 +378,68 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptio
                                  res->iterations, res->kkt_residual);
       break;
   }
+}
+
+}  // namespace
+
+double MapSmootherDataUnit(const MapSmootherProblem& problem) {
+  const Eigen::MatrixXd& z = problem.z;
+  std::vector<double> steps;
+  if (z.cols() > 1) {
+    steps.reserve(static_cast<std::size_t>(z.rows()) * (z.cols() - 1));
+    for (Eigen::Index t = 0; t + 1 < z.cols(); ++t)
+      for (Eigen::Index i = 0; i < z.rows(); ++i) steps.push_back(std::abs(z(i, t + 1) - z(i, t)));
+  }
+  if (!steps.empty()) {
+    const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+    std::nth_element(steps.begin(), mid, steps.end());
+    if (*mid > 0 && std::isfinite(*mid)) return *mid;
+    double mean = 0;
+    for (double d : steps) mean += d / static_cast<double>(steps.size());
+    if (mean > 0 && std::isfinite(mean)) return mean;
+  }
+  const double largest = z.size() ? z.cwiseAbs().maxCoeff() : 0.0;
+  if (largest > 0 && std::isfinite(largest)) return largest;
+  // Measurements all zero: the penalties' own scale, the largest finite bound, offset or linear term of
+  // their PLQ forms (all in the unit of the residuals).
+  double bound = 0;
+  auto take = [&](const Eigen::VectorXd& v) {
+    for (double x : v)
+      if (std::isfinite(x)) bound = std::max(bound, std::abs(x));
+  };
+  for (const std::vector<models::Penalty>* penalties : {&problem.process, &problem.measurement})
+    for (const models::Penalty& f : *penalties) {
+      take(f.plq().lo);
+      take(f.plq().hi);
+      take(f.plq().b);
+      take(f.plq().p);
+    }
+  return bound > 0 ? bound : 1.0;
+}
+
+void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptions& options, double z_scale,
+                             double mu, const MapSmootherDualIterate* dual, MapSmootherResult* res) {
+  if (!res->x.allFinite() || !res->u.allFinite()) {
+    MarkNotFinite(res);
+    return;
+  }
+  switch (p.state_dim()) {
+    case 1:
+      FinishResult<1>(p, z_scale, mu, dual, res);
+      break;
+    case 2:
+      FinishResult<2>(p, z_scale, mu, dual, res);
+      break;
+    case 3:
+      FinishResult<3>(p, z_scale, mu, dual, res);
+      break;
+    case 4:
+      FinishResult<4>(p, z_scale, mu, dual, res);
+      break;
+    default:
+      FinishResult<0>(p, z_scale, mu, dual, res);
+  }
+  SetStatusAndMessage(options, res);
 }
 
 }  // namespace ident::internal

@@ -1,0 +1,209 @@
+// The per-step records and small kernels of the MAP smoother's fast path (internal to
+// ident/smoothing/internal/map_smoother_fast_path.cc; see map_smoother_fast_path.h): the step constants and
+// iterate, the constants' assembly, reciprocals, the small SPD inverse and the inverse of the factorisation's Schur complement.
+#pragma once
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "ident/smoothing/map_smoother.h"
+
+namespace ident::internal::fast_path {
+
+// The data of one time step that does not change between iterations. Time-invariant problems share three
+// of these (t = 0, 0 < t < T, t = T); time-varying ones have one per step.
+template <int kN>
+struct StepConstants {
+  double Db[kN * kN];  // constant Newton block D_t = W_t + F_t' W_{t+1} F_t (process terms)
+  double E[kN * kN];   // sub-diagonal block E_t = -W_t F_{t-1} (t >= 1)
+  double F[kN * kN];   // F_{t-1} (t >= 1)
+  double W[kN * kN];   // W_t = B'K^-1 B of the process penalty f_t (bound-free: u = K^-1 (B r - b) implicitly)
+  double c0[kN];       // c0 = p - B'K^-1 b: p + B'u = c0 + W r
+  double H[kN];        // H_t (1 x n)
+  // n = 2: E_t P E_t' for a symmetric P as (E P E')_ij = EPE[3k] p11 + EPE[3k+1] p12 + EPE[3k+2] p22,
+  // ij = 11, 12, 22 (k = 0, 1, 2): one level of products on the factorisation's recurrence.
+  double EPE[9];
+  double lo, hi, m;  // measurement penalty: box [lo, hi], M = m
+};
+
+// The iterate and work values of one time step (nz = 1: one PLQ coordinate per step).
+template <int kN>
+struct StepState {
+  double u, slo, shi, qlo, qhi;       // multiplier of g_t, slacks and multipliers of lo <= u <= hi
+  double du, dslo, dshi, dqlo, dqhi;  // Newton direction
+  double islo, ishi, iqlo, iqhi;      // reciprocals (once per iteration: no divisions in the other passes)
+  double kd;                          // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
+  double r3, rt3;                     // R3 and R3 - e of the current direction
+  double R4[kN];                      // gradient residual
+  double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
+  double dx[kN];                      // state direction
+  double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)
+  double M[kN * kN];                  // P_t E_t: v_t = P_t b_t - M_t v_{t-1}
+  double N[kN * kN];                  // P_t E_{t+1}': dx_t = v_t - N_t dx_{t+1}
+};
+
+// 1/s_lo, 1/s_hi, 1/q_lo, 1/q_hi by one division, 1/(s_lo s_hi q_lo q_hi), when that product is a normal
+// number (four divisions otherwise): the divider, not the arithmetic, bounds the factorisation pass.
+template <int kN>
+[[gnu::always_inline]] inline void Reciprocals(StepState<kN>& s) {
+  const double ss = s.slo * s.shi, qq = s.qlo * s.qhi, all = ss * qq;
+  if (all >= std::numeric_limits<double>::min() && all <= std::numeric_limits<double>::max()) {
+    const double inv = 1.0 / all, iss = qq * inv, iqq = ss * inv;
+    s.islo = s.shi * iss;
+    s.ishi = s.slo * iss;
+    s.iqlo = s.qhi * iqq;
+    s.iqhi = s.qlo * iqq;
+  } else {
+    s.islo = 1.0 / s.slo;
+    s.ishi = 1.0 / s.shi;
+    s.iqlo = 1.0 / s.qlo;
+    s.iqhi = 1.0 / s.qhi;
+  }
+}
+
+// In-place inverse of a symmetric positive definite kN x kN matrix (column-major); false if a pivot is not
+// positive. n = 1, 2 in closed form (one reciprocal), Gauss-Jordan without pivoting beyond.
+template <int kN>
+[[gnu::always_inline]] inline bool InvertSpd(double* A) {
+  if constexpr (kN == 1) {
+    if (!(A[0] > 0) || !std::isfinite(A[0])) return false;
+    A[0] = 1.0 / A[0];
+    return true;
+  } else if constexpr (kN == 2) {
+    const double a = A[0], b = A[1], d = A[3];
+    const double det = a * d - b * b;
+    if (!(a > 0) || !(det > 0) || !std::isfinite(det)) return false;
+    const double idet = 1.0 / det;
+    A[0] = d * idet;
+    A[1] = A[2] = -b * idet;
+    A[3] = a * idet;
+    return true;
+  } else {
+    for (int k = 0; k < kN; ++k) {
+      const double pivot = A[k + k * kN];
+      if (!(pivot > 0) || !std::isfinite(pivot)) return false;
+      const double ip = 1.0 / pivot;
+      A[k + k * kN] = 1.0;
+      for (int j = 0; j < kN; ++j) A[k + j * kN] *= ip;
+      for (int i = 0; i < kN; ++i) {
+        if (i == k) continue;
+        const double f = A[i + k * kN];
+        A[i + k * kN] = 0.0;
+        for (int j = 0; j < kN; ++j) A[i + j * kN] -= f * A[k + j * kN];
+      }
+    }
+    return true;
+  }
+}
+
+// The step constants of step t: W = W_t and c0 = c0_t of the process penalty f_t (in the unit σ), W_next =
+// W_{t+1} (nullptr at t = T), the measurement penalty's box and M divided by the data unit sigma.
+template <int kN>
+void FillStepConstants(const MapSmootherProblem& p, int t, const Eigen::MatrixXd& W_t, const Eigen::VectorXd& c0,
+                       const Eigen::MatrixXd* W_next, double sigma, StepConstants<kN>* c) {
+  using MatN = Eigen::Matrix<double, kN, kN>;
+  using VecN = Eigen::Matrix<double, kN, 1>;
+  const MatN W = W_t;
+  MatN Db = W, E = MatN::Zero(), F = MatN::Zero();
+  if (W_next) {
+    const MatN Fn = p.Ft(t);
+    Db += Fn.transpose() * MatN(*W_next) * Fn;
+  }
+  if (t > 0) {
+    F = p.Ft(t - 1);
+    E = -W * F;
+  }
+  Eigen::Map<MatN>(c->Db) = Db;
+  Eigen::Map<MatN>(c->E) = E;
+  Eigen::Map<MatN>(c->F) = F;
+  Eigen::Map<MatN>(c->W) = W;
+  Eigen::Map<VecN>(c->c0) = c0;
+  Eigen::Map<VecN>(c->H) = p.Ht(t).row(0).transpose();
+  if constexpr (kN == 2) {
+    const int ij[3][2] = {{0, 0}, {0, 1}, {1, 1}};
+    for (int k = 0; k < 3; ++k) {
+      const int i = ij[k][0], j = ij[k][1];
+      c->EPE[3 * k] = E(i, 0) * E(j, 0);
+      c->EPE[3 * k + 1] = E(i, 0) * E(j, 1) + E(i, 1) * E(j, 0);
+      c->EPE[3 * k + 2] = E(i, 1) * E(j, 1);
+    }
+  }
+  const models::PlqForm& g = p.gt(t).plq();
+  c->lo = g.lo(0) / sigma;  // in the unit σ
+  c->hi = g.hi(0) / sigma;
+  c->m = g.M(0, 0);
+}
+
+// P_t = S_t^-1 and gf = P_t H' K^-1 of the factorisation's step t, from Pp = P_{t-1} (nullptr at t = 0),
+// ikd = K and kd = K^-1. S_t = Db_t - E_t P_{t-1} E_t' + K^-1 H'H. K^-1 grows to ~1/mu on the coordinates at
+// a kink, where inverting S_t directly cancels terms of order K^-2 (tested: the iteration then stalls near
+// 1e-10). The measurement's rank-one term enters the inverse with the factor K instead: with
+// S0 = Db_t - E_t P_{t-1} E_t' (of the process terms' size),
+//   n = 2: P_t = (K adj(S0) + adj(H'H)) / (K det(S0) + H adj(S0) H')   (adj is linear for 2 x 2,
+//          det(S0 + k h h') = det(S0) + k h'adj(S0)h), one division, no differences of large terms;
+//   else:  Sherman-Morrison, P_t = P0 - g g' / (K + H g), P0 = S0^-1, g = P0 H'.
+// False if S0 is not numerically positive definite.
+template <int kN>
+[[gnu::always_inline]] inline bool StepInverse(const StepConstants<kN>& c, const double* Pp, double ikd, double kd,
+                                               double* P, double* gf) {
+  if constexpr (kN == 2) {
+    double s11 = c.Db[0], s12 = c.Db[1], s22 = c.Db[3];
+    if (Pp) {
+      const double p11 = Pp[0], p12 = Pp[1], p22 = Pp[3];
+      s11 -= c.EPE[0] * p11 + c.EPE[1] * p12 + c.EPE[2] * p22;
+      s12 -= c.EPE[3] * p11 + c.EPE[4] * p12 + c.EPE[5] * p22;
+      s22 -= c.EPE[6] * p11 + c.EPE[7] * p12 + c.EPE[8] * p22;
+    }
+    const double det = s11 * s22 - s12 * s12;
+    if (!(s11 > 0) || !(det > 0) || !std::isfinite(det)) return false;
+    const double h1 = c.H[0], h2 = c.H[1];
+    const double a1 = s22 * h1 - s12 * h2, a2 = s11 * h2 - s12 * h1;  // adj(S0) H'
+    double id = 1.0 / (ikd * det + (h1 * a1 + h2 * a2)), bid = id;
+    double a = ikd, b = 1;
+    if (!(ikd <= 1e150)) {  // K S0 could overflow: numerator and denominator divided by K
+      a = 1;
+      b = kd;
+      id = 1.0 / (det + kd * (h1 * a1 + h2 * a2));
+      bid = kd * id;
+    }
+    P[0] = (a * s22 + b * (h2 * h2)) * id;
+    P[1] = P[2] = -(a * s12 + b * (h1 * h2)) * id;
+    P[3] = (a * s11 + b * (h1 * h1)) * id;
+    gf[0] = a1 * bid;  // P_t H' K^-1 = adj(S0) H' / (K det(S0) + H adj(S0) H')
+    gf[1] = a2 * bid;
+  } else {
+    for (int i = 0; i < kN * kN; ++i) P[i] = c.Db[i];
+    if (Pp) {
+      double PE[kN * kN];  // P_{t-1} E_t'
+      for (int j = 0; j < kN; ++j)
+        for (int i = 0; i < kN; ++i) {
+          double pe = 0;
+          for (int k = 0; k < kN; ++k) pe += Pp[i + k * kN] * c.E[j + k * kN];
+          PE[i + j * kN] = pe;
+        }
+      for (int j = 0; j < kN; ++j)
+        for (int i = 0; i < kN; ++i) {
+          double epe = 0;
+          for (int k = 0; k < kN; ++k) epe += c.E[i + k * kN] * PE[k + j * kN];
+          P[i + j * kN] -= epe;
+        }
+    }
+    if (!InvertSpd<kN>(P)) return false;
+    double g[kN], hg = 0;
+    for (int i = 0; i < kN; ++i) {
+      double gi = 0;
+      for (int k = 0; k < kN; ++k) gi += P[i + k * kN] * c.H[k];
+      g[i] = gi;
+      hg += c.H[i] * gi;
+    }
+    const double f = 1.0 / (ikd + hg);
+    for (int j = 0; j < kN; ++j)
+      for (int i = 0; i < kN; ++i) P[i + j * kN] -= f * g[i] * g[j];
+    for (int i = 0; i < kN; ++i) gf[i] = f * g[i];
+  }
+  return true;
+}
+
+}  // namespace ident::internal::fast_path
