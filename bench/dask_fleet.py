@@ -2,8 +2,9 @@
 """Throughput of ident.distributed on a local cluster, and the threads of `ident compare --jobs`.
 
 1. A fleet of 400 simulated records of 10^4 rows (ARX(2,2,1), Cauchy noise), fitted with cauchy, given
-   as CSV paths and as DataFrames: serially in this process, then on a LocalCluster of 2 single-threaded
-   worker processes (started and warmed before the clock). Speed-up = serial time / cluster time; overhead
+   as CSV paths and as DataFrames: serially in this process, then on ident.distributed.local_cluster(2),
+   the cluster client=None starts, of 2 single-threaded worker processes (started and warmed before the
+   clock). Speed-up = serial time / cluster time; overhead
    per record = (cluster time x workers - serial time) / records, split into the scheduler's share (wall
    time outside the span of the tasks, from Dask's task stream) and the workers' compute against the same
    fits run alone in this process.
@@ -41,7 +42,7 @@ def record(seed, rows):
 
 def fleet(records, rows, workers, folder):
     """The fleet as CSV files (what a nightly refit reads), and as DataFrames sent from this process."""
-    from dask.distributed import Client, LocalCluster, get_task_stream
+    from dask.distributed import Client, get_task_stream
     frames = [record(seed, rows) for seed in range(records)]
     paths = []
     for i, frame in enumerate(frames):
@@ -49,8 +50,7 @@ def fleet(records, rows, workers, folder):
         frame.to_csv(paths[-1], index=False)
     spec = dict(output="y", inputs=["u"], na=2, nb=2, nk=1, split=1, detrend="none", estimator="cauchy")
     out = {"records": records, "rows": rows, "workers": workers}
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            Client(cluster) as client:
+    with idd.local_cluster(workers) as cluster, Client(cluster) as client:
         idd.fit_many(frames[:workers * 2], spec, client=client)  # warm the workers (imports)
         for name, fleet_records in (("paths", paths), ("dataframes", frames)):
             start = time.perf_counter()

@@ -49,9 +49,11 @@ def test_local_cluster_of_two_processes_gives_the_serial_results(tmp_path):
                dd.from_pandas(long, npartitions=2)]
     spec = dict(ARX, estimator="cauchy")
     serial = idd.fit_many(records, spec, client="serial", key="unit")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    # The cluster client=None starts: one process per worker, and no statistical profiler in them.
+    with idd.local_cluster(2) as cluster, distributed.Client(cluster) as client:
+        profiling = client.run(lambda: __import__("dask").config.get("distributed.worker.profile.enabled"))
         parallel = idd.fit_many(records, spec, client=client, key="unit", batch_size=2)
+    assert list(profiling.values()) == [False, False]
     assert_same_rows(serial, parallel)
     assert list(serial["record"])[-4:] == ["malformed", "unit=0", "unit=1", "unit=2"]
     bad = serial[serial["record"] == "malformed"].iloc[0]
