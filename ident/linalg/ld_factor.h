@@ -247,12 +247,7 @@ class LdFactor {
       double* __restrict row = L + j * n;
       double* __restrict row_saved = saved + j * n;
       if (gj != 0.0) {
-        const double w = 1 / dj;
-        const double u = u_next + gj * gj * w;
-        const double ru = 1 / u;
-        dn = dj * u * ru_next;
-        b = gj * w * ru;
-        u_next = u, ru_next = ru;
+        AgeeTurnerStep(dj, gj, u_next, ru_next, dn, b);
         for (Eigen::Index i = 0; i < j; ++i) {
           const double l = row[i];
           row_saved[i] = l;
@@ -346,6 +341,17 @@ class LdFactor {
   // Covers the rounding of the ~2n operations behind each L entry (relative 2^-52 each) many times over.
   static constexpr double kRoundingSlack = 1 + 0x1p-20;
 
+  // One step j, for g_j ≠ 0, of the plan's recurrence (PlanPrefixSum): u_j = u_{j+1} + g_j²/d'_j,
+  // dn_j = d'_j u_j / u_{j+1}, b_j = g_j / (d'_j u_j), with u_{j+1} and its reciprocal carried from step j+1.
+  [[gnu::always_inline]] static void AgeeTurnerStep(double dj, double gj, double& u_next, double& ru_next,
+                                                    double& dn, double& b) noexcept {
+    const double w = 1 / dj;
+    const double u = u_next + gj * gj * w;
+    const double ru = 1 / u;
+    dn = dj * u * ru_next;
+    b = gj * w * ru;
+    u_next = u, ru_next = ru;
+  }
 
   // Stores the new d_j and b_j of a plan sweep and adds them to the plan's by-products.
   void Record(Plan& p, Eigen::Index j, double dn, double b, double gj) noexcept {
@@ -376,14 +382,7 @@ class LdFactor {
       const double dj = d_(j) * s;
       const double gj = g(j);
       double b = 0, dn = dj;
-      if (gj != 0.0) {
-        const double w = 1 / dj;
-        const double u = u_next + gj * gj * w;
-        const double ru = 1 / u;
-        dn = dj * u * ru_next;
-        b = gj * w * ru;
-        u_next = u, ru_next = ru;
-      }
+      if (gj != 0.0) AgeeTurnerStep(dj, gj, u_next, ru_next, dn, b);
       Record(p, j, dn, b, gj);
     }
     return p;

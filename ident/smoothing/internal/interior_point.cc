@@ -103,30 +103,14 @@ inline double Solver<kN>::KktResidual(double v_scale, double z_scale, double bou
 template <int kN>
 inline bool Solver<kN>::Stops(int iter, double kkt, const std::vector<double>& history, double relative_floor,
                               double x_scale, double bound_scale, double z_scale, MapSmootherResult* res) const {
-  if (kkt <= o_.tolerance) {
-    res->status = MapSmootherStatus::kConverged;
-    return true;
-  }
-  if (iter >= o_.max_iterations) return true;
-  if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
-    res->status = MapSmootherStatus::kStalled;
-    res->message = fmt::format(
-        "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
-        "round-off floor is {:.1e} for states of size {:.1e})",
-        iter, kkt, kStallWindow, relative_floor, sigma_ * x_scale);
-    return true;
-  }
+  if (StopsOnProgress(o_, iter, kkt, history, relative_floor, sigma_ * x_scale, res)) return true;
   if (u_.size() && u_.cwiseAbs().maxCoeff() > 1e10 * bound_scale * z_scale) {
     Eigen::Index c = 0;
     const double umax = u_.cwiseAbs().maxCoeff(&c);
     int t = -1;
     for (const Term& term : active_)
       if (term.offset <= c && c < term.offset + term.prep->k) t = term.t;
-    res->status = MapSmootherStatus::kInfeasible;
-    res->message = fmt::format(
-        "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
-        "the data): no state sequence keeps every residual inside its penalty's domain",
-        sigma_ * umax, t, umax / (bound_scale * z_scale));
+    MarkDiverging(sigma_ * umax, t, umax / (bound_scale * z_scale), res);
     return true;
   }
   return false;

@@ -142,28 +142,13 @@ class FastSolver {
   // diverging multipliers; sets res's status and message and returns true if the iteration stops.
   bool Stops(int iter, double kkt, const Residuals& r, double r4_floor, double z_scale,
              const std::vector<double>& history, MapSmootherResult* res) const {
-    if (kkt <= o_.tolerance) {
-      res->status = MapSmootherStatus::kConverged;
+    if (StopsOnProgress(o_, iter, kkt, history, r4_floor / (r.v_scale * matrix_scale_), sigma_ * r.xmax, res))
       return true;
-    }
-    if (iter >= o_.max_iterations) return true;
-    if (iter >= kStallWindow && kkt > kStallProgress * history[iter - kStallWindow]) {
-      res->status = MapSmootherStatus::kStalled;
-      res->message = fmt::format(
-          "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
-          "round-off floor is {:.1e} for states of size {:.1e})",
-          iter, kkt, kStallWindow, r4_floor / (r.v_scale * matrix_scale_), sigma_ * r.xmax);
-      return true;
-    }
     if (r.umax > 1e10 * bound_scale_ * z_scale) {
       int t = 0;
       for (int s = 0; s <= T_; ++s)
         if (std::abs(steps_[s].u) > std::abs(steps_[t].u)) t = s;
-      res->status = MapSmootherStatus::kInfeasible;
-      res->message = fmt::format(
-          "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
-          "the data): no state sequence keeps every residual inside its penalty's domain",
-          sigma_ * r.umax, t, r.umax / (bound_scale_ * z_scale));
+      MarkDiverging(sigma_ * r.umax, t, r.umax / (bound_scale_ * z_scale), res);
       return true;
     }
     return false;

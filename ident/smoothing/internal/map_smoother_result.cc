@@ -442,4 +442,30 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptio
   SetStatusAndMessage(options, res);
 }
 
+bool StopsOnProgress(const MapSmootherOptions& options, int iteration, double kkt, const std::vector<double>& history,
+                     double relative_floor, double state_size, MapSmootherResult* res) {
+  if (kkt <= options.tolerance) {
+    res->status = MapSmootherStatus::kConverged;
+    return true;
+  }
+  if (iteration >= options.max_iterations) return true;
+  if (iteration >= kStallWindow && kkt > kStallProgress * history[iteration - kStallWindow]) {
+    res->status = MapSmootherStatus::kStalled;
+    res->message = fmt::format(
+        "stalled after {} iterations at KKT residual {:.1e} (no progress in the last {}; the residuals' "
+        "round-off floor is {:.1e} for states of size {:.1e})",
+        iteration, kkt, kStallWindow, relative_floor, state_size);
+    return true;
+  }
+  return false;
+}
+
+void MarkDiverging(double u, int t, double ratio, MapSmootherResult* res) {
+  res->status = MapSmootherStatus::kInfeasible;
+  res->message = fmt::format(
+      "infeasible: the multipliers diverge (|u| = {:.1e} at t = {}, {:.0e} times the penalties' bounds and "
+      "the data): no state sequence keeps every residual inside its penalty's domain",
+      u, t, ratio);
+}
+
 }  // namespace ident::internal

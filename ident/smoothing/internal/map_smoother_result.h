@@ -4,6 +4,7 @@
 #pragma once
 
 #include <algorithm>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -25,6 +26,16 @@ inline double RelativeKktResidual(double total_complementarity, double objective
 // The stall test of both paths: the KKT residual fell by less than kStallProgress over kStallWindow iterations.
 inline constexpr int kStallWindow = 10;
 inline constexpr double kStallProgress = 0.9;
+// The stopping rule of both paths before a Newton step, but for diverging multipliers: converged (kkt at the
+// tolerance), out of iterations, or stalled (`history` holds each iteration's kkt; `relative_floor` is the
+// residuals' round-off floor relative to the dual values and `state_size` the states' size, for the
+// message). Sets res's status and message; returns true if the iteration stops.
+bool StopsOnProgress(const MapSmootherOptions& options, int iteration, double kkt, const std::vector<double>& history,
+                     double relative_floor, double state_size, MapSmootherResult* res);
+// The status and message of multipliers that diverge: |u| = `u` (in the data's unit) at time t, `ratio` times
+// the penalties' bounds and the data.
+void MarkDiverging(double u, int t, double ratio, MapSmootherResult* res);
+
 // The stationarity residual's round-off floor in units of eps × the magnitudes it is computed from.
 inline constexpr double kFloorFactor = 64;
 // The same for the residuals r = z - Hx of R3, relative to the states' size: tighter, since the gap of a
