@@ -226,7 +226,7 @@ void SafeStudentRegression::Replay() noexcept {
 
 bool SafeStudentRegression::FinishStartup() noexcept {
   if (!in_startup() || stored_ <= num_parameters()) return false;
-  Restart(stored_, /*lock_in=*/false, /*strict=*/false);
+  Restart(stored_, RestartKind::kStartup, /*strict=*/false);
   start_at_end_ = started_;
   return started_;
 }
@@ -266,7 +266,7 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
     for (long i = 0; i < stored_; ++i) samples.col(i) = history_.col(Column(i));
     SafeStudentRegression candidate = *this;
     const std::size_t index = events_.size();
-    candidate.Restart(stored_, /*lock_in=*/true);
+    candidate.Restart(stored_, RestartKind::kEndOfData);
     if (candidate.events_.size() <= index) return false;
     // The restart's replay weighs each sample once against the estimate of its time, as the first pass did;
     // further passes from its estimate (BeginPass) let it settle, as --passes does.
@@ -283,7 +283,7 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
   }
 }
 
-void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool strict) noexcept {
+void SafeStudentRegression::Restart(long recent, RestartKind kind, bool strict) noexcept {
   const int rho = num_parameters();
   const double low_before = monitor_.low_fraction();
   Eigen::MatrixXd window(recent, rho + 1);  // the last `recent` samples, oldest first
@@ -298,13 +298,15 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool stri
   StudentRegressionOptions o = options_.base;
   o.leverage_guard = true;
   const double growth = std::pow(options_.scale_growth, (o.dof + 1) / (2 * o.dof));
-  // Start-up: the window's fit is the prior of its samples; lock-in: ν0 = ρ+k+δ pseudo-samples at the
-  // recent fit. Either way every kept sample is replayed.
-  const double nu0 = lock_in_restart ? rho + o.dof + o.delta : static_cast<double>(recent);
+  // Start-up and end of the data: the window's fit is the prior of its samples; lock-in: ν0 = ρ+k+δ
+  // pseudo-samples at the recent fit, which the replay of the older samples then outweighs. Either way
+  // every kept sample is replayed.
+  const bool recorded = kind != RestartKind::kStartup;
+  const double nu0 = kind == RestartKind::kLockIn ? rho + o.dof + o.delta : static_cast<double>(recent);
   Eigen::VectorXd influence;
   double seed = 0;
   std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth, strict, influence, seed);
-  if (!prior && !lock_in_restart) return;  // not identifiable yet: the start-up waits for more samples
+  if (!prior && !recorded) return;  // not identifiable yet: the start-up waits for more samples
   centre_ = centre;
   spread_ = spread;
   if (!prior) {
@@ -319,13 +321,13 @@ void SafeStudentRegression::Restart(long recent, bool lock_in_restart, bool stri
   } catch (...) {
     // Not reached for a finite window (the prior is validated); the current estimator is kept.
   }
-  if (!lock_in_restart && !started_) {
+  if (!recorded && !started_) {
     start_update_ = updates_;
     start_window_ = recent;
   }
   started_ = true;
   Replay();
-  if (!lock_in_restart) return;
+  if (!recorded) return;
   RestartEvent event;
   event.update = updates_;
   event.replayed = stored_;

@@ -89,10 +89,10 @@ class SafeStudentRegression {
     Store(y, z);
     if (in_startup()) {
       // Every W samples until the regressors of the last (up to 5W) samples are identifiable.
-      if (updates_ % startup_window_ == 0) Restart(std::min<long>(stored_, 5L * startup_window_), /*lock_in=*/false);
+      if (updates_ % startup_window_ == 0) Restart(std::min<long>(stored_, 5L * startup_window_), RestartKind::kStartup);
     } else if (monitor_.Add(report.nu * report.weight)) {
       ++lock_ins_;
-      if (options_.restart_on_lock_in && updates_ >= next_restart_) Restart(RecentWindow(), /*lock_in=*/true);
+      if (options_.restart_on_lock_in && updates_ >= next_restart_) Restart(RecentWindow(), RestartKind::kLockIn);
     }
     return report;
   }
@@ -141,9 +141,10 @@ class SafeStudentRegression {
   // window refused, and replays them. True if it started; false (state unchanged) otherwise or when not
   // in the start-up. The command line calls it after the last estimation row.
   bool FinishStartup() noexcept;
-  // The end of the data after the start-up: weighs the recursion's estimate against a competing hypothesis: a restart from
-  // the robust fit of every kept sample (as for a lock-in), a replay of them all and kCompetingPasses − 1
-  // further passes (BeginPass) over them. The one with the higher
+  // The end of the data after the start-up: weighs the recursion's estimate against a competing hypothesis:
+  // a start from the robust fit of every kept sample as the start-up makes one (the fit is the prior of the
+  // samples it summarises, ν0 = their number), a replay of them all and kCompetingPasses − 1 further passes
+  // (BeginPass) over them. The one with the higher
   // Student-t_k likelihood of the kept samples (scale profiled out, by more than kCompetingMargin) is kept; an
   // adopted restart is recorded (RestartEvent::end_of_data). Up to kMaxCompetingSamples kept samples (the
   // robust fit costs O(nρ²) per start it tries); none of this with `base.exact` or without restarts. The
@@ -183,10 +184,15 @@ class SafeStudentRegression {
   long RecentWindow() const;
   // Column i (0 = oldest) of the kept samples.
   Eigen::Index Column(long i) const { return (ring_start_ + i) % stored_; }
-  // Rebuilds the estimator from the robust fit of the last `recent` samples and replays every kept sample
-  // (the start-up, or a lock-in restart, which is recorded).
+  // What a Restart is for; it sets the prior's weight ν0 (see Restart in the .cc).
+  enum class RestartKind {
+    kStartup,    // the robust start: the window's fit is the prior of its samples (ν0 = the window)
+    kLockIn,     // a lock-in restart: ν0 = ρ+k+δ pseudo-samples at the recent fit (recorded)
+    kEndOfData,  // ReconsiderAtEnd's competing start: as kStartup over every kept sample (recorded)
+  };
+  // Rebuilds the estimator from the robust fit of the last `recent` samples and replays every kept sample.
   // `strict` = false: FinishStartup's start from every kept sample (see RobustWindowPrior).
-  void Restart(long recent, bool lock_in, bool strict = true) noexcept;
+  void Restart(long recent, RestartKind kind, bool strict = true) noexcept;
   // Replays every kept sample into est_ (the last M weights refill the monitor).
   void Replay() noexcept;
   // (y − Θ'z)² of every kept sample, oldest first.
