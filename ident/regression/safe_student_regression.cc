@@ -261,21 +261,27 @@ double SafeStudentRegression::ProfileNegativeLogLikelihood(const Eigen::VectorXd
 bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
   if (!options_.restart_on_lock_in || stored_ != updates_ || stored_ > kMaxCompetingSamples) return false;
   try {
-    // The kept samples, oldest first (BeginPass clears the history; the candidate is fed them again).
+    // The kept samples, oldest first (BeginPass clears the history; the candidates are fed them again).
     Eigen::MatrixXd samples(num_parameters() + 1, stored_);
     for (long i = 0; i < stored_; ++i) samples.col(i) = history_.col(Column(i));
-    SafeStudentRegression candidate = *this;
     const std::size_t index = events_.size();
-    candidate.Restart(stored_, RestartKind::kEndOfData);
-    if (candidate.events_.size() <= index) return false;
-    // The restart's replay weighs each sample once against the estimate of its time, as the first pass did;
-    // further passes from its estimate (BeginPass) let it settle, as --passes does.
-    for (int pass = 1; pass < kCompetingPasses && candidate.BeginPass(); ++pass)
-      for (long i = 0; i < samples.cols(); ++i) candidate.Update(samples(0, i), samples.col(i).tail(num_parameters()));
-    const double current = ProfileNegativeLogLikelihood(parameters());
-    const double other = candidate.ProfileNegativeLogLikelihood(candidate.parameters());
-    if (!(other < current - kCompetingMargin)) return false;
-    *this = std::move(candidate);
+    std::optional<SafeStudentRegression> best;
+    double best_nll = ProfileNegativeLogLikelihood(parameters()) - kCompetingMargin;
+    const WindowStart fit = FitWindow(stored_, StartWeight(RestartKind::kEndOfData, stored_), /*strict=*/true);
+    for (const RestartKind kind : {RestartKind::kEndOfData, RestartKind::kLockIn}) {
+      SafeStudentRegression candidate = *this;
+      WindowStart start = fit;
+      if (start.prior) start.prior->nu0 = StartWeight(kind, stored_);
+      candidate.StartFrom(std::move(start), kind);
+      // The restart's replay weighs each sample once against the estimate of its time, as the first pass
+      // did; further passes from its estimate (BeginPass) let it settle, as --passes does.
+      for (int pass = 1; pass < kCompetingPasses && candidate.BeginPass(); ++pass)
+        for (long i = 0; i < samples.cols(); ++i) candidate.Update(samples(0, i), samples.col(i).tail(num_parameters()));
+      const double nll = candidate.ProfileNegativeLogLikelihood(candidate.parameters());
+      if (nll < best_nll) best_nll = nll, best = std::move(candidate);
+    }
+    if (!best) return false;
+    *this = std::move(*best);
     events_[index].end_of_data = true;
     return true;
   } catch (...) {
@@ -283,51 +289,64 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
   }
 }
 
+double SafeStudentRegression::StartWeight(RestartKind kind, long recent) const {
+  // Start-up and end of the data: the window's fit is the prior of its samples; lock-in: ν0 = ρ+k+δ
+  // pseudo-samples at the recent fit, which the replay of the older samples then outweighs.
+  const StudentRegressionOptions& o = options_.base;
+  return kind == RestartKind::kLockIn ? num_parameters() + o.dof + o.delta : static_cast<double>(recent);
+}
+
+SafeStudentRegression::WindowStart SafeStudentRegression::FitWindow(long recent, double nu0, bool strict) const {
+  const int rho = num_parameters();
+  WindowStart start;
+  start.window.resize(recent, rho + 1);  // the last `recent` samples, oldest first
+  for (long i = 0; i < recent; ++i) start.window.row(i) = history_.col(Column(stored_ - recent + i)).transpose();
+  start.centre.resize(rho);
+  start.spread.resize(rho);
+  for (int j = 0; j < rho; ++j) {
+    Eigen::VectorXd column = start.window.col(j + 1);
+    std::nth_element(column.data(), column.data() + recent / 2, column.data() + recent);
+    start.centre(j) = column(recent / 2);
+    start.spread(j) = RobustScale(start.window.col(j + 1));
+  }
+  const double k = options_.base.dof, growth = std::pow(options_.scale_growth, (k + 1) / (2 * k));
+  start.prior = RobustWindowPrior(start.window, options_, nu0, growth, strict, start.influence, start.seed);
+  return start;
+}
+
 void SafeStudentRegression::Restart(long recent, RestartKind kind, bool strict) noexcept {
+  WindowStart start = FitWindow(recent, StartWeight(kind, recent), strict);
+  if (!start.prior && kind == RestartKind::kStartup) return;  // not identifiable yet: the start-up waits
+  StartFrom(std::move(start), kind);
+}
+
+void SafeStudentRegression::StartFrom(WindowStart start, RestartKind kind) noexcept {
   const int rho = num_parameters();
   const double low_before = monitor_.low_fraction();
-  Eigen::MatrixXd window(recent, rho + 1);  // the last `recent` samples, oldest first
-  for (long i = 0; i < recent; ++i) window.row(i) = history_.col(Column(stored_ - recent + i)).transpose();
-  Eigen::VectorXd centre(rho), spread(rho);
-  for (int j = 0; j < rho; ++j) {
-    Eigen::VectorXd column = window.col(j + 1);
-    std::nth_element(column.data(), column.data() + recent / 2, column.data() + recent);
-    centre(j) = column(recent / 2);
-    spread(j) = RobustScale(window.col(j + 1));
-  }
   StudentRegressionOptions o = options_.base;
   o.leverage_guard = true;
-  const double growth = std::pow(options_.scale_growth, (o.dof + 1) / (2 * o.dof));
-  // Start-up and end of the data: the window's fit is the prior of its samples; lock-in: ν0 = ρ+k+δ
-  // pseudo-samples at the recent fit, which the replay of the older samples then outweighs. Either way
-  // every kept sample is replayed.
-  const bool recorded = kind != RestartKind::kStartup;
-  const double nu0 = kind == RestartKind::kLockIn ? rho + o.dof + o.delta : static_cast<double>(recent);
-  Eigen::VectorXd influence;
-  double seed = 0;
-  std::optional<RegressionPrior> prior = RobustWindowPrior(window, options_, nu0, growth, strict, influence, seed);
-  if (!prior && !recorded) return;  // not identifiable yet: the start-up waits for more samples
-  centre_ = centre;
-  spread_ = spread;
-  if (!prior) {
-    prior = RegressionPrior::FromWindow(window, rho + o.dof + o.delta, o.delta);  // vague, equivariant
-    influence.resize(0);
+  centre_ = std::move(start.centre);
+  spread_ = std::move(start.spread);
+  if (!start.prior) {
+    start.prior = RegressionPrior::FromWindow(start.window, rho + o.dof + o.delta, o.delta);  // vague, equivariant
+    start.influence.resize(0);
   }
   try {
-    o.prior = *prior;
+    o.prior = *start.prior;
     est_ = StudentRegression(rho, o);  // assigned only if the constructor succeeds
-    start_influence_ = std::move(influence);
-    if (start_influence_.size() > 0) est_->SeedPropagatedVariance(seed);
+    start_influence_ = std::move(start.influence);
+    if (start_influence_.size() > 0) est_->SeedPropagatedVariance(start.seed);
   } catch (...) {
     // Not reached for a finite window (the prior is validated); the current estimator is kept.
   }
-  if (!recorded && !started_) {
+  // Every kept sample is replayed, whatever the kind; the start-up alone is not recorded as a restart.
+  if (kind == RestartKind::kStartup && !started_) {
     start_update_ = updates_;
-    start_window_ = recent;
+    start_window_ = start.window.rows();
   }
   started_ = true;
   Replay();
-  if (!recorded) return;
+  if (kind == RestartKind::kStartup) return;
   RestartEvent event;
   event.update = updates_;
   event.replayed = stored_;

@@ -51,6 +51,7 @@
 #include "common/step_report.h"
 #include "ident/regression/lock_in_monitor.h"
 #include "ident/regression/regression_estimator.h"
+#include "ident/regression/regression_prior.h"
 #include "ident/regression/student_regression.h"
 
 namespace ident {
@@ -141,19 +142,20 @@ class SafeStudentRegression {
   // window refused, and replays them. True if it started; false (state unchanged) otherwise or when not
   // in the start-up. The command line calls it after the last estimation row.
   bool FinishStartup() noexcept;
-  // The end of the data after the start-up: weighs the recursion's estimate against a competing hypothesis:
-  // a start from the robust fit of every kept sample as the start-up makes one (the fit is the prior of the
-  // samples it summarises, ν0 = their number), a replay of them all and kCompetingPasses − 1 further passes
-  // (BeginPass) over them. The one with the higher
-  // Student-t_k likelihood of the kept samples (scale profiled out, by more than kCompetingMargin) is kept; an
-  // adopted restart is recorded (RestartEvent::end_of_data). Up to kMaxCompetingSamples kept samples (the
-  // robust fit costs O(nρ²) per start it tries); none of this with `base.exact` or without restarts. The
-  // workflow calls it after FinishStartup when the regressors do not depend on the estimate (not ARMAX/OE).
+  // The end of the data after the start-up: weighs the recursion's estimate against two competing
+  // hypotheses, both from the robust fit of every kept sample: a start as the start-up makes one (the fit is
+  // the prior of the samples it summarises, ν0 = their number) and a restart as for a lock-in (ν0 = ρ+k+δ),
+  // each followed by a replay of every kept sample and kCompetingPasses − 1 further passes (BeginPass). The
+  // one with the highest Student-t_k likelihood of the kept samples (scale profiled out) is kept, a
+  // hypothesis only if it beats the recursion's by more than kCompetingMargin; an adopted one is recorded
+  // (RestartEvent::end_of_data). Up to kMaxCompetingSamples kept samples (the robust fit, made once, costs
+  // O(nρ²) per start it tries); none of this with `base.exact` or without restarts. The workflow calls it
+  // after FinishStartup when the regressors do not depend on the estimate (not ARMAX/OE).
   bool ReconsiderAtEnd() noexcept;
   // Negative log-likelihood margin a restart must win by at the end of the data.
   static constexpr double kCompetingMargin = 1.0;
   static constexpr long kMaxCompetingSamples = 100'000;
-  // Passes over the kept samples the competing restart makes (its replay, then BeginPass and a pass).
+  // Passes over the kept samples each competing hypothesis makes (its replay, then BeginPass and a pass).
   static constexpr int kCompetingPasses = 3;
 
   // Back to the state of a freshly built estimator with the same options: the provisional prior (the
@@ -190,9 +192,23 @@ class SafeStudentRegression {
     kLockIn,     // a lock-in restart: ν0 = ρ+k+δ pseudo-samples at the recent fit (recorded)
     kEndOfData,  // ReconsiderAtEnd's competing start: as kStartup over every kept sample (recorded)
   };
-  // Rebuilds the estimator from the robust fit of the last `recent` samples and replays every kept sample.
+  // The robust fit of the last `recent` samples (their rows, oldest first): the prior of a start from it
+  // with weight ν0 (nullopt: the window has none, see RobustWindowPrior in the .cc), each sample's influence
+  // on it, and the regressors' median and robust scale (the leverage guard's reference).
+  struct WindowStart {
+    Eigen::MatrixXd window;
+    Eigen::VectorXd centre, spread, influence;
+    std::optional<RegressionPrior> prior;
+    double seed = 0;
+  };
+  double StartWeight(RestartKind kind, long recent) const;
   // `strict` = false: FinishStartup's start from every kept sample (see RobustWindowPrior).
+  WindowStart FitWindow(long recent, double nu0, bool strict) const;
+  // Rebuilds the estimator from the robust fit of the last `recent` samples and replays every kept sample.
   void Restart(long recent, RestartKind kind, bool strict = true) noexcept;
+  // Rebuilds the estimator from `start` (the vague prior of its window if it has none) and replays every
+  // kept sample; a restart other than the start-up is recorded.
+  void StartFrom(WindowStart start, RestartKind kind) noexcept;
   // Replays every kept sample into est_ (the last M weights refill the monitor).
   void Replay() noexcept;
   // (y − Θ'z)² of every kept sample, oldest first.
