@@ -70,6 +70,13 @@ class BasicLcGaussianFilter {
   StepReport Correct(const models::ProjectedMeasurement& measurement, double y) noexcept;
   // The update for given moments of the tilted density along c (used by event models).
   StepReport ApplyTilt(const Eigen::Ref<const Eigen::VectorXd>& c, const models::TiltedMoments& t) noexcept;
+  // ScaleCovariance(factor) followed by ApplyTilt(c, t), in one pass over P and without a copy, for a
+  // caller that has formed Pc = P c with P before the scaling (the tilt's prior variance is factor·c'Pc):
+  //   k = factor·Pc/σ²,  m ← m + k (μ_s − c'm),  P_ij ← factor·P_ij − (σ² − v_s)·(k_i k_j)
+  // (the product k_i k_j is symmetric, so P stays exactly symmetric). Every bound that keeps the result
+  // finite is checked first (|P_ij| ≤ trace P for P ≥ 0), so a failure leaves the state untouched.
+  StepReport ScaleAndApplyTilt(double factor, const Eigen::Ref<const Eigen::VectorXd>& c,
+                               const Eigen::Ref<const Eigen::VectorXd>& Pc, const models::TiltedMoments& t) noexcept;
   // The update for a reading that depends on x only through a pair s jointly Gaussian with x (e.g.
   // s = (c'x(k−1), c'x(k)), studies/mems/crossing_reading.h): `cross` = Cov(x, s) (n × 2), s ~ N(prior_mean,
   // prior_cov) before the reading, `t` the moments of the tilted density of s. x | s is Gaussian, so
@@ -128,7 +135,7 @@ BasicLcGaussianFilter<N>::BasicLcGaussianFilter(const Eigen::Ref<const Eigen::Ve
                 P0.cols(), n, n);
   IDENT_REQUIRE(Eigen::LLT<Eigen::MatrixXd>(P0).info() == Eigen::Success, "P0 is not positive definite");
   m_ = m0;
-  P_ = P0;
+  P_ = 0.5 * (P0 + P0.transpose());  // exactly symmetric (ScaleAndApplyTilt keeps it so)
   k_.resize(n);
   k2_.resize(n, 2);
   kd_.resize(n, 2);
@@ -190,6 +197,35 @@ StepReport BasicLcGaussianFilter<N>::ApplyTilt(const Eigen::Ref<const Eigen::Vec
   P_new_ = P_;
   P_new_.noalias() -= (s2 - std::min(t.variance, s2)) * k_ * k_.transpose();  // P ← P − k k'(σ² − v_s)
   return CommitUpdate(t.log_normalizer, t.mean - prior_mean);
+}
+
+template <int N>
+StepReport BasicLcGaussianFilter<N>::ScaleAndApplyTilt(double factor, const Eigen::Ref<const Eigen::VectorXd>& c,
+                                                       const Eigen::Ref<const Eigen::VectorXd>& Pc,
+                                                       const models::TiltedMoments& t) noexcept {
+  const int n = num_states();
+  if (!(factor >= 1 && std::isfinite(factor)) || c.size() != n || Pc.size() != n || !c.allFinite()) {
+    return {StepStatus::kRejectedInvalid};
+  }
+  if (!t.ok || !std::isfinite(t.mean) || !(t.variance >= 0) || !std::isfinite(t.log_normalizer)) {
+    return {StepStatus::kNumericalFailure};
+  }
+  const double s2 = factor * c.dot(Pc);
+  if (!(s2 > 0) || !std::isfinite(s2)) return {StepStatus::kNumericalFailure};
+  const double innovation = t.mean - c.dot(m_), shrink = s2 - std::min(t.variance, s2);
+  k_.noalias() = (factor / s2) * Pc;
+  // Bounds by norms (|x_i| ≤ ‖x‖, max P_ii ≤ trace P for P ≥ 0): finite bounds keep every entry finite.
+  const double k2 = k_.squaredNorm();
+  if (!std::isfinite(k2) || !std::isfinite(innovation) || !std::isfinite(m_.norm() + std::sqrt(k2) * std::abs(innovation)) ||
+      !std::isfinite(factor * P_.trace() + shrink * k2)) {
+    return {StepStatus::kNumericalFailure};
+  }
+  m_.noalias() += innovation * k_;
+  for (int j = 0; j < n; ++j) P_.col(j) = factor * P_.col(j) - shrink * (k_ * k_(j));  // entries f·P_ij − s·(k_i k_j)
+  log_likelihood_ += t.log_normalizer;
+  StepReport report{StepStatus::kUpdated};
+  report.prediction_error = innovation;
+  return report;
 }
 
 template <int N>

@@ -191,13 +191,15 @@ bool LcRegression::Outlying(const Eigen::Ref<const Eigen::VectorXd>& z) const no
 }
 
 StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>& z) noexcept {
-  if (options_.forgetting < 1) filter_.ScaleCovariance(1 / options_.forgetting);
+  // The random-walk time update P̃ ← P̃/λ (forgetting) goes into the measurement update (ScaleAndApplyTilt).
+  const double factor = options_.forgetting < 1 ? 1 / options_.forgetting : 1;
   const double mu = z.dot(filter_.mean());
   pz_.noalias() = filter_.covariance() * z;
-  const double vt = z.dot(pz_);  // ṽ = z'P̃z = Var(z'θ)/σ²
+  const double vt = factor * z.dot(pz_);  // ṽ = z'P̃z = Var(z'θ)/σ² after the time update
   const double e = y - mu;
   if (!(vt > 0 && std::isfinite(vt))) {
     // z carries no information on θ (z = 0): nothing to learn, the sample counts.
+    filter_.ScaleCovariance(factor);
     StepReport report{StepStatus::kUpdated};
     report.prediction_error = e;
     report.weight = options_.noise.Weight(e / sigma_);
@@ -211,6 +213,7 @@ StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>&
   // correct a direction the start window hardly determined.)
   const double weight = options_.noise.Weight(a);
   if (options_.leverage_guard && weight < kGrossWeight && Outlying(z)) {
+    filter_.ScaleCovariance(factor);
     StepReport report{StepStatus::kUpdated};
     report.prediction_error = e;
     report.weight = 0;
@@ -220,7 +223,7 @@ StepReport LcRegression::Step(double y, const Eigen::Ref<const Eigen::VectorXd>&
   if (!r.ok) return {StepStatus::kNumericalFailure};
   // s = y − σr: mean μ + σ(a − E r); the filter holds P̃, so the variance goes in units of σ² (Var r).
   const models::TiltedMoments s{r.log_normalizer - std::log(sigma_), mu + sigma_ * (a - r.mean), r.variance, true};
-  StepReport report = filter_.ApplyTilt(z, s);
+  StepReport report = filter_.ScaleAndApplyTilt(factor, z, pz_, s);
   if (!report.updated()) return report;
   report.prediction_error = e;
   report.weight = weight;

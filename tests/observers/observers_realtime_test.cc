@@ -220,6 +220,30 @@ TYPED_TEST(LcGaussianRealtime, WithGaussianReadingsEqualsTheTextbookKalmanFilter
   EXPECT_LT((Eigen::Matrix2d(f.covariance()) - P).norm(), 1e-12);
 }
 
+// ScaleAndApplyTilt (the lc:* regression's step under forgetting) is ScaleCovariance then ApplyTilt, in
+// one pass, and keeps P exactly symmetric.
+TYPED_TEST(LcGaussianRealtime, ScaleAndApplyTiltIsTheTimeUpdateThenTheTilt) {
+  Eigen::Matrix2d P0;
+  P0 << 0.7, 0.2, 0.2, 0.4;
+  TypeParam one(Eigen::Vector2d(0.3, -1), P0), two(Eigen::Vector2d(0.3, -1), P0);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g;
+  for (int t = 0; t < 500; ++t) {
+    const Eigen::Vector2d c(g(rng), 1 + g(rng));
+    const double factor = 1 / 0.95, s2 = factor * c.dot(one.covariance() * c), prior = c.dot(one.mean());
+    // The tilt of a Gaussian reading y = c'x + N(0, 0.2²): mean and variance of the product of Gaussians.
+    const double y = prior + g(rng), r2 = 0.04, v = s2 * r2 / (s2 + r2);
+    const models::TiltedMoments tilt{0.0, v * (prior / s2 + y / r2), v, true};
+    const Eigen::Vector2d Pc = one.covariance() * c;
+    ASSERT_TRUE(one.ScaleAndApplyTilt(factor, c, Pc, tilt).updated());
+    ASSERT_TRUE(two.ScaleCovariance(factor).updated());
+    ASSERT_TRUE(two.ApplyTilt(c, tilt).updated());
+    ASSERT_EQ(one.covariance()(0, 1), one.covariance()(1, 0)) << t;
+  }
+  EXPECT_LT((one.mean() - two.mean()).norm(), 1e-12 * two.mean().norm());
+  EXPECT_LT((one.covariance() - two.covariance()).norm(), 1e-12 * two.covariance().norm());
+}
+
 // A measurement function whose tilt throws (user code, or a Boost.Math overflow error).
 class ThrowingMeasurement final : public models::ProjectedMeasurement {
  public:
@@ -256,7 +280,16 @@ TYPED_TEST(LcGaussianRealtime, RejectedOrFailedStepsLeaveTheStateBitIdentical) {
   blow_up.A = 1e300 * Eigen::Matrix2d::Identity();
   EXPECT_EQ(f.Predict(blow_up, Eigen::VectorXd::Zero(1)).status, StepStatus::kNumericalFailure);  // P overflows
   EXPECT_EQ(f.Update({Eigen::VectorXd::Zero(1), 0.0}).status, StepStatus::kRejectedInvalid);      // no model
+  const Eigen::Vector2d Pc = P * c;
+  EXPECT_EQ(f.ScaleAndApplyTilt(0.5, c, Pc, {0.0, 0.0, 1.0, true}).status, StepStatus::kRejectedInvalid);
+  EXPECT_EQ(f.ScaleAndApplyTilt(1.1, c, Pc, models::TiltedMoments{}).status, StepStatus::kNumericalFailure);
+  const Eigen::Vector2d tiny = 1e-10 * c, P_tiny = 1e-10 * Pc;  // gain ~1e10: the mean would overflow
+  EXPECT_EQ(f.ScaleAndApplyTilt(1.1, tiny, P_tiny, {0.0, 1e300, 0.0, true}).status, StepStatus::kNumericalFailure);
   EXPECT_TRUE(unchanged());
+  TypeParam wide(Eigen::Vector2d::Zero(), 10 * Eigen::Matrix2d::Identity());  // 1e308·P would overflow
+  EXPECT_EQ(wide.ScaleAndApplyTilt(1e308, c, Eigen::Vector2d(10, 0), {0.0, 0.0, 1.0, true}).status,
+            StepStatus::kNumericalFailure);
+  EXPECT_TRUE(SameBits(Eigen::Matrix2d(wide.covariance()), Eigen::Matrix2d(10 * Eigen::Matrix2d::Identity())));
   // Update is all or nothing.
   TypeParam stored(model, std::make_shared<ThrowingMeasurement>(), Eigen::Vector2d(0, 1), Eigen::Matrix2d::Identity());
   EXPECT_EQ(stored.Update({Eigen::VectorXd::Zero(1), 0.0}).status, StepStatus::kNumericalFailure);
