@@ -177,8 +177,8 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
                    "estimate\n",
                    e.update, e.replayed);
       else
-        fmt::print("    restart at update {}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
-                 e.update, e.replayed,
+        fmt::print("    restart at update {}{}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
+                 e.update, e.pass > 1 ? fmt::format(" of pass {}", e.pass) : "", e.replayed,
                  e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
                  100 * e.low_weight_before, 100 * e.low_weight_after,
                  e.resolved ? "" : " (not a lock-in: the noise is heavier-tailed than the model; next restart waits)");

@@ -56,6 +56,8 @@ struct RestartEvent {
                                  // a lock-in); the next restart then waits twice as long
   bool end_of_data = false;      // made when the data ended: the restart's estimate had the higher likelihood
                                  // (SafeStudentRegression::ReconsiderAtEnd)
+  int pass = 1;                  // the pass over the data it was made in (1 = the first; BeginPass starts
+                                 // the next, as do the further passes of an end-of-data restart)
 };
 
 // The state of a robust estimator's lock-in safeguard (ident/regression/lock_in_monitor.h, docs/explanation/karny-hangos-estimator.md):

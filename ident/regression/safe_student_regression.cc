@@ -348,6 +348,7 @@ void SafeStudentRegression::StartFrom(WindowStart start, RestartKind kind) noexc
   Replay();
   if (kind == RestartKind::kStartup) return;
   RestartEvent event;
+  event.pass = pass_;
   event.update = updates_;
   event.replayed = stored_;
   event.dropped = updates_ - stored_;
@@ -380,6 +381,7 @@ bool SafeStudentRegression::BeginPass() {
   next_restart_ = 0;
   backoff_ = 1;
   started_ = true;
+  ++pass_;
   monitor_.Clear();
   return true;
 }
@@ -391,6 +393,7 @@ void SafeStudentRegression::Reset() {
   backoff_ = 1;
   started_ = false;
   lock_ins_ = 0;
+  pass_ = 1;
   events_.clear();
   start_influence_.resize(0);
   start_update_ = start_window_ = 0;

@@ -227,6 +227,7 @@ class SafeStudentRegression {
   Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the last (re)start window
   long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
   int lock_ins_ = 0;
+  int pass_ = 1;  // RestartEvent::pass
   std::vector<RestartEvent> events_;
   long start_update_ = 0, start_window_ = 0;  // the robust start (LockInStatus)
   bool start_at_end_ = false;

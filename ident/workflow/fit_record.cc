@@ -20,7 +20,8 @@ nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events
                     {"low_weight_before", e.low_weight_before},
                     {"low_weight_after", e.low_weight_after},
                     {"resolved", e.resolved},
-                    {"end_of_data", e.end_of_data}});
+                    {"end_of_data", e.end_of_data},
+                    {"pass", e.pass}});
   return list;
 }
 

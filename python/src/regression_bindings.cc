@@ -142,6 +142,7 @@ py::object LockInDict(const std::optional<LockInStatus>& status) {
     d["low_weight_after"] = e.low_weight_after;
     d["resolved"] = e.resolved;
     d["end_of_data"] = e.end_of_data;
+    d["pass"] = e.pass;
     events.append(d);
   }
   py::dict d;

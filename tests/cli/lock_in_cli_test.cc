@@ -153,6 +153,23 @@ TEST(LockInCli, NullForRlsAndExactAndAReportLineForTheRobustOnes) {
       << r.out;
 }
 
+// silverbox (65 534 updates, heavier-tailed than Cauchy): the end-of-data restart replaces the estimate,
+// and the restarts of its further passes say which pass they belong to, in the JSON and in the report.
+TEST(LockInCli, RestartsOfFurtherPassesNameTheirPass) {
+  const nlohmann::json j = FitJson("silverbox_snls80mv --estimator cauchy");
+  const nlohmann::json& events = j["lock_in"]["events"];
+  std::size_t end = events.size();
+  for (std::size_t i = 0; i < events.size(); ++i)
+    if (events[i]["end_of_data"].get<bool>()) end = i;
+  ASSERT_LT(end, events.size());
+  ASSERT_LT(end + 1, events.size());  // the further passes restart too (heavy tails)
+  for (std::size_t i = 0; i < events.size(); ++i) EXPECT_EQ(events[i]["pass"].get<int>() > 1, i > end) << i;
+  const CliResult r = RunCli("fit silverbox_snls80mv --estimator cauchy");
+  EXPECT_NE(r.out.find(fmt::format("restart at update {} of pass 2:", events[end + 1]["update"].get<long>())),
+            std::string::npos)
+      << r.out;
+}
+
 TEST(LockInCli, BadLockInOptionsExitOneAndSayWhy) {
   const std::string dryer = "fit dryer --output y --input u --na 2 --nb 2 --nk 3";
   ExpectCliError(dryer + " --estimator rls --lock-in-window 50", "lock-in options apply to the robust estimators");

@@ -184,6 +184,15 @@ TEST(Restarts, KeepEverySample) {
       EXPECT_EQ(r.dropped, 0);
     }
   EXPECT_LT((b.parameters() - Eigen::Vector3d(1, 2, -1)).norm(), 0.15);
+  // A second pass numbers its restarts as pass 2, counting updates from its own start.
+  const std::size_t first_pass = a.restart_events().size();
+  ASSERT_TRUE(a.BeginPass());
+  for (std::size_t t = 0; t < arx.y.size(); ++t) a.Update(arx.y[t], arx.z[t]);
+  for (std::size_t i = 0; i < a.restart_events().size(); ++i) {
+    const RestartEvent& r = a.restart_events()[i];
+    EXPECT_EQ(r.pass, i < first_pass ? 1 : 2) << i;
+    EXPECT_LE(r.update, static_cast<long>(arx.y.size()));
+  }
 }
 
 // The order of the rows of a static record (t₂ noise, n = 2000) moves the estimate by less than its own
