@@ -22,8 +22,8 @@ void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
         if (na_option->count() == 0) na = 0;
       });
   app.add_option("--recursion", recursion,
-                 "ARMAX/OE/BJ: rplr (pseudo-linear regression) or rpem (prediction-error method, ARMAX and OE: "
-                 "gradient filtered by 1/C or 1/F)")
+                 "ARMAX/OE/BJ: rplr (pseudo-linear regression) or rpem (prediction-error method: the gradient "
+                 "filtered by 1/C, 1/F or D/(CF))")
       ->check(CLI::IsMember({"rplr", "rpem"}))
       ->capture_default_str();
   auto* regressors_option =

@@ -24,9 +24,13 @@ PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structur
       recursion_(recursion),
       psi_(Eigen::VectorXd::Zero(structure.num_parameters())) {
   if (recursion_ == Recursion::kPredictionError) {
-    IDENT_REQUIRE(structure.nf() == 0 || structure.nc() + structure.nd() == 0,
-                  "{}: the recursive prediction-error method is for ARMAX and OE models", structure.ToString());
-    past_psi_.setZero(structure.num_parameters(), structure.nf() > 0 ? structure.nf() : structure.nc());
+    const int nc = structure.nc(), nd = structure.nd(), nf = structure.nf();
+    box_jenkins_ = nf > 0 && nc + nd > 0;
+    past_psi_.setZero(structure.num_parameters(), box_jenkins_ ? std::max(nc + nf, nd) : (nf > 0 ? nf : nc));
+    if (box_jenkins_) {
+      pre_.setZero(structure.num_parameters());
+      cf_.setZero(nc + nf);
+    }
   }
 }
 
@@ -52,9 +56,14 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   for (int k = 0; k < structure_.nc(); ++k) phi_(structure_.c_offset() + k) = past_e_(k);
   for (int k = 0; k < structure_.nd(); ++k) phi_(structure_.d_offset() + k) = -past_v_(k);
   for (int k = 0; k < structure_.nf(); ++k) phi_(structure_.f_offset() + k) = -past_w_(k);
-  gradient_ = recursion_ == Recursion::kPredictionError && known_ && !fixed_;
+  gradient_ = recursion_ == Recursion::kPredictionError && known_ && !fixed_ && !measured_w_;
   if (!gradient_) {
     z = phi_;
+    return true;
+  }
+  if (box_jenkins_) {
+    BoxJenkinsGradient();
+    z = psi_;
     return true;
   }
   // ψ(t) = φ(t) − Σ_k g_k ψ(t−k), G = C (ARMAX) or F (OE) of the tracked estimate.
@@ -65,6 +74,35 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
     psi_.noalias() -= theta_(offset + k) * past_psi_.col((newest_psi_ + k) % n);
   z = psi_;
   return true;
+}
+
+void PseudoLinearRegressor::BoxJenkinsGradient() {
+  // ŷ = (D/C)(B/F) u + (1 − D/C) y, so −∂ε/∂θ is (D/(C F)) φ in the B and F coordinates and φ/C in the C
+  // and D ones. The ring holds p(t): p = φ/(C F) in B, F (then ψ = D(q) p there) and p = ψ = φ/C in C, D.
+  const int nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
+  const int b = structure_.na(), nb = structure_.arx().num_parameters() - b;
+  const int c = structure_.c_offset(), d = structure_.d_offset(), f = structure_.f_offset();
+  for (int k = 1; k <= nc + nf; ++k) {  // C(q)F(q) = 1 + Σ_k cf_k q^−k
+    double h = (k <= nc ? theta_(c + k - 1) : 0.0) + (k <= nf ? theta_(f + k - 1) : 0.0);
+    for (int i = std::max(1, k - nf); i <= std::min(nc, k - 1); ++i) h += theta_(c + i - 1) * theta_(f + k - i - 1);
+    cf_(k - 1) = h;
+  }
+  const Eigen::Index n = past_psi_.cols();
+  const auto past = [&](int k) { return past_psi_.col((newest_psi_ + k - 1) % n); };  // p(t−k), k ≥ 1
+  pre_ = phi_;
+  for (int k = 1; k <= nc + nf; ++k) {
+    pre_.segment(b, nb).noalias() -= cf_(k - 1) * past(k).segment(b, nb);
+    pre_.segment(f, nf).noalias() -= cf_(k - 1) * past(k).segment(f, nf);
+  }
+  for (int k = 1; k <= nc; ++k) {
+    pre_.segment(c, nc).noalias() -= theta_(c + k - 1) * past(k).segment(c, nc);
+    pre_.segment(d, nd).noalias() -= theta_(c + k - 1) * past(k).segment(d, nd);
+  }
+  psi_ = pre_;
+  for (int k = 1; k <= nd; ++k) {
+    psi_.segment(b, nb).noalias() += theta_(d + k - 1) * past(k).segment(b, nb);
+    psi_.segment(f, nf).noalias() += theta_(d + k - 1) * past(k).segment(f, nf);
+  }
 }
 
 double PseudoLinearRegressor::LinearisedOutput(double y) const {
@@ -132,7 +170,7 @@ void PseudoLinearRegressor::Store(double y) {
     if (!formed_)
       newest.setZero();
     else
-      newest = gradient_ ? psi_ : phi_;
+      newest = gradient_ ? (box_jenkins_ ? pre_ : psi_) : phi_;
     if (!newest.allFinite()) newest.setZero();
   }
   formed_ = gradient_ = false;

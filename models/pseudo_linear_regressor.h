@@ -21,9 +21,11 @@
 // Rows before t0 (no regressor) store w = y, ε = v = 0.
 //
 // Recursive prediction-error method (RPEM; Ljung & Söderström 1983, §3.7, the Gauss–Newton RPEM of
-// eq. (3.130); Ljung §11.4): with `Recursion::kPredictionError` (ARMAX and OE), while an estimate is
-// tracked, Next() writes the predictor's gradient ψ(t) = φ(t)/C(q) (ARMAX) or φ(t)/F(q) (OE), filtered with
-// the tracked (stable) estimate, instead of φ(t), and the estimator regresses the linearised output
+// eq. (3.130); Ljung §11.4): with `Recursion::kPredictionError`, while an estimate is tracked after the
+// warm-up (during it, with w = y, the noise model has no data to be differentiated on: z = φ), Next() writes
+// the predictor's gradient ψ(t) = φ(t)/C(q) (ARMAX) or φ(t)/F(q) (OE) — for Box–Jenkins D(q)φ(t)/(C(q)F(q))
+// in the B and F coordinates and φ(t)/C(q) in the C and D ones — filtered with the tracked (stable)
+// estimate, instead of φ(t), and the estimator regresses the linearised output
 // ỹ(t) = y(t) − θ'φ(t) + θ'ψ(t) (LinearisedOutput) on it: its update θ(t) = θ(t−1) + P(t)ψ(t)ε(t),
 // ε = y − θ(t−1)'φ, is then the RPEM step with the estimator's own weight (RLS, Cauchy, Student-t).
 // A fixed model (SetEstimate) predicts with φ as in RPLR.
@@ -47,7 +49,6 @@ class PseudoLinearRegressor {
   // Warm-up: the first kWarmUp·ρ tracked estimates keep w = y (an ARX start, the usual initialisation of
   // an OE fit): the noise-free outputs of estimates from a few samples would start the recursion far off.
   static constexpr int kWarmUp = 10;
-  // Throws InvalidArgument for kPredictionError on a Box–Jenkins structure.
   explicit PseudoLinearRegressor(const PolynomialStructure& structure, const OutputCleaningOptions& cleaning = {},
                                  Recursion recursion = Recursion::kPseudoLinear);
 
@@ -78,6 +79,7 @@ class PseudoLinearRegressor {
 
  private:
   void Store(double y);  // after the ARX part has stored y: the residual, noise and noise-free output
+  void BoxJenkinsGradient();  // pre_ and psi_ for the current φ (RPEM, Box–Jenkins)
   static void Shift(Eigen::VectorXd& history, double value);
 
   PolynomialStructure structure_;
@@ -87,7 +89,10 @@ class PseudoLinearRegressor {
   Eigen::VectorXd work_;                      // the stability test's buffer
   Recursion recursion_;
   Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
-  Eigen::MatrixXd past_psi_;                  // ψ(t−1−k), k < nc (ARMAX) or nf (OE), in column (newest_psi_ + k) mod n
+  Eigen::MatrixXd past_psi_;                  // ψ(t−1−k), k < nc (ARMAX) or nf (OE), in column (newest_psi_ + k) mod n;
+                                              // Box–Jenkins: p(t−1−k) (BoxJenkinsGradient), k < max(nc + nf, nd)
+  Eigen::VectorXd pre_, cf_;                  // Box–Jenkins: p(t); the coefficients of C(q)F(q)
+  bool box_jenkins_ = false;                  // RPEM with F and C or D
   Eigen::Index newest_psi_ = 0;
   bool gradient_ = false;                     // z = ψ(t) for the current sample
   bool known_ = false;                        // an estimate has been given

@@ -29,7 +29,7 @@ std::unique_ptr<DataSource> ModelSpec::MakeSource(const std::vector<std::string>
     return v.size() == m ? v : std::vector<int>(m, v[0]);
   };
   IDENT_REQUIRE(recursion == "rplr" || recursion == "rpem", "--recursion '{}': need rplr or rpem", recursion);
-  IDENT_REQUIRE(recursion == "rplr" || polynomial(), "--recursion rpem needs an ARMAX (--nc) or OE (--nf) model");
+  IDENT_REQUIRE(recursion == "rplr" || polynomial(), "--recursion rpem needs an ARMAX (--nc), OE (--nf) or BJ model");
   if (polynomial()) {
     const models::PolynomialStructure structure(na, per_input(nb, "nb"), per_input(nk, "nk"), nc, nd, nf);
     return MakePolynomialSource(columns, output, inputs, structure, source, clean,

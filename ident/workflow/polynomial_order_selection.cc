@@ -78,7 +78,7 @@ std::vector<ModelSpec> PolynomialGridModels(const io::DataTable& table, const st
                 const std::unique_ptr<DataSource> source = spec.MakeSource(table.names, name);
                 *t0 = std::max(*t0, source->first_regression_index());
               } catch (const InvalidArgument&) {
-                continue;  // no model: an A polynomial with F, D without F, RPEM for Box–Jenkins
+                continue;  // no model: an A polynomial with F, D without F
               }
               specs.push_back(std::move(spec));
             }

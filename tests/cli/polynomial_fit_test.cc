@@ -260,7 +260,6 @@ TEST(PolynomialFit, UnstableOutputErrorModelHasNoFitPercent) {
 TEST(PolynomialFit, RefusesStructuresThatAreNoneOfArmaxOeBj) {
   ExpectCliError("fit dryer --output y --input u --na 2 --nf 2", "has no A polynomial");
   ExpectCliError("fit dryer --nd 1", "needs nf >= 1");
-  ExpectCliError("fit dryer --nc 1 --nd 1 --nf 2 --recursion rpem", "for ARMAX and OE models");
   ExpectCliError("fit dryer --recursion rpem", "--recursion rpem needs an ARMAX");
   ExpectCliError("fit dryer --nc -1", "orders must be >= 0");
   ExpectCliError("compare dryer --nf -2", "orders must be >= 0");

@@ -206,8 +206,8 @@ TEST(PseudoLinearRegressor, TrackEstimateKeepsTheLastStableOne) {
 namespace ident::models {
 namespace {
 
-// RPEM: while an estimate is tracked, z is the gradient ψ = φ/C (filtered from the φ of the same θ used
-// as a fixed model) and the linearised output is y + θ'(ψ − φ).
+// RPEM: while an estimate is tracked after the warm-up, z is the gradient ψ = φ/C (filtered from the φ of
+// the same θ used as a fixed model) and the linearised output is y + θ'(ψ − φ); during the warm-up z = φ.
 TEST(PseudoLinearRegressor, PredictionErrorGradientIsPhiFilteredByC) {
   const Record r = SimulateArmax({-1.5, 0.7}, {1.0, 0.5}, {-1.0, 0.2}, 1, 120, 6);
   const auto armax = PolynomialStructure::Armax(2, {2}, 2, {1});
@@ -215,6 +215,7 @@ TEST(PseudoLinearRegressor, PredictionErrorGradientIsPhiFilteredByC) {
   theta << -1.4, 0.6, 0.9, 0.4, -0.8, 0.1;
   PseudoLinearRegressor fixed(armax), rpem(armax, {}, Recursion::kPredictionError);
   fixed.SetEstimate(theta);
+  for (int k = 0; k < PseudoLinearRegressor::kWarmUp * 6; ++k) rpem.TrackEstimate(theta);  // past the warm-up
   Eigen::VectorXd phi(6), psi(6), u(1);
   std::vector<Eigen::VectorXd> past(2, Eigen::VectorXd::Zero(6));
   for (int t = 0; t < 120; ++t) {
@@ -232,8 +233,68 @@ TEST(PseudoLinearRegressor, PredictionErrorGradientIsPhiFilteredByC) {
     fixed.PushOutput(r.y[t]);
     rpem.PushOutput(r.y[t]);
   }
-  EXPECT_THROW(PseudoLinearRegressor(PolynomialStructure::BoxJenkins(2, 1, 1, 2, 1), {}, Recursion::kPredictionError),
-               InvalidArgument);
+}
+
+// The prediction errors ε(t; θ) of a fixed Box–Jenkins model θ over a record (SetEstimate: the regressor's
+// residual, noise and noise-free output histories all come from θ).
+std::vector<double> FixedModelErrors(const PolynomialStructure& s, const Eigen::VectorXd& theta, const Record& r) {
+  PseudoLinearRegressor fixed(s);
+  fixed.SetEstimate(theta);
+  Eigen::VectorXd phi(theta.size()), u(1);
+  std::vector<double> e(r.y.size(), 0.0);
+  for (std::size_t t = 0; t < r.y.size(); ++t) {
+    u(0) = r.u[t];
+    if (fixed.Next(u, phi)) e[t] = r.y[t] - theta.dot(phi);
+    fixed.PushOutput(r.y[t]);
+  }
+  return e;
+}
+
+// RPEM on Box–Jenkins: ψ(t) is −∂ε(t; θ)/∂θ, checked by central differences of the fixed model's errors,
+// coordinate by coordinate (D(q)φ/(C(q)F(q)) in the B and F coordinates, φ/C in the C and D ones).
+TEST(PseudoLinearRegressor, BoxJenkinsPredictionErrorGradientIsMinusTheErrorsDerivative) {
+  const Record r = SimulateArmax({-1.5, 0.7}, {1.0, 0.5}, {-1.0, 0.2}, 1, 200, 11);
+  const auto bj = PolynomialStructure::BoxJenkins(2, 2, 1, 2, 1);  // θ = [b1 b2, c1 c2, d1, f1 f2]
+  Eigen::VectorXd theta(7);
+  theta << 0.9, 0.4, -0.6, 0.2, -0.5, -1.2, 0.5;
+  std::vector<std::vector<double>> derivative(7);
+  for (int j = 0; j < 7; ++j) {
+    const double h = 1e-6;
+    Eigen::VectorXd up = theta, down = theta;
+    up(j) += h;
+    down(j) -= h;
+    const std::vector<double> eu = FixedModelErrors(bj, up, r), ed = FixedModelErrors(bj, down, r);
+    for (std::size_t t = 0; t < eu.size(); ++t) derivative[j].push_back(-(eu[t] - ed[t]) / (2 * h));
+  }
+  PseudoLinearRegressor rpem(bj, {}, Recursion::kPredictionError);
+  for (int k = 0; k < PseudoLinearRegressor::kWarmUp * 7; ++k) rpem.TrackEstimate(theta);  // past the w = y warm-up
+  Eigen::VectorXd psi(7), u(1);
+  int formed = 0;
+  for (std::size_t t = 0; t < r.y.size(); ++t) {
+    u(0) = r.u[t];
+    ASSERT_TRUE(rpem.TrackEstimate(theta));
+    if (rpem.Next(u, psi)) {
+      ++formed;
+      for (int j = 0; j < 7; ++j)
+        EXPECT_NEAR(psi(j), derivative[j][t], 1e-6 * (1 + std::abs(derivative[j][t]))) << "t = " << t << ", j = " << j;
+    }
+    rpem.PushOutput(r.y[t]);
+  }
+  EXPECT_GT(formed, 190);
+  // During the warm-up (w = y) the regressor is φ, as in pseudo-linear regression.
+  PseudoLinearRegressor warm(bj, {}, Recursion::kPredictionError), plain(bj);
+  Eigen::VectorXd phi(7);
+  for (std::size_t t = 0; t < 20; ++t) {
+    u(0) = r.u[t];
+    warm.TrackEstimate(theta);
+    plain.TrackEstimate(theta);
+    const bool a = warm.Next(u, psi), b = plain.Next(u, phi);
+    ASSERT_EQ(a, b);
+    if (a) EXPECT_EQ(psi, phi) << "t = " << t;
+    EXPECT_EQ(warm.LinearisedOutput(r.y[t]), r.y[t]);
+    warm.PushOutput(r.y[t]);
+    plain.PushOutput(r.y[t]);
+  }
 }
 
 }  // namespace
