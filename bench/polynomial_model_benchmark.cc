@@ -60,11 +60,14 @@ void BM_ArxRls(benchmark::State& state) {
   benchmark::DoNotOptimize(rls.parameters());
 }
 
-void ArmaxRls(benchmark::State& state, ident::models::Recursion recursion) {
+// ARMAX(n,n,n,1), or Box-Jenkins BJ(n,n/2,n/2,n,1): ρ = 3n either way.
+void PolynomialRls(benchmark::State& state, ident::models::Recursion recursion, bool box_jenkins) {
   const int n = static_cast<int>(state.range(0));
   const Stream s = MakeStream(n);
-  ident::models::PseudoLinearRegressor regressor(ident::models::PolynomialStructure::Armax(n, {n}, n, {1}), {},
-                                                 recursion);
+  using ident::models::PolynomialStructure;
+  ident::models::PseudoLinearRegressor regressor(
+      box_jenkins ? PolynomialStructure::BoxJenkins(n, n / 2, n / 2, n, 1) : PolynomialStructure::Armax(n, {n}, n, {1}),
+      {}, recursion);
   ident::RecursiveLeastSquares rls(3 * n);
   Eigen::VectorXd z(3 * n), u(1);
   int t = 0;
@@ -83,12 +86,14 @@ void ArmaxRls(benchmark::State& state, ident::models::Recursion recursion) {
   benchmark::DoNotOptimize(rls.parameters());
 }
 
-void BM_ArmaxRplr(benchmark::State& state) { ArmaxRls(state, ident::models::Recursion::kPseudoLinear); }
-void BM_ArmaxRpem(benchmark::State& state) { ArmaxRls(state, ident::models::Recursion::kPredictionError); }
+void BM_ArmaxRplr(benchmark::State& state) { PolynomialRls(state, ident::models::Recursion::kPseudoLinear, false); }
+void BM_ArmaxRpem(benchmark::State& state) { PolynomialRls(state, ident::models::Recursion::kPredictionError, false); }
+void BM_BjRpem(benchmark::State& state) { PolynomialRls(state, ident::models::Recursion::kPredictionError, true); }
 
 BENCHMARK(BM_ArxRls)->Arg(2)->Arg(4);
 BENCHMARK(BM_ArmaxRplr)->Arg(2)->Arg(4);
 BENCHMARK(BM_ArmaxRpem)->Arg(2)->Arg(4);
+BENCHMARK(BM_BjRpem)->Arg(2)->Arg(4);
 
 }  // namespace
 
@@ -96,7 +101,8 @@ int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   ident::bench::RatioReporter reporter({{"BM_ArmaxRplr", "BM_ArxRls", "RPLR ARMAX vs RLS ARX, same rho"},
-                                        {"BM_ArmaxRpem", "BM_ArxRls", "RPEM ARMAX vs RLS ARX, same rho"}});
+                                        {"BM_ArmaxRpem", "BM_ArxRls", "RPEM ARMAX vs RLS ARX, same rho"},
+                                        {"BM_BjRpem", "BM_ArxRls", "RPEM Box-Jenkins vs RLS ARX, same rho"}});
   benchmark::RunSpecifiedBenchmarks(&reporter);
   benchmark::Shutdown();
   return 0;

@@ -29,6 +29,7 @@ PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structur
     past_psi_.setZero(structure.num_parameters(), box_jenkins_ ? std::max(nc + nf, nd) : (nf > 0 ? nf : nc));
     if (box_jenkins_) {
       pre_.setZero(structure.num_parameters());
+      grouped_psi_.setZero(structure.num_parameters());
       cf_.setZero(nc + nf);
     }
   }
@@ -76,11 +77,20 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   return true;
 }
 
+void PseudoLinearRegressor::Grouped(const Eigen::VectorXd& x, Eigen::VectorXd& out) const {
+  // θ's order [b, c, d, f] to the ring's [b, f, c, d]: the coordinates filtered alike are contiguous.
+  const int nb = structure_.arx().num_parameters(), nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
+  out.head(nb) = x.head(nb);
+  out.segment(nb, nf) = x.segment(structure_.f_offset(), nf);
+  out.segment(nb + nf, nc + nd) = x.segment(structure_.c_offset(), nc + nd);
+}
+
 void PseudoLinearRegressor::BoxJenkinsGradient() {
   // ŷ = (D/C)(B/F) u + (1 − D/C) y, so −∂ε/∂θ is (D/(C F)) φ in the B and F coordinates and φ/C in the C
-  // and D ones. The ring holds p(t): p = φ/(C F) in B, F (then ψ = D(q) p there) and p = ψ = φ/C in C, D.
+  // and D ones. The ring holds p(t) grouped as [b, f, c, d]: p = φ/(C F) in B, F (where ψ = D(q) p) and
+  // p = ψ = φ/C in C, D.
   const int nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
-  const int b = structure_.na(), nb = structure_.arx().num_parameters() - b;
+  const int nbf = structure_.arx().num_parameters() + nf, ncd = nc + nd;
   const int c = structure_.c_offset(), d = structure_.d_offset(), f = structure_.f_offset();
   for (int k = 1; k <= nc + nf; ++k) {  // C(q)F(q) = 1 + Σ_k cf_k q^−k
     double h = (k <= nc ? theta_(c + k - 1) : 0.0) + (k <= nf ? theta_(f + k - 1) : 0.0);
@@ -89,20 +99,16 @@ void PseudoLinearRegressor::BoxJenkinsGradient() {
   }
   const Eigen::Index n = past_psi_.cols();
   const auto past = [&](int k) { return past_psi_.col((newest_psi_ + k - 1) % n); };  // p(t−k), k ≥ 1
-  pre_ = phi_;
-  for (int k = 1; k <= nc + nf; ++k) {
-    pre_.segment(b, nb).noalias() -= cf_(k - 1) * past(k).segment(b, nb);
-    pre_.segment(f, nf).noalias() -= cf_(k - 1) * past(k).segment(f, nf);
-  }
-  for (int k = 1; k <= nc; ++k) {
-    pre_.segment(c, nc).noalias() -= theta_(c + k - 1) * past(k).segment(c, nc);
-    pre_.segment(d, nd).noalias() -= theta_(c + k - 1) * past(k).segment(d, nd);
-  }
-  psi_ = pre_;
-  for (int k = 1; k <= nd; ++k) {
-    psi_.segment(b, nb).noalias() += theta_(d + k - 1) * past(k).segment(b, nb);
-    psi_.segment(f, nf).noalias() += theta_(d + k - 1) * past(k).segment(f, nf);
-  }
+  Grouped(phi_, pre_);
+  for (int k = 1; k <= nc + nf; ++k) pre_.head(nbf).noalias() -= cf_(k - 1) * past(k).head(nbf);
+  for (int k = 1; k <= nc; ++k) pre_.tail(ncd).noalias() -= theta_(c + k - 1) * past(k).tail(ncd);
+  grouped_psi_ = pre_;
+  for (int k = 1; k <= nd; ++k) grouped_psi_.head(nbf).noalias() += theta_(d + k - 1) * past(k).head(nbf);
+  // Back to θ's order.
+  const int nb = nbf - nf;
+  psi_.head(nb) = grouped_psi_.head(nb);
+  psi_.segment(f, nf) = grouped_psi_.segment(nb, nf);
+  psi_.segment(c, ncd) = grouped_psi_.tail(ncd);
 }
 
 double PseudoLinearRegressor::LinearisedOutput(double y) const {
@@ -167,10 +173,14 @@ void PseudoLinearRegressor::Store(double y) {
     // columns are a ring: the newest takes the place of the oldest.
     newest_psi_ = (newest_psi_ + past_psi_.cols() - 1) % past_psi_.cols();
     auto newest = past_psi_.col(newest_psi_);
-    if (!formed_)
+    if (!formed_) {
       newest.setZero();
-    else
-      newest = gradient_ ? (box_jenkins_ ? pre_ : psi_) : phi_;
+    } else if (!box_jenkins_) {
+      newest = gradient_ ? psi_ : phi_;
+    } else {  // p(t), grouped (BoxJenkinsGradient)
+      if (!gradient_) Grouped(phi_, pre_);
+      newest = pre_;
+    }
     if (!newest.allFinite()) newest.setZero();
   }
   formed_ = gradient_ = false;
