@@ -157,6 +157,15 @@ std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::M
   }
 }
 
+// D_y(0) ← factor·D_y(0) of a prior, its centre Θ0 = V_z⁻¹V_zy kept: V_y(0) = D_y(0) + Θ0'V_zy.
+void ScaleNoise(RegressionPrior& prior, double factor) {
+  if (factor == 1) return;
+  const Eigen::Index rho = prior.V0.rows() - 1;
+  const Eigen::VectorXd vzy = prior.V0.bottomLeftCorner(rho, 1);
+  const double explained = prior.V0.bottomRightCorner(rho, rho).ldlt().solve(vzy).dot(vzy);
+  prior.V0(0, 0) = factor * (prior.V0(0, 0) - explained) + explained;
+}
+
 }  // namespace
 
 SafeStudentRegression::SafeStudentRegression(int num_parameters, const SafeStudentOptions& options)
@@ -266,13 +275,23 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
     for (long i = 0; i < stored_; ++i) samples.col(i) = history_.col(Column(i));
     const std::size_t index = events_.size();
     std::optional<SafeStudentRegression> best;
-    double best_nll = ProfileNegativeLogLikelihood(parameters()) - kCompetingMargin;
+    double best_nll = ProfileNegativeLogLikelihood(parameters());
     const WindowStart fit = FitWindow(stored_, StartWeight(RestartKind::kEndOfData, stored_), /*strict=*/true);
-    for (const RestartKind kind : {RestartKind::kEndOfData, RestartKind::kLockIn}) {
+    // The start-up's D_y(0) carries the safety factor G^{(k+1)/k} against lock-in (spec §8); from a fit of
+    // every sample the scale the fit found is a hypothesis of its own.
+    const double k = options_.base.dof, safety = std::pow(options_.scale_growth, (k + 1) / k);
+    const struct {
+      RestartKind kind;
+      double scale_factor;
+    } hypotheses[] = {{RestartKind::kEndOfData, 1}, {RestartKind::kEndOfData, 1 / safety}, {RestartKind::kLockIn, 1}};
+    for (const auto& h : hypotheses) {
       SafeStudentRegression candidate = *this;
       WindowStart start = fit;
-      if (start.prior) start.prior->nu0 = StartWeight(kind, stored_);
-      candidate.StartFrom(std::move(start), kind);
+      if (start.prior) {
+        start.prior->nu0 = StartWeight(h.kind, stored_);
+        ScaleNoise(*start.prior, h.scale_factor);
+      }
+      candidate.StartFrom(std::move(start), h.kind);
       // The restart's replay weighs each sample once against the estimate of its time, as the first pass
       // did; further passes from its estimate (BeginPass) let it settle, as --passes does.
       for (int pass = 1; pass < kCompetingPasses && candidate.BeginPass(); ++pass)

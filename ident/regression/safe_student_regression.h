@@ -142,18 +142,17 @@ class SafeStudentRegression {
   // window refused, and replays them. True if it started; false (state unchanged) otherwise or when not
   // in the start-up. The command line calls it after the last estimation row.
   bool FinishStartup() noexcept;
-  // The end of the data after the start-up: weighs the recursion's estimate against two competing
-  // hypotheses, both from the robust fit of every kept sample: a start as the start-up makes one (the fit is
-  // the prior of the samples it summarises, ν0 = their number) and a restart as for a lock-in (ν0 = ρ+k+δ),
-  // each followed by a replay of every kept sample and kCompetingPasses − 1 further passes (BeginPass). The
-  // one with the highest Student-t_k likelihood of the kept samples (scale profiled out) is kept, a
-  // hypothesis only if it beats the recursion's by more than kCompetingMargin; an adopted one is recorded
+  // The end of the data after the start-up: weighs the recursion's estimate against three competing
+  // hypotheses, all from the robust fit of every kept sample: a start as the start-up makes one (the fit is
+  // the prior of the samples it summarises, ν0 = their number), the same at the fit's own noise scale
+  // (without the start-up's safety factor G^{(k+1)/k} on D_y(0)), and a restart as for a lock-in
+  // (ν0 = ρ+k+δ), each followed by a replay of every kept sample and kCompetingPasses − 1 further passes
+  // (BeginPass). The one with the highest Student-t_k likelihood of the kept samples (scale profiled out)
+  // is kept, a hypothesis if it beats the recursion's; an adopted one is recorded
   // (RestartEvent::end_of_data). Up to kMaxCompetingSamples kept samples (the robust fit, made once, costs
   // O(nρ²) per start it tries); none of this with `base.exact` or without restarts. The workflow calls it
   // after FinishStartup when the regressors do not depend on the estimate (not ARMAX/OE).
   bool ReconsiderAtEnd() noexcept;
-  // Negative log-likelihood margin a restart must win by at the end of the data.
-  static constexpr double kCompetingMargin = 1.0;
   static constexpr long kMaxCompetingSamples = 100'000;
   // Passes over the kept samples each competing hypothesis makes (its replay, then BeginPass and a pass).
   static constexpr int kCompetingPasses = 3;
