@@ -122,15 +122,15 @@ struct Entry {
 std::vector<Entry>& Registry() {
   static std::vector<Entry> registry = {
       {"rls", MakeRls, {.data_scaled_prior = true}},
-      {"cauchy", MakeCauchy, {.lock_in = true}},
-      {"student", MakeStudentT, {.lock_in = true}},
+      {"cauchy", MakeCauchy, {.lock_in = true, .robust = true}},
+      {"student", MakeStudentT, {.lock_in = true, .robust = true}},
       {"huber",
        [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); },
-       {}},
+       {.robust = true}},
       {"cauchy-ml",
        [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); },
-       {}},
-      {"lc", MakeLc, {}},
+       {.robust = true}},
+      {"lc", MakeLc, {.robust = true}},
   };
   return registry;
 }

@@ -71,6 +71,9 @@ struct EstimatorTraits {
   bool data_scaled_prior = false;
   // It has the lock-in safeguard and the ω-exponent convention δ (the Kárný–Hangos estimators).
   bool lock_in = false;
+  // It models outliers (a heavy-tailed or robust criterion): the workflow detrends its output robustly
+  // (workflow/fit.h FitOptions::robust_offset). A least-squares estimator keeps the plain mean.
+  bool robust = false;
 };
 // Throws InvalidArgument for an unknown name.
 EstimatorTraits RegressionEstimatorTraits(std::string_view name);

@@ -13,6 +13,8 @@
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "ident/workflow/internal/fit_steps.h"
+#include "ident/workflow/spike_robust_mean.h"
 
 namespace ident::workflow {
 namespace {
@@ -218,6 +220,7 @@ struct TrialRun {
   Eigen::VectorXd theta;
   FitScores scores;
   double distance = 0, cleaned = 0;
+  double offset = 0;    // CorruptedOutputOffset
   Recording recording;  // the update sequence (kept for the timed trials)
 };
 
@@ -226,6 +229,7 @@ struct TrialRun {
 struct Tally {
   std::vector<double> one_step, simulation, distance, ns, cleaned, one_step_per_trial, distance_per_trial;
   Eigen::VectorXd theta_sum;
+  double offset_sum = 0;
   std::string kind, failure;
   int passes = 1, failed = 0;
 
@@ -238,6 +242,7 @@ struct Tally {
   void Add(const TrialRun& run, int trial) {
     kind = run.kind;
     passes = run.passes;
+    offset_sum += run.offset;
     if (!run.failure.empty()) {
       if (failed++ == 0) failure = fmt::format("trial {}: {}", trial + 1, run.failure);
       return;
@@ -251,8 +256,9 @@ struct Tally {
     distance_per_trial[static_cast<std::size_t>(trial)] = run.distance;
   }
 
-  EstimatorScore Summary(const std::string& label, int trials) const {
+  EstimatorScore Summary(const std::string& label, int trials, double output_mean) const {
     EstimatorScore score;
+    score.output_offset = output_mean + offset_sum / trials;
     score.estimator = label;
     score.kind = kind;
     score.passes = passes;
@@ -274,10 +280,29 @@ struct Tally {
   }
 };
 
-// Runs one estimator on one corrupted record; scores on the clean `data`.
-TrialRun RunTrial(const io::DataTable& data, const io::DataTable& corrupted, DataSource& source,
+// The output's detrending offset that `ident fit` would subtract from the corrupted record, in the
+// coordinates of the clean record's detrending (0 without detrending): the mean of the corrupted estimation
+// outputs, or for a robust estimator on a dynamic structure their mean after the Hampel filter.
+double CorruptedOutputOffset(const io::DataTable& corrupted, const DataSource& source, const EstimatorSettings& settings,
+                             const FitOptions& fit, Segment estimation) {
+  if (fit.detrend != Detrend::kMean) return 0;
+  const auto y = corrupted.values.col(source.output_column()).segment(estimation.first, estimation.count);
+  if (RegressionEstimatorTraits(settings.name).robust && source.dynamic()) return SpikeRobustMean(y);
+  internal::RunningMean mean;
+  for (Eigen::Index r = 0; r < y.size(); ++r) mean.Add(y(r));
+  return mean.Get(corrupted.source, corrupted.names[static_cast<std::size_t>(source.output_column())]);
+}
+
+// Runs one estimator on one corrupted record, detrended as `ident fit` detrends it for that estimator, and
+// scores the model (θ with that operating point) on the clean `data`.
+TrialRun RunTrial(const io::DataTable& data, const io::DataTable& corrupted_record, DataSource& source,
                   const EstimatorSettings& settings, const FitOptions& fit, const CompareResult& result) {
   TrialRun run;
+  const double offset = CorruptedOutputOffset(corrupted_record, source, settings, fit, result.estimation);
+  run.offset = offset;
+  io::DataTable corrupted = corrupted_record, clean = data;
+  corrupted.values.col(source.output_column()).array() -= offset;
+  clean.values.col(source.output_column()).array() -= offset;
   auto estimator = MakeRegressionEstimator(settings, source.num_parameters());
   run.kind = estimator->kind();
   RecordingEstimator recorder(*estimator, result.estimation.count, run.recording);
@@ -295,7 +320,7 @@ TrialRun RunTrial(const io::DataTable& data, const io::DataTable& corrupted, Dat
   run.theta = estimator->parameters();
   // Scored on the uncorrupted record: with split = 1 the validation rows are the estimation rows,
   // whose corrupted outputs would reward the estimator that fits the outliers.
-  run.scores = Score(data, result.validation, source, run.theta);
+  run.scores = Score(clean, result.validation, source, run.theta);
   run.distance = (run.theta - result.theta_ls).norm() / result.theta_ls.norm();
   return run;
 }
@@ -359,7 +384,10 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
 
   CompareResult result;
   result.experiments = TableExperiments(data);
-  std::tie(result.estimation, result.validation) = PrepareData(data, source, options.fit);
+  std::vector<std::pair<int, double>> means;
+  std::tie(result.estimation, result.validation) = PrepareData(data, source, options.fit, &means);
+  for (const auto& [column, mean] : means)
+    if (column == source.output_column()) result.output_mean = mean;
   result.structure = source.structure();
   result.parameter_names = source.parameter_names();
   const TrialSettings settings = ScaledSettings(data, result.estimation, source, estimators, options.fit);
@@ -388,7 +416,7 @@ CompareResult Compare(io::DataTable data, DataSource& source, const std::vector<
   }
   bool any = false;
   for (std::size_t e = 0; e < estimators.size(); ++e) {
-    result.scores.push_back(tallies[e].Summary(labels[e], options.trials));
+    result.scores.push_back(tallies[e].Summary(labels[e], options.trials, result.output_mean));
     any = any || tallies[e].failed < options.trials;
   }
   if (!any)

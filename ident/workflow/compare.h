@@ -4,7 +4,9 @@
 // Protocol: split and detrend as `ident fit` (ident/workflow/fit.h). A clean least-squares
 // fit (RLS with the flat prior = batch LS) on the estimation part gives θ_LS and the residual std σ.
 // Each trial adds ±SIZE·σ (random sign) to y at ⌊RATE·N_est + ½⌋ distinct estimation rows drawn with
-// seed SEED + trial, runs every estimator on that corrupted estimation part and scores it on the
+// seed SEED + trial, runs every estimator on that corrupted estimation part — detrended as `ident fit` detrends
+// it for that estimator: the output's offset is the corrupted record's mean, or its Hampel-filtered mean for a
+// robust estimator (FitOptions::robust_offset) — and scores the model, θ with that offset, on the
 // untouched (uncorrupted) validation rows — with split = 1 the clean estimation rows themselves: fit % one-step and
 // simulation, θ distance ‖θ̂ − θ_LS‖₂/‖θ_LS‖₂, and time per update (the recorded update sequence replayed on a fresh
 // estimator in 7 timed blocks of at least 1 ms; the median of the blocks, then the median over the first 5 trials).
@@ -75,6 +77,9 @@ struct EstimatorScore {
   bool has_simulation = false;
   double ns_per_update = 0;  // median over the first 5 trials of each one's median timed replay
   double cleaned = 0;        // mean number of outputs cleaned in the regressors
+  // The output's detrending offset subtracted for this estimator (mean over trials; data units; 0 without
+  // detrending): the model is θ around it.
+  double output_offset = 0;
   int failed_trials = 0;     // trials whose estimate failed or was unusable (left out of the spreads)
   std::string failure;       // the first such trial's reason, "" if none
 };
@@ -85,6 +90,7 @@ struct CompareResult {
   Segment estimation, validation;
   Eigen::VectorXd theta_ls;  // clean-data least squares
   double sigma = 0;          // its residual std (the outlier unit)
+  double output_mean = 0;    // the clean record's detrending mean of the output (0 without detrending)
   FitScores reference;       // its validation scores
   int outliers_per_trial = 0;
   std::vector<EstimatorScore> scores;  // sorted by mean one-step fit, best first

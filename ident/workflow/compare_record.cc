@@ -55,6 +55,7 @@ nlohmann::ordered_json CompareJson(const CompareResult& r, const std::string& pa
                    {"fit_simulation", s.has_simulation ? SpreadJson(s.simulation) : nullptr},
                    {"theta_distance", SpreadJson(s.theta_distance)}};
     e["cleaned_per_trial"] = FiniteOrNull(s.cleaned);
+    e["output_offset"] = FiniteOrNull(s.output_offset);
     e["failed_trials"] = s.failed_trials;
     e["failure"] = s.failure.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(s.failure);
     list.push_back(std::move(e));

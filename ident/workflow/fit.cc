@@ -18,6 +18,7 @@ namespace ident::workflow {
 using internal::EstimateRows;
 using internal::MeanSquares;
 using internal::RequireUsable;
+using internal::RobustOffset;
 using internal::RunningMean;
 using internal::Scoring;
 using internal::Split;
@@ -74,9 +75,14 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
   if (means) means->clear();
   if (options.detrend == Detrend::kMean) {
     for (int c : source.used_columns()) {
-      RunningMean mean;
-      for (int r = 0; r < estimation.count; ++r) mean.Add(data.values(r, c));
-      const double m = mean.Get(data.source, data.names[c]);
+      double m = 0;
+      if (options.robust_offset && source.dynamic() && c == source.output_column()) {
+        m = RobustOffset(data.values.col(c).head(estimation.count), data.source, data.names[c]);
+      } else {
+        RunningMean mean;
+        for (int r = 0; r < estimation.count; ++r) mean.Add(data.values(r, c));
+        m = mean.Get(data.source, data.names[c]);
+      }
       data.values.col(c).array() -= m;
       if (means) means->emplace_back(c, m);
     }

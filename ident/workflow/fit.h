@@ -3,7 +3,8 @@
 //
 // Protocol (datasets/README.md): the first ⌊split·N⌋ rows estimate, the rest validate (split = 1:
 // estimate and validate on the whole record). Detrend "mean" subtracts the estimation-part mean of
-// every column the model uses from all rows. Inside each segment regression starts at t0 (models/arx.h).
+// every column the model uses from all rows (for a robust estimator on a dynamic structure, the output's
+// mean after a Hampel filter: FitOptions::robust_offset). Inside each segment regression starts at t0 (models/arx.h).
 // Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) over the scored validation samples (t ≥ t0 of the segment; ȳ their
 // mean); "one-step" uses measured past outputs, "simulation" (ARX only) feeds back the model's own
 // output after the first t0 measured samples.
@@ -43,6 +44,10 @@ enum class Detrend { kMean, kNone };
 struct FitOptions {
   double split = 0.5;  // fraction of rows for estimation, in (0, 1]
   Detrend detrend = Detrend::kMean;
+  // With Detrend::kMean on a dynamic structure: the output's offset is its mean after a Hampel filter
+  // (spike_robust_mean.h) instead of the plain mean, so that gross errors in y do not move the operating
+  // point. Set for the estimators that model outliers (EstimatorTraits::robust); the inputs keep their means.
+  bool robust_offset = false;
   std::FILE* trace = nullptr;  // if set: one CSV row per update (t, nu, beta, pred_err, theta…, Dy)
   // Each regressor's Σ z_i² over the estimation part must reach this, else InvalidArgument: the
   // default flat prior carries information 1e-12 per parameter (RegressionPrior::Flat) and would bias

@@ -151,7 +151,8 @@ CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataS
 }
 
 // Detrending offsets of a CSV file: the estimation-part means of the used columns (NaN = missing skipped),
-// zero with Detrend::kNone.
+// zero with Detrend::kNone. With FitOptions::robust_offset on a dynamic structure the output's estimation
+// values are kept for SpikeRobustMean (memory O(N), as the robust estimators' own sample history).
 Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
                                const FitOptions& options, Segment estimation, const TimeCheck* filled) {
   RecordRows reader(path, csv, filled);
@@ -159,9 +160,16 @@ Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& cs
   if (options.detrend == Detrend::kMean) {
     std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
     const std::vector<int> used = source.used_columns();
-    for (int r = 0; r < estimation.count && reader.Next(row); ++r)
+    const int robust = options.robust_offset && source.dynamic() ? source.output_column() : -1;
+    std::vector<double> output;
+    for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
       for (int c : used) means[c].Add(row(c));
+      if (robust >= 0) output.push_back(row(robust));
+    }
     for (int c : used) offset(c) = means[c].Get(path, reader.names()[c]);
+    if (robust >= 0)
+      offset(robust) = internal::RobustOffset(Eigen::Map<const Eigen::VectorXd>(output.data(), std::ssize(output)),
+                                              path, reader.names()[robust]);
   }
   return offset;
 }

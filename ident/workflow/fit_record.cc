@@ -119,6 +119,7 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
   plan.options.split = request.split;
   plan.options.passes = request.passes;
   plan.options.detrend = detrend == "none" ? Detrend::kNone : Detrend::kMean;
+  plan.options.robust_offset = RegressionEstimatorTraits(plan.settings.name).robust;
   plan.options.decision = request.model.Decision();
   if (plan.settings.prior) plan.options.min_regressor_information = 0;  // the user's prior, the user's scale
   const bool default_prior = !plan.settings.prior && !plan.settings.exact;

@@ -162,7 +162,7 @@ def fit(data, output=None, inputs=None, na=None, nb=None, nk=None, estimator="rl
     experiments = experiment_column or ""
     raw = _ident.fit(columns, values, name, split, int(passes), detrend or "", bool(history), int(residual_lags),
                      model, experiments)
-    structure = {k: v for k, v in model.items() if k in _STRUCTURE_KEYS}
+    structure = {k: v for k, v in model.items() if k in _STRUCTURE_KEYS + ("estimator",)}
     return FitResult(raw, lambda theta: _ident.predict(columns, values, name, split, detrend or "", theta, structure,
                                                        experiments))
 

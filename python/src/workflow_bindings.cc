@@ -210,6 +210,8 @@ py::dict Predict(const std::vector<std::string>& columns, Eigen::MatrixXd values
   workflow::FitOptions options;
   options.split = split;
   options.detrend = request.ResolvedDetrend() == "none" ? workflow::Detrend::kNone : workflow::Detrend::kMean;
+  // The operating point of the fit (workflow/fit.h FitOptions::robust_offset): the estimator's own.
+  options.robust_offset = RegressionEstimatorTraits(ParseEstimatorSpec(o.estimator.estimator).name).robust;
   const workflow::Segment validation = workflow::PrepareData(table, *source, options).second;
   const workflow::SegmentPredictions p = workflow::PredictSegment(table, validation, *source, theta);
   py::dict predictions;

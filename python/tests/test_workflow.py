@@ -211,3 +211,19 @@ def test_the_readme_python_example_runs_as_written(source_dir):
     namespace = {}
     exec(compile(code, "README.md", "exec"), namespace)
     assert namespace["result"].estimator == "cauchy"
+
+
+def test_a_robust_fit_predicts_around_its_own_operating_point():
+    # Gross errors in the estimation part move the plain mean of y, not the robust fit's offset (the mean
+    # after a Hampel filter); the predictions use the offset the fit subtracted.
+    frame = ident.datasets.load("gas_furnace")
+    frame.loc[7:147:20, "y"] += 100.0
+    clean_mean = ident.datasets.load("gas_furnace")["y"].iloc[:148].mean()
+    result = ident.fit(frame, output="y", inputs=["u"], na=2, nb=2, nk=3, estimator="cauchy")
+    assert abs(result.detrend_means["y"] - clean_mean) < 0.02
+    assert abs(frame["y"].iloc[:148].mean() - clean_mean) > 5
+    p = result.predictions
+    scored = np.isfinite(p["one_step"])
+    e = p["measured"][scored] - p["one_step"][scored]
+    fit = 100 * (1 - np.linalg.norm(e) / np.linalg.norm(p["measured"][scored] - p["measured"][scored].mean()))
+    assert fit == pytest.approx(result.fit_one_step, abs=1e-9)

@@ -175,15 +175,25 @@ TEST(RowOrder, TheDefaultFitOfEveryStaticRecordIsWithinItsStd) {
 }
 
 // With --split 1 the validation rows are the estimation rows; `compare` scores them uncorrupted: the fit %
-// it reports equals the one recomputed here from its θ on the clean record.
+// it reports equals the one recomputed here from its θ, around its output offset, on the clean record.
+// The offset is the one `ident fit` subtracts from the corrupted record: its mean for least squares, its
+// Hampel-filtered mean for the robust estimators, which the 1000σ outliers do not move.
 TEST(CompareScoring, UsesTheUncorruptedRows) {
-  const nlohmann::json j = Json("compare dryer --split 1 --estimators rls,cauchy,huber --outliers 0.05:20:3");
+  const nlohmann::json j = Json("compare dryer --split 1 --estimators rls,cauchy,huber --outliers 0.05:1000:3");
   std::vector<std::string> names;
-  Eigen::MatrixXd data = testing::ReadCsvMatrix(testing::DatasetPath("dryer.csv"), &names);
+  const Eigen::MatrixXd raw = testing::ReadCsvMatrix(testing::DatasetPath("dryer.csv"), &names);
   const int u = static_cast<int>(std::find(names.begin(), names.end(), "u") - names.begin());
   const int y = static_cast<int>(std::find(names.begin(), names.end(), "y") - names.begin());
-  for (int c : {u, y}) data.col(c).array() -= data.col(c).mean();
+  const double clean_mean = raw.col(y).mean(), sigma_ls = 0.0412;  // the clean LS residual std, roughly
   for (const auto& e : j["estimators"]) {
+    const double offset = e["output_offset"].get<double>();
+    if (e["estimator"] == "rls")  // 25 outliers of ±1000σ in 1000 rows move the mean by a multiple of σ
+      EXPECT_GT(std::abs(offset - clean_mean), sigma_ls);
+    else
+      EXPECT_LT(std::abs(offset - clean_mean), 0.1 * sigma_ls) << e["estimator"];
+    Eigen::MatrixXd data = raw;
+    data.col(u).array() -= data.col(u).mean();
+    data.col(y).array() -= offset;
     const Eigen::VectorXd theta = Theta(e);  // ARX(2,2,3): z = [−y(t−1), −y(t−2), u(t−3), u(t−4)]
     double err = 0, dev = 0, mean = 0;
     int count = 0;

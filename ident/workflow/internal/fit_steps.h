@@ -17,6 +17,7 @@
 #include "common/error.h"
 #include "ident/regression/rls.h"
 #include "ident/workflow/fit.h"
+#include "ident/workflow/spike_robust_mean.h"
 
 namespace ident::workflow::internal {
 
@@ -60,6 +61,17 @@ class RunningMean {
   long count_ = 0;
   double mean_ = 0;
 };
+
+// FitOptions::robust_offset's offset of an output column (SpikeRobustMean), with RunningMean's check.
+inline double RobustOffset(const Eigen::Ref<const Eigen::VectorXd>& y, const std::string& source,
+                           const std::string& column) {
+  const double m = SpikeRobustMean(y);
+  IDENT_REQUIRE(std::isfinite(m),
+                "{}: the mean of column '{}' overflows (values near 1e308 of both signs); rescale the data or "
+                "pass --detrend none",
+                source, column);
+  return m;
+}
 
 // Recursive estimation, one row at a time (rows of one segment, in order).
 class Estimation {
