@@ -6,14 +6,16 @@
 // −(1 + a1 + … + a_na)·δ in every equation. With the plain mean, K additive outliers of size s in N
 // samples give δ = (Σ signs)·s/N: it grows with s, so the larger the outliers the larger the bias, while
 // the robust weight of each outlier itself falls with s. The filter removes that path:
-//   r(t) = median of the finite y(t−2) … y(t+2) (the window cut at the ends of the record),
+//   r(t) = median of the finite y(t−4) … y(t+4) (the window cut at the ends of the record),
 //   d(t) = y(t) − r(t),  S = 1.4826 · median of the nonzero |d(t)|  (the MAD scale of the deviations;
 //          exact zeros, as of a quantised signal on a plateau, carry no scale),
-//   y(t) counts as r(t) when |d(t)| > kSpikeThreshold · S, else as itself; the offset is the mean.
-// A run of up to two gross errors is replaced (a five-point median passes runs of up to two); level
-// changes and steps pass the median unchanged, so a signal without spikes keeps its plain mean up to the
-// few samples beyond the threshold. NaN (missing) samples are skipped throughout.
-// Cost O(N) time, O(N) memory.
+//   y(t) is flagged when |d(t)| > kSpikeThreshold · S; flagged samples leave the windows and the rest are
+//   judged again by the medians of what is left, until no new sample is flagged (a cluster of spikes that
+//   fills half a window hides from the first median, not once its edges are out);
+//   the offset is the mean of y with each flagged y(t) replaced by the median of its window's kept samples.
+// Level changes and steps pass the median unchanged, so a signal without spikes keeps its plain mean up to
+// the few samples beyond the threshold. NaN (missing) samples are skipped throughout.
+// Cost O(N) time per round (a few rounds), O(N) memory.
 #pragma once
 
 #include <Eigen/Core>
