@@ -59,6 +59,15 @@ TEST(SpikeRobustMean, SpikesOfAnySizeLeaveTheOffset) {
   EXPECT_GT(std::abs(spiked(1e6).mean() - clean.mean()), 1000);
 }
 
+// A cluster of five same-signed spikes in nine samples fills more than half of the window around its
+// middle; once its edges are flagged and out, the rest is found too.
+TEST(SpikeRobustMean, FindsAClusterOfSpikes) {
+  const Eigen::VectorXd clean = NoisySine(1000, 4);
+  Eigen::VectorXd y = clean;
+  for (int t : {500, 504, 505, 506, 508}) y(t) += 1000;
+  EXPECT_NEAR(SpikeRobustMean(y), clean.mean(), 0.005);
+}
+
 TEST(SpikeRobustMean, SkipsMissingSamples) {
   Eigen::VectorXd y = NoisySine(500, 2);
   const double mean = y.mean();
