@@ -132,7 +132,7 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
   else
     fmt::print("estimation rows 1-{} ({} updates", r.samples_estimation, r.updates);
   if (r.rejected) fmt::print(", {} samples rejected as missing/invalid", r.rejected);
-  if (r.cleaned) fmt::print(", {} outputs cleaned in later regressors", r.cleaned);
+  if (r.cleaned) fmt::print(", {} outputs cleaned: the equations that hold them are left out", r.cleaned);
   fmt::print(")");
   if (separate)
     fmt::print(", validation on {} (all {} rows)", r.validation_data, r.samples_validation);

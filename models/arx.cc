@@ -56,6 +56,7 @@ OutputCleaningOptions WithWarmUp(OutputCleaningOptions cleaning, int num_paramet
 ArxRegressor::ArxRegressor(const ArxStructure& structure, const OutputCleaningOptions& cleaning)
     : structure_(structure), cleaner_(WithWarmUp(cleaning, structure.num_parameters())) {
   past_y_.setZero(structure_.na());
+  past_cleaned_.assign(static_cast<std::size_t>(structure_.na()), 0);
   for (int i = 0; i < structure_.num_inputs(); ++i)
     past_u_.emplace_back(Eigen::VectorXd::Zero(structure_.input_history(i)));
   Reset();
@@ -63,6 +64,8 @@ ArxRegressor::ArxRegressor(const ArxStructure& structure, const OutputCleaningOp
 
 void ArxRegressor::Reset() {
   past_y_.setZero();
+  std::fill(past_cleaned_.begin(), past_cleaned_.end(), 0);
+  cleaned_in_window_ = 0;
   for (auto& p : past_u_) p.setZero();
   samples_ = 0;
   outputs_ = 0;
@@ -96,7 +99,12 @@ void ArxRegressor::PushOutput(double y) {
   last_cleaned_ = false;
   const Eigen::Index m = past_y_.size();
   for (Eigen::Index k = m - 1; k > 0; --k) past_y_(k) = past_y_(k - 1);
-  if (m > 0) past_y_(0) = y;
+  if (m > 0) {
+    past_y_(0) = y;
+    cleaned_in_window_ -= past_cleaned_.back();
+    std::copy_backward(past_cleaned_.begin(), past_cleaned_.end() - 1, past_cleaned_.end());
+    past_cleaned_.front() = 0;
+  }
   ++outputs_;
 }
 
@@ -108,6 +116,10 @@ double ArxRegressor::PushCheckedOutput(double y, double y_hat, double scale, boo
   last_measured_ = y;
   last_cleaned_ = cleaner_.cleaned() > cleaned_before;
   last_screened_ = last_cleaned_ && screening;
+  if (last_cleaned_ && !past_cleaned_.empty()) {
+    past_cleaned_.front() = 1;
+    ++cleaned_in_window_;
+  }
   return stored;
 }
 
@@ -134,6 +146,8 @@ void ArxRegressor::RestoreMeasured() {
   past_y_(0) = last_measured_;
   cleaner_.Restore(last_measured_);
   last_cleaned_ = last_screened_ = false;
+  cleaned_in_window_ -= past_cleaned_.front();
+  past_cleaned_.front() = 0;
 }
 
 std::vector<std::string> StaticRegression::ParameterNames() const {

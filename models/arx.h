@@ -80,10 +80,17 @@ class ArxRegressor {
   // calls RestoreMeasured(), which puts the measured y(t−1) back for every later regressor.
   bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const;
   void RestoreMeasured();
+  // Whether a prediction error of y(t) is gross for the cleaner ((5) of models/output_cleaner.h): a reading
+  // under which y(t) is itself a gross error explains nothing (two outliers in a row look like an
+  // innovation followed by its echo).
+  bool IsGrossError(double e) const { return !cleaner_.in_warm_up() && cleaner_.IsGross(e); }
   // The same question while no model judges (y(t−1) was cleaned by the warm-up's model-free screen, (4)
   // of models/output_cleaner.h): the screen's own predictor, the last stored value, answers it — true if
   // y(t) lies nearer the measured y(t−1) than the cleaned one. nullopt when y(t−1) was not cleaned so.
   std::optional<bool> MeasuredIsNearer(double y) const;
+  // The regressor Next() formed holds a cleaned output (one of y(t−1) … y(t−na) is stored cleaned): its
+  // equation is an errors-in-variables one, which the workflow leaves out as if the output were missing.
+  bool HoldsCleaned() const { return cleaned_in_window_ > 0; }
   // The estimator's predictions are trustworthy from now on: ends the cleaner's model-free warm-up.
   void EndCleaningWarmUp() { cleaner_.EndWarmUp(); }
   const ArxStructure& structure() const { return structure_; }
@@ -95,6 +102,8 @@ class ArxRegressor {
   double last_measured_ = 0;             // the measured y(t−1)
   bool last_cleaned_ = false;            // past_y_(0) is a cleaned value
   bool last_screened_ = false;           // ... cleaned by the model-free warm-up screen
+  std::vector<char> past_cleaned_;       // past_cleaned_[k]: past_y_(k) is a cleaned value
+  int cleaned_in_window_ = 0;            // how many of past_cleaned_ are set
   std::vector<Eigen::VectorXd> past_u_;  // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
   long samples_ = 0;                     // samples pushed with Next()
   long outputs_ = 0;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -69,11 +70,21 @@ double OutputCleaner::Accept(double y) {
 }
 
 double OutputCleaner::RingScale(const double* ring, int count) {
-  if (count < 5) return 0;
+  if (count < 5) return std::numeric_limits<double>::quiet_NaN();
+  // The median of the nonzero entries: exact zeros (a quantised or constant stretch, a model that
+  // reproduces it) carry no scale, and more than half of them would make the MAD 0 and switch the test off.
   double work[kDifferences];
-  for (int i = 0; i < count; ++i) work[i] = std::abs(ring[i]);
-  std::nth_element(work, work + count / 2, work + count);
-  return 1.4826 * work[count / 2];
+  int nonzero = 0;
+  for (int i = 0; i < count; ++i)
+    if (ring[i] != 0) work[nonzero++] = std::abs(ring[i]);
+  if (nonzero == 0) return 0;
+  std::nth_element(work, work + nonzero / 2, work + nonzero);
+  return 1.4826 * work[nonzero / 2];
+}
+
+bool OutputCleaner::IsGross(double e) const {
+  const double scale = ErrorScale();
+  return options_.gross > 0 && !std::isnan(scale) && std::abs(e) > options_.gross * scale;
 }
 
 double OutputCleaner::DifferenceScale() const { return RingScale(differences_, num_differences_); }
@@ -83,17 +94,20 @@ double OutputCleaner::Clean(double y, double y_hat, double scale, bool flagged, 
   const long t = seen_++;
   if (!options_.enabled || !judged || !have_range_ || run_ >= options_.max_run || !std::isfinite(y)) return Accept(y);
   if (t < warm_up_end_) {  // (4): the model-free screen
+    // s = 0: every recent difference is exactly zero, and any jump is gross against them.
     const double s = DifferenceScale();
-    if (!(options_.screen > 0 && s > 0 && std::abs(y - last_) > options_.screen * s)) return Accept(y);
+    if (!(options_.screen > 0 && !std::isnan(s) && std::abs(y - last_) > options_.screen * s)) return Accept(y);
     y_hat = last_;
     scale = s;
   } else {
     if (!std::isfinite(y_hat)) return Accept(y);
-    const double gross_scale = ErrorScale();
+    const double known = ErrorScale();
+    const double gross_scale = std::isnan(known) ? 0 : known;  // fewer than 5 errors: every flagged one
     errors_[next_error_] = y - y_hat;
     next_error_ = (next_error_ + 1) % kDifferences;
     num_errors_ = std::min(num_errors_ + 1, kDifferences);
-    if (!flagged || !(std::isfinite(scale) && scale > 0) ||
+    // Only the Huber clip (gross = 0) needs the estimator's scale; a gross error is judged by the errors'.
+    if (!flagged || (options_.gross == 0 && !(std::isfinite(scale) && scale > 0)) ||
         (options_.gross > 0 && !(std::abs(y - y_hat) > options_.gross * gross_scale)))
       return Accept(y);
   }

@@ -14,10 +14,11 @@
 //   after max_run consecutive cleaned samples the next measured value is stored as is               (3)
 //   during the first warm_up samples (the model is not yet trustworthy) only gross errors are       (4)
 //   cleaned, by a model-free screen: the prediction is the last stored value ŷ0 and the scale s_Δ the
-//   robust scale (1.4826·MAD) of the last 16 stored differences; |y − ŷ0| > screen·s_Δ stores ŷ0
+//   robust scale (1.4826·median of the nonzero |Δ|; exact zeros of a constant or quantised stretch carry
+//   no scale) of the last 16 stored differences; |y − ŷ0| > screen·s_Δ stores ŷ0
 //   as in (1)–(3)
 //   after warm-up a flagged sample is cleaned only if its error is gross against the robust scale of   (5)
-//   the recent prediction errors (every prediction, flagged or not, enters that scale): the
+//   the recent prediction errors (every prediction, flagged or not, enters that scale; as s_Δ): the
 //   estimator's own scale can sit below the bulk of the errors (model mismatch, a scale still
 //   adapting), and cleaning ordinary samples turns the regression into an errors-in-variables one
 //
@@ -69,6 +70,9 @@ class OutputCleaner {
   void EndWarmUp() { warm_up_end_ = std::min(warm_up_end_, seen_); }
   // The next Clean() screens model-free (4).
   bool in_warm_up() const { return seen_ < warm_up_end_; }
+  // After warm-up: is a prediction error e gross against the recent ones, as (5) judges (gross > 0, and at
+  // least 5 errors known)?
+  bool IsGross(double e) const;
   // The last stored value was cleaned, but the next sample showed the measured y to be right (an
   // innovation, which the dynamics carry on, not an additive outlier): y is accepted as measured and
   // the sample no longer counts as cleaned.
@@ -80,8 +84,8 @@ class OutputCleaner {
  private:
   double Accept(double y);
   double Store(double y);          // records y as the last stored value and its difference
-  double DifferenceScale() const;  // s_Δ of (4); 0 while fewer than 5 differences are known
-  double ErrorScale() const;       // the robust scale of (5); 0 while fewer than 5 errors are known
+  double DifferenceScale() const;  // s_Δ of (4); NaN while fewer than 5 differences are known
+  double ErrorScale() const;       // the robust scale of (5); NaN while fewer than 5 errors are known
   static double RingScale(const double* ring, int count);
 
   static constexpr int kDifferences = 16;

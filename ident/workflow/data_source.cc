@@ -75,6 +75,8 @@ class ArxSource final : public DynamicSource<models::ArxRegressor> {
     return regressor().MeasuredRegressor(z_measured);
   }
   void RestoreMeasured() override { regressor().RestoreMeasured(); }
+  bool RegressorHoldsCleaned() const override { return regressor().HoldsCleaned(); }
+  bool IsGrossError(double e) const override { return regressor().IsGrossError(e); }
   std::optional<bool> MeasuredIsNearer(double y) const override { return regressor().MeasuredIsNearer(y); }
 };
 

@@ -55,6 +55,11 @@ class DataSource {
   // the last output was cleaned, the regressor with the measured value instead, and a way to keep it.
   virtual bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> /*z_measured*/) const { return false; }
   virtual void RestoreMeasured() {}
+  // After Regressor() (and the choice above): the regressor holds an output stored cleaned, so its equation
+  // has an error in a variable of the size of the prediction error (models/arx.h ArxRegressor::HoldsCleaned).
+  virtual bool RegressorHoldsCleaned() const { return false; }
+  // Whether a prediction error is gross for the output cleaner (models/arx.h ArxRegressor::IsGrossError).
+  virtual bool IsGrossError(double /*e*/) const { return false; }
   // When the last output was cleaned by the model-free warm-up screen, that screen's answer to the same
   // question (models/arx.h ArxRegressor::MeasuredIsNearer); nullopt: the model's predictions decide.
   virtual std::optional<bool> MeasuredIsNearer(double /*y*/) const { return std::nullopt; }

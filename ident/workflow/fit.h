@@ -90,7 +90,7 @@ struct FitResult {
   std::string kind;                     // "recursive" or "batch"
   int passes = 1;                       // passes over the estimation part that ran
   int updates = 0, rejected = 0;        // estimator steps taken / rejected (missing or invalid samples), last pass
-  long cleaned = 0;                     // outputs cleaned in later regressors (--clean-regressors on)
+  long cleaned = 0;                     // outputs cleaned (--clean-regressors on); the equations that hold them are left out
   std::optional<LockInStatus> lock_in;  // the robust estimators' lock-in safeguard at the end of estimation
   FitScores validation;
   // The record's time column (workflow/time_column.h); null when there is none or it was not checked.

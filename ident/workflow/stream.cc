@@ -68,7 +68,8 @@ StreamStep StreamEstimation::Row(const Eigen::VectorXd& row) {
     return step;
   }
   if (!report->updated()) {
-    step.status = missing ? StreamStatus::kMissing : StreamStatus::kRejected;
+    // Skipped: the regressor holds an output cleaned as a gross error, which counts as missing.
+    step.status = missing || report->status == StepStatus::kSkipped ? StreamStatus::kMissing : StreamStatus::kRejected;
     return step;
   }
   step.weight = report->weight;

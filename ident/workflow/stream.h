@@ -38,7 +38,8 @@ enum class StreamStatus {
   kOk,        // updated, an inlier
   kOutlier,   // updated with a relative weight νβ below the model's outlier threshold (--clean-below)
   kRestart,   // updated, and the lock-in monitor restarted the estimator at this update
-  kMissing,   // no update: this row or a row its regressor reaches back to has a missing value
+  kMissing,   // no update: this row or a row its regressor reaches back to has a missing value, or an
+              // output cleaned as a gross error
   kRejected,  // no update: the estimator refused the sample (values too large, numerically unsafe)
   kEnd,       // the end-of-data steps changed the estimate (Finish)
 };

@@ -58,18 +58,20 @@ TEST(WarmUpCleaning, AScreenedOutlierNeverReturnsIntoTheRegressorsDuringTheStart
   workflow::Fit(table, *source, estimator, options);
 
   // The warm-up screen needs 5 stored differences (rows 0–5) and lasts 10ρ = 40 samples at most.
+  // A row whose regressor holds a cleaned output is left out (no update): the outlier may not be in the
+  // regressor of any row that is updated.
   int checked = 0;
   for (const int p : outliers) {
     if (p < 6 || p >= 40) continue;
+    ++checked;
     for (std::size_t i = 0; i < estimator.rows.size(); ++i) {
       const int lag = estimator.rows[i] - p;  // z(lag − 1) holds −y(p) at rows p + 1 and p + 2
       if (lag < 1 || lag > 2) continue;
-      ++checked;
       EXPECT_GT(std::abs(estimator.regressors[i](lag - 1) + y(p)), 1.0)
           << "the outlier at row " << p << " is back in the regressor of row " << estimator.rows[i];
     }
   }
-  EXPECT_GE(checked, 4);  // outliers at rows 15, 23 and 27 lie in the screened warm-up
+  EXPECT_GE(checked, 3);  // outliers at rows 15, 23 and 27 lie in the screened warm-up
 }
 
 }  // namespace

@@ -61,8 +61,15 @@ TEST(OutputCleaner, NonFiniteInputsAndBadOptions) {
   OutputCleaner c({.enabled = true, .warm_up = 1});
   c.Clean(0.0, 0.0, 1.0, false);
   EXPECT_EQ(c.Clean(3.0, std::nan(""), 1.0, true), 3.0);
-  EXPECT_EQ(c.Clean(3.0, 0.0, 0.0, true), 3.0);
   EXPECT_EQ(c.cleaned(), 0);
+  // The Huber clip (gross = 0) needs the estimator's scale: none, no cleaning. A gross error is judged by the
+  // recent errors' scale alone, so an estimator scale of 0 does not keep it in.
+  OutputCleaner clip({.enabled = true, .warm_up = 1, .gross = 0});
+  clip.Clean(0.0, 0.0, 1.0, false);
+  EXPECT_EQ(clip.Clean(3.0, 0.0, 0.0, true), 3.0);
+  EXPECT_EQ(clip.cleaned(), 0);
+  EXPECT_EQ(c.Clean(3.0, 0.0, 0.0, true), 0.0);
+  EXPECT_EQ(c.cleaned(), 1);
   EXPECT_THROW(OutputCleaner({.clip = 0}), InvalidArgument);
   EXPECT_THROW(OutputCleaner({.max_run = 0}), InvalidArgument);
   EXPECT_THROW(OutputCleaner({.warm_up = -1}), InvalidArgument);

@@ -117,6 +117,20 @@ class Estimation {
         source_.RestoreMeasured();
         z_ = z_measured_;
       }
+      // A regressor that holds a cleaned output is left out, as if that output were missing: the cleaned
+      // value is a prediction, and an equation built on it is an errors-in-variables one whose error, of
+      // the size of the prediction error, biases the estimate where the model predicts poorly. Its
+      // output is still judged (a gross error against the prediction is cleaned in turn).
+      if (source_.RegressorHoldsCleaned()) {
+        ++left_out_;
+        y_hat = estimator_.Predict(z_);
+        if (judged_) scale = estimator_.noise_std();
+        source_.PushCheckedOutput(y, y_hat, scale, /*flagged=*/judged_, judged_);
+        StepReport skipped;
+        skipped.status = StepStatus::kSkipped;
+        skipped.prediction_error = y - y_hat;
+        return skipped;
+      }
       const double y_regressed = source_.RegressionOutput(y);  // y, or RPEM's linearised output
       const StepReport report = *(step = estimator_.Update(y_regressed, z_));
       if (in_startup_ && !estimator_.in_startup()) {  // the robust start is made: the model judges from now on
@@ -216,7 +230,10 @@ class Estimation {
  private:
   bool KeepMeasured(double y) const {
     if (const std::optional<bool> nearer = source_.MeasuredIsNearer(y)) return *nearer;
-    return std::abs(y - estimator_.Predict(z_measured_)) < std::abs(y - estimator_.Predict(z_));
+    // The measured reading must predict y(t) better, and not as a gross error itself: two outliers in a row
+    // make the second look like the echo of an innovation.
+    const double measured = y - estimator_.Predict(z_measured_);
+    return std::abs(measured) < std::abs(y - estimator_.Predict(z_)) && !source_.IsGrossError(measured);
   }
 
   DataSource& source_;
@@ -234,6 +251,7 @@ class Estimation {
   bool uses_estimate_;       // the source's regressor depends on θ (ARMAX/OE/BJ)
   std::optional<RecursiveLeastSquares> shadow_;  // θ for the regressors during a robust start-up
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
+  int left_out_ = 0;  // equations left out because their regressor holds a cleaned output
 };
 
 // Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) and RMS, accumulated in one pass (Welford for ‖y − ȳ‖²).
