@@ -230,10 +230,12 @@ class Estimation {
  private:
   bool KeepMeasured(double y) const {
     if (const std::optional<bool> nearer = source_.MeasuredIsNearer(y)) return *nearer;
-    // The measured reading must predict y(t) better, and not as a gross error itself: two outliers in a row
-    // make the second look like the echo of an innovation.
-    const double measured = y - estimator_.Predict(z_measured_);
-    return std::abs(measured) < std::abs(y - estimator_.Predict(z_)) && !source_.IsGrossError(measured);
+    // An innovation outlier is carried on by the dynamics: with the cleaned reading y(t) is a gross error (the
+    // echo was not predicted), with the measured one an ordinary one. Anything else keeps the cleaned reading:
+    // two outliers in a row make the second look like an echo, and a model in which y(t−1) barely matters
+    // cannot tell the readings apart, while a measured outlier restored in error is a leverage point.
+    const double measured = y - estimator_.Predict(z_measured_), cleaned = y - estimator_.Predict(z_);
+    return std::abs(measured) < std::abs(cleaned) && !source_.IsGrossError(measured) && source_.IsGrossError(cleaned);
   }
 
   DataSource& source_;
