@@ -37,8 +37,8 @@ void StructureCliOptions::AddTo(CLI::App& app, bool require_output) {
       app.add_flag("--intercept", intercept, "Static regression: add an intercept (first parameter)")
           ->needs(regressors_option);
   app.add_option("--clean-regressors", clean_regressors,
-                 "ARX: replace outputs the estimator flags as outliers (nu*beta < --clean-below) by a bounded "
-                 "cleaned value in later regressors")
+                 "ARX (and the A part of ARMAX/BJ): an output the estimator flags as an outlier (nu*beta < "
+                 "--clean-below) is stored cleaned, and the equations whose regressors hold it are left out")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
   app.add_option("--clean-clip", cleaning.clip,

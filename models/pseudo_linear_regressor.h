@@ -31,7 +31,8 @@
 // A fixed model (SetEstimate) predicts with φ as in RPLR.
 //
 // Outlier cleaning of y as in models/arx.h (PushCheckedOutput): the cleaned value is used for y and the
-// residuals derived from it. No allocation after construction.
+// residuals derived from it, and HoldsCleaned() tells the workflow to leave out an equation whose A part
+// holds one. No allocation after construction.
 #pragma once
 
 #include <Eigen/Core>
@@ -72,6 +73,8 @@ class PseudoLinearRegressor {
   void PushOutput(double y);
   double PushCheckedOutput(double y, double y_hat, double scale, bool flagged, bool judged = true);
   void EndCleaningWarmUp() { arx_.EndCleaningWarmUp(); }
+  // The A part's regressor holds a cleaned output (models/arx.h ArxRegressor::HoldsCleaned).
+  bool HoldsCleaned() const { return arx_.HoldsCleaned(); }
 
   const PolynomialStructure& structure() const { return structure_; }
   const OutputCleaner& cleaner() const { return arx_.cleaner(); }

@@ -93,6 +93,7 @@ class PolynomialSource final : public DynamicSource<models::PseudoLinearRegresso
   }
   void ClearEstimate() override { regressor().ClearEstimate(); }
   double RegressionOutput(double y) const override { return regressor().LinearisedOutput(y); }
+  bool RegressorHoldsCleaned() const override { return regressor().HoldsCleaned(); }
 };
 
 class StaticSource final : public DataSource {
