@@ -38,6 +38,23 @@ class RecordingEstimator final : public testing::ForwardingEstimator {
   std::vector<Eigen::VectorXd> regressors;
 };
 
+// Fits `table` (output y, input u) with `cauchy` as `ident fit --split 0.5 --detrend none` does, with
+// output cleaning on, recording every update's row and regressor.
+std::unique_ptr<RecordingEstimator> FitRecording(const io::DataTable& table, const std::string& path,
+                                                 const models::ArxStructure& arx) {
+  auto source = workflow::MakeArxSource(table.names, "y", {"u"}, arx, path, {.enabled = true});
+  EstimatorSettings settings;
+  settings.name = "cauchy";
+  auto estimator =
+      std::make_unique<RecordingEstimator>(MakeRegressionEstimator(settings, source->num_parameters()));
+  workflow::FitOptions options;
+  options.split = 0.5;
+  options.detrend = workflow::Detrend::kNone;
+  options.on_row = [e = estimator.get()](int r) { e->row = r; };
+  workflow::Fit(table, *source, *estimator, options);
+  return estimator;
+}
+
 TEST(WarmUpCleaning, AScreenedOutlierNeverReturnsIntoTheRegressorsDuringTheStartUp) {
   const std::string path = testing::DatasetPath("gas_furnace.csv");
   io::DataTable table = io::ReadCsv(path);
@@ -48,16 +65,9 @@ TEST(WarmUpCleaning, AScreenedOutlierNeverReturnsIntoTheRegressorsDuringTheStart
   const std::vector<int> outliers = workflow::InjectOutliers(y, {0, estimation_rows}, 0.1, 13.2, 45);
   table.values.col(y_column) = y;
 
-  const models::ArxStructure arx(2, {2}, {3});  // z = [−y(t−1), −y(t−2), u(t−3), u(t−4)]
-  auto source = workflow::MakeArxSource(table.names, "y", {"u"}, arx, path, {.enabled = true});  // as `ident fit`
-  EstimatorSettings settings;
-  settings.name = "cauchy";
-  RecordingEstimator estimator(MakeRegressionEstimator(settings, source->num_parameters()));
-  workflow::FitOptions options;
-  options.split = 0.5;
-  options.detrend = workflow::Detrend::kNone;
-  options.on_row = [&estimator](int r) { estimator.row = r; };
-  workflow::Fit(table, *source, estimator, options);
+  // z = [−y(t−1), −y(t−2), u(t−3), u(t−4)]
+  const std::unique_ptr<RecordingEstimator> fitted = FitRecording(table, path, models::ArxStructure(2, {2}, {3}));
+  const RecordingEstimator& estimator = *fitted;
 
   // The warm-up screen needs 5 stored differences (rows 0–5) and lasts 10ρ = 40 samples at most.
   // A row whose regressor holds a cleaned output is left out (no update): the outlier may not be in the
@@ -97,20 +107,12 @@ TEST(Cleaning, NoUpdatedRegressorHoldsAGrossOutlier) {
       }
     table.values.col(y_column) = y;
     const models::ArxStructure arx(2, {2}, {std::string(record) == "dryer.csv" ? 3 : 1});
-    auto source = workflow::MakeArxSource(table.names, "y", {"u"}, arx, path, {.enabled = true});
-    EstimatorSettings settings;
-    settings.name = "cauchy";
-    RecordingEstimator estimator(MakeRegressionEstimator(settings, source->num_parameters()));
-    workflow::FitOptions options;
-    options.split = 0.5;
-    options.detrend = workflow::Detrend::kNone;
-    options.on_row = [&estimator](int r) { estimator.row = r; };
-    workflow::Fit(table, *source, estimator, options);
+    const std::unique_ptr<RecordingEstimator> estimator = FitRecording(table, path, arx);
     int held = 0;
-    for (std::size_t i = 0; i < estimator.rows.size(); ++i)
+    for (std::size_t i = 0; i < estimator->rows.size(); ++i)
       for (int lag = 1; lag <= 2; ++lag)
         for (int p : outliers)
-          if (estimator.rows[i] - p == lag && std::abs(estimator.regressors[i](lag - 1) + y(p)) < 1e-9) ++held;
+          if (estimator->rows[i] - p == lag && std::abs(estimator->regressors[i](lag - 1) + y(p)) < 1e-9) ++held;
     EXPECT_EQ(held, 0) << record << ": updated regressors holding a measured outlier";
   }
 }
