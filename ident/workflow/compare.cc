@@ -14,7 +14,6 @@
 
 #include "common/error.h"
 #include "ident/workflow/internal/fit_steps.h"
-#include "ident/workflow/spike_robust_mean.h"
 
 namespace ident::workflow {
 namespace {
@@ -286,11 +285,15 @@ struct Tally {
 double CorruptedOutputOffset(const io::DataTable& corrupted, const DataSource& source, const EstimatorSettings& settings,
                              const FitOptions& fit, Segment estimation) {
   if (fit.detrend != Detrend::kMean) return 0;
-  const auto y = corrupted.values.col(source.output_column()).segment(estimation.first, estimation.count);
-  if (RegressionEstimatorTraits(settings.name).robust && source.dynamic()) return SpikeRobustMean(y);
+  FitOptions own = fit;
+  own.robust_offset = RegressionEstimatorTraits(settings.name).robust;
+  const int c = source.output_column();
+  const std::string& name = corrupted.names[static_cast<std::size_t>(c)];
+  const auto y = corrupted.values.col(c).segment(estimation.first, estimation.count);
+  if (internal::RobustOffsetColumn(own, source) == c) return internal::RobustOffset(y, corrupted.source, name);
   internal::RunningMean mean;
   for (Eigen::Index r = 0; r < y.size(); ++r) mean.Add(y(r));
-  return mean.Get(corrupted.source, corrupted.names[static_cast<std::size_t>(source.output_column())]);
+  return mean.Get(corrupted.source, name);
 }
 
 // Runs one estimator on one corrupted record, detrended as `ident fit` detrends it for that estimator, and

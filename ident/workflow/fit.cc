@@ -74,9 +74,10 @@ std::pair<Segment, Segment> PrepareData(io::DataTable& data, const DataSource& s
   const auto [estimation, validation] = Split(data.num_rows(), source, options, data.source);
   if (means) means->clear();
   if (options.detrend == Detrend::kMean) {
+    const int robust = internal::RobustOffsetColumn(options, source);
     for (int c : source.used_columns()) {
       double m = 0;
-      if (options.robust_offset && source.dynamic() && c == source.output_column()) {
+      if (c == robust) {
         m = RobustOffset(data.values.col(c).head(estimation.count), data.source, data.names[c]);
       } else {
         RunningMean mean;

@@ -160,7 +160,7 @@ Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& cs
   if (options.detrend == Detrend::kMean) {
     std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
     const std::vector<int> used = source.used_columns();
-    const int robust = options.robust_offset && source.dynamic() ? source.output_column() : -1;
+    const int robust = internal::RobustOffsetColumn(options, source);
     std::vector<double> output;
     for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
       for (int c : used) means[c].Add(row(c));

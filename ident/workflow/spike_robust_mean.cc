@@ -22,17 +22,18 @@ double LocalMedian(const Eigen::VectorXd& w, Eigen::Index t) {
   for (Eigen::Index s = first; s <= last; ++s)
     if (std::isfinite(w(s))) window[n++] = w(s);
   if (n == 0) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(window, window + n);
-  return n % 2 == 1 ? window[n / 2] : 0.5 * (window[n / 2 - 1] + window[n / 2]);
+  double* const middle = window + n / 2;
+  std::nth_element(window, middle, window + n);
+  if (n % 2 == 1) return *middle;
+  return 0.5 * (*std::max_element(window, middle) + *middle);  // the two middle values of an even count
 }
 
-// The deviation limit kSpikeThreshold·S of the header, from the first pass's deviations; +∞ when every
+// The deviation limit kSpikeThreshold·S of the header from y and its local medians r; +∞ when every
 // finite sample equals its local median.
-double DeviationLimit(const Eigen::VectorXd& y) {
+double DeviationLimit(const Eigen::VectorXd& y, const Eigen::VectorXd& r) {
   std::vector<double> deviation;
   for (Eigen::Index t = 0; t < y.size(); ++t)
-    if (std::isfinite(y(t)))
-      if (const double d = std::abs(y(t) - LocalMedian(y, t)); d > 0) deviation.push_back(d);
+    if (const double d = std::abs(y(t) - r(t)); d > 0) deviation.push_back(d);  // NaN: not > 0
   if (deviation.empty()) return std::numeric_limits<double>::infinity();
   const auto middle = deviation.begin() + static_cast<std::ptrdiff_t>(deviation.size() / 2);
   std::nth_element(deviation.begin(), middle, deviation.end());
@@ -42,25 +43,33 @@ double DeviationLimit(const Eigen::VectorXd& y) {
 }  // namespace
 
 double SpikeRobustMean(const Eigen::Ref<const Eigen::VectorXd>& y) {
-  const Eigen::VectorXd measured = y;
-  const double limit = DeviationLimit(measured);
-  // Flagged samples leave the windows (NaN in w) and the rest are judged again, until no new one is
-  // flagged: a cluster of spikes that fills half a window hides from the first median, not from the
-  // medians once its edges are out.
-  Eigen::VectorXd w = measured;
-  for (int round = 0; round < kMaxRounds; ++round) {
-    std::vector<Eigen::Index> flagged;
+  // w: y with the flagged samples NaN; r: the local medians of w at its finite samples.
+  Eigen::VectorXd w = y, r(y.size());
+  const auto medians = [&] {
     for (Eigen::Index t = 0; t < w.size(); ++t)
-      if (std::isfinite(w(t)) && std::abs(w(t) - LocalMedian(w, t)) > limit) flagged.push_back(t);
-    if (flagged.empty()) break;
-    for (Eigen::Index t : flagged) w(t) = std::numeric_limits<double>::quiet_NaN();
+      r(t) = std::isfinite(w(t)) ? LocalMedian(w, t) : std::numeric_limits<double>::quiet_NaN();
+  };
+  medians();
+  const double limit = DeviationLimit(w, r);
+  // Flagged samples leave the windows and the rest are judged again, until no new one is flagged: a
+  // cluster of spikes that fills half a window hides from the first median, not from the medians once
+  // its edges are out.
+  for (int round = 0; round < kMaxRounds; ++round) {
+    bool any = false;
+    for (Eigen::Index t = 0; t < w.size(); ++t)
+      if (std::abs(w(t) - r(t)) > limit) {  // NaN (flagged or missing): false
+        w(t) = std::numeric_limits<double>::quiet_NaN();
+        any = true;
+      }
+    if (!any) break;
+    medians();
   }
   // m ← m + (v − m)/k, as the plain mean of the workflow: exact for a constant column even near 1e308. A
   // flagged sample counts as the median of its window's kept samples (none: it is left out).
   double mean = 0;
   long count = 0;
-  for (Eigen::Index t = 0; t < measured.size(); ++t) {
-    if (!std::isfinite(measured(t))) continue;
+  for (Eigen::Index t = 0; t < y.size(); ++t) {
+    if (!std::isfinite(y(t))) continue;
     const double kept = std::isfinite(w(t)) ? w(t) : LocalMedian(w, t);
     if (std::isnan(kept)) continue;
     mean += (kept - mean) / static_cast<double>(++count);

@@ -62,6 +62,12 @@ class RunningMean {
   double mean_ = 0;
 };
 
+// The column whose detrending offset is FitOptions::robust_offset's (the output of a dynamic structure,
+// when both apply), or −1.
+inline int RobustOffsetColumn(const FitOptions& options, const DataSource& source) {
+  return options.detrend == Detrend::kMean && options.robust_offset && source.dynamic() ? source.output_column() : -1;
+}
+
 // FitOptions::robust_offset's offset of an output column (SpikeRobustMean), with RunningMean's check.
 inline double RobustOffset(const Eigen::Ref<const Eigen::VectorXd>& y, const std::string& source,
                            const std::string& column) {
@@ -122,7 +128,6 @@ class Estimation {
       // the size of the prediction error, biases the estimate where the model predicts poorly. Its
       // output is still judged (a gross error against the prediction is cleaned in turn).
       if (source_.RegressorHoldsCleaned()) {
-        ++left_out_;
         y_hat = estimator_.Predict(z_);
         if (judged_) scale = estimator_.noise_std();
         source_.PushCheckedOutput(y, y_hat, scale, /*flagged=*/judged_, judged_);
@@ -253,7 +258,6 @@ class Estimation {
   bool uses_estimate_;       // the source's regressor depends on θ (ARMAX/OE/BJ)
   std::optional<RecursiveLeastSquares> shadow_;  // θ for the regressors during a robust start-up
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
-  int left_out_ = 0;  // equations left out because their regressor holds a cleaned output
 };
 
 // Fit % = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) and RMS, accumulated in one pass (Welford for ‖y − ȳ‖²).
