@@ -15,7 +15,7 @@
 
 #include "bench/support/ratio_reporter.h"
 #include "ident/io/csv.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"
 #include "models/arx.h"

@@ -21,7 +21,7 @@
 #include "common/error.h"
 #include "ident/io/arriving_input.h"
 #include "ident/io/csv.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/workflow/stream.h"
 #include "ident/workflow/time_column.h"
 

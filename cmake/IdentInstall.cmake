@@ -1,7 +1,7 @@
 # Install rules: `cmake --install <build> [--prefix <dir>]` puts in place
 #   include/ident/{common,models,approx,ident}/**.h  the public headers, paths preserved (consumers write
 #                                               #include "ident/regression/rls.h" as inside the tree)
-#   lib/libident_{models,approx,linalg,regression,observers,smoothing,density,control,io}.a  the libraries
+#   lib/libident_{models,approx,linalg,regression,observers,registry,smoothing,density,control,io}.a  the libraries
 #   lib/cmake/Ident/IdentConfig.cmake, IdentConfigVersion.cmake, IdentTargets*.cmake
 # Consumers: find_package(Ident 0.1 REQUIRED) and link Ident::ident (all of them) or one folder's target
 # (Ident::regression, Ident::observers, Ident::smoothing, ...). Everything here is in the COMPONENT `ident_development`, so
@@ -12,7 +12,7 @@ include(CMakePackageConfigHelpers)
 set(IDENT_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/Ident")
 
 set(ident_installed_targets ident_common ident_models ident_approx ident_linalg ident_regression ident_observers
-                            ident_smoothing ident_density ident_control ident_io ident_workflow ident_core)
+                            ident_registry ident_smoothing ident_density ident_control ident_io ident_workflow ident_core)
 install(TARGETS ${ident_installed_targets}
         EXPORT IdentTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT ident_development

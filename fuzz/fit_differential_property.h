@@ -24,7 +24,7 @@
 #include "common/error.h"
 #include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/regression/regression_prior.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"

@@ -40,7 +40,7 @@
 // reached (counted in projection_failures()).
 //
 // With the model given at construction it is a StateObserver (ident/observers/state_observer.h): Update(d) =
-// Step(model, d.u, d.y); the registry builds it as "lc_truncated" (ident/observers/observer_registry.h).
+// Step(model, d.u, d.y); the registry builds it as "lc_truncated" (ident/registry/observer_registry.h).
 //
 // Example:
 //   ident::TruncatedGaussianFilter f(sensor, m0, P0);

@@ -14,9 +14,10 @@
 // and optionally
 //   std::optional<LockInStatus> lock_in() the lock-in safeguard's state, if the estimator has one
 //
-// Run time: AnyRegressionEstimator wraps any such E behind a virtual interface, and
-// MakeRegressionEstimator() builds one by name ("rls", "cauchy", "student:3", ...) from
-// EstimatorSettings (see estimator_registry.h).
+// Run time: AnyRegressionEstimator is the regression side of the one estimator interface
+// (common/estimator.h: Update(RegressionItem), mean() = Θ̂, Predict(RegressionItem) = Θ̂'z); RegressionEstimatorModel
+// wraps any such E, and MakeEstimator() / MakeRegressionEstimator() build one by name ("rls", "cauchy",
+// "student:3", ...) from EstimatorSettings (ident/registry/estimator_registry.h).
 #pragma once
 
 #include <concepts>
@@ -28,6 +29,7 @@
 
 #include <Eigen/Core>
 
+#include "common/estimator.h"
 #include "common/step_report.h"
 
 namespace ident {
@@ -79,11 +81,17 @@ struct LockInStatus {
   bool start_at_end = false;
 };
 
-// Type-erased regression estimator for selection at run time.
-class AnyRegressionEstimator {
+// Type-erased regression estimator for selection at run time: the regression side of AnyEstimator.
+class AnyRegressionEstimator : public AnyEstimator {
  public:
-  virtual ~AnyRegressionEstimator() = default;
-  virtual std::string name() const = 0;
+  using AnyEstimator::Predict;
+  using AnyEstimator::Update;
+  ItemKind item_kind() const final { return ItemKind::kRegression; }
+  int dimension() const final { return num_parameters(); }
+  StepReport Update(const RegressionItem& item) final { return Update(item.y, item.z); }
+  Eigen::VectorXd mean() const final { return parameters(); }
+  double Predict(const RegressionItem& item) const final { return Predict(item.z); }
+
   virtual StepReport Update(double y, const Eigen::Ref<const Eigen::VectorXd>& z) = 0;
   virtual int num_parameters() const = 0;
   virtual Eigen::VectorXd parameters() const = 0;
@@ -93,7 +101,6 @@ class AnyRegressionEstimator {
   virtual double Dy() const = 0;
   // Estimated noise standard deviation (for RLS s; for Student-t/Cauchy the scale σ ≈ √D_y).
   virtual double noise_std() const = 0;
-  virtual void Reset() = 0;
   // The lock-in safeguard's state; nullopt for estimators without one (RLS, --exact).
   virtual std::optional<LockInStatus> lock_in() const { return std::nullopt; }
   // The restarts lock_in() lists, counted without copying them (0 for estimators without the safeguard).

@@ -17,7 +17,7 @@
 // weight relative to least squares (ident/regression/outlier_decision.h) and u = ξ_z − ξ its squared
 // prediction error in units of the current residual scale [spec §3]. LeastSquaresWeight (β = 1/ν [spec §7c])
 // makes recursive least squares (ident/regression/rls.h). A rule is registered by name with
-// RegisterRegressionEstimator (ident/regression/estimator_registry.h); the Kárný–Hangos estimators take the
+// RegisterRegressionEstimator (ident/registry/estimator_registry.h); the Kárný–Hangos estimators take the
 // same step with their own weighting-polynomial rule and their start-up and lock-in machinery around it
 // (ident/regression/student_regression.h).
 #pragma once

@@ -187,7 +187,7 @@ Spread Spread::Of(std::vector<double> v) {
 namespace {
 
 // The estimators' settings with their default priors in the data's own scale (DataScaledDefaultPrior,
-// ident/regression/estimator_registry.h) from the clean estimation part's mean squares, the clean least-squares
+// ident/registry/estimator_registry.h) from the clean estimation part's mean squares, the clean least-squares
 // reference's settings, and the fit options every trial uses.
 struct TrialSettings {
   std::vector<EstimatorSettings> estimators;

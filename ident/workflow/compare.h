@@ -24,7 +24,7 @@
 #include <Eigen/Core>
 
 #include "ident/io/csv.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/workflow/experiments.h"
 #include "ident/workflow/fit.h"
 

@@ -1,4 +1,4 @@
-// The estimator of a fit, as a user states it: a registered name (ident/regression/estimator_registry.h)
+// The estimator of a fit, as a user states it: a registered name (ident/registry/estimator_registry.h)
 // and the options every estimator or some of them take. The command line (`--estimator`, `--dof`,
 // `--forgetting`, …) and the Python package fill the same fields; Resolve() checks them together and
 // turns them into EstimatorSettings.
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 
 namespace ident::workflow {
 

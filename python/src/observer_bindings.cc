@@ -1,5 +1,5 @@
 // The state observers as Python objects: one class `Observer` over the registry
-// (ident/observers/observer_registry.h) and the measurement models it needs; python/ident/observers.py
+// (ident/registry/observer_registry.h) and the measurement models it needs; python/ident/observers.py
 // names them (KalmanFilter, LcGaussianFilter, GridObserver). A data item is (y(k), u(k−1)).
 #include <cstdint>
 #include <map>
@@ -14,7 +14,7 @@
 #include <pybind11/stl.h>
 
 #include "common/error.h"
-#include "ident/observers/observer_registry.h"
+#include "ident/registry/observer_registry.h"
 #include "models/measurement.h"
 #include "python/src/bindings.h"
 
@@ -27,7 +27,7 @@ using RowMajorArray = py::array_t<double, py::array::c_style | py::array::forcec
 
 class Observer {
  public:
-  Observer(ObserverSettings settings, ObserverProblem problem)
+  Observer(EstimatorSettings settings, ObserverProblem problem)
       : settings_(std::move(settings)), problem_(std::move(problem)) {
     problem_.model.Validate();
     observer_ = MakeStateObserver(settings_, problem_);
@@ -78,9 +78,16 @@ class Observer {
     const Guard guard(*this);
     return observer_->covariance();
   }
+  double Predict(const std::optional<Eigen::VectorXd>& u) const {
+    const Guard guard(*this);
+    const StateSpaceItem item{u.value_or(Eigen::VectorXd()), 0.0};
+    IDENT_REQUIRE(item.u.size() == problem_.model.num_inputs(), "u has {} entries; the model has {} inputs",
+                  item.u.size(), problem_.model.num_inputs());
+    return observer_->Predict(item);
+  }
   void Reset() {
     const Guard guard(*this);
-    observer_ = MakeStateObserver(settings_, problem_);
+    observer_->Reset();
   }
   std::string name() const { return observer_->name(); }
   bool enabled() const { return enabled_; }
@@ -97,7 +104,7 @@ class Observer {
     std::unique_lock<std::mutex> lock_;
   };
 
-  ObserverSettings settings_;
+  EstimatorSettings settings_;
   ObserverProblem problem_;
   std::unique_ptr<AnyStateObserver> observer_;
   bool enabled_ = true;
@@ -149,7 +156,7 @@ void RegisterObservers(py::module_& m) {
                        const Eigen::MatrixXd& Q, std::shared_ptr<const Measurement> measurement,
                        const Eigen::VectorXd& x0, const Eigen::MatrixXd& P0,
                        const std::map<std::string, std::string>& options) {
-             ObserverSettings settings;
+             EstimatorSettings settings;
              settings.name = name;
              settings.options = options;
              return std::make_unique<Observer>(settings, Problem(A, B, Q, std::move(measurement), x0, P0));
@@ -160,6 +167,9 @@ void RegisterObservers(py::module_& m) {
            "One step: time update with u(k-1), measurement update with y(k). Returns a StepReport")
       .def("update_many", &Observer::UpdateMany, py::arg("Y"), py::arg("U") = py::none(),
            "Readings Y[k] with inputs U[k, :], the loop in C++ without the GIL. Returns the StepStatus codes")
+      .def("predict", &Observer::Predict, py::arg("u") = py::none(),
+           "c'(A x + B u): the mean of the measured combination c'x(k) after the time update with u(k-1) "
+           "(for a linear-Gaussian measurement the predicted reading); NaN for a measurement without c")
       .def("reset", &Observer::Reset, "Back to the prior N(x0, P0)")
       .def_property("enabled", &Observer::enabled, &Observer::set_enabled,
                     "False: update() and update_many() skip every reading (status SKIPPED)")

@@ -1,5 +1,5 @@
 // The regression estimators as Python objects: one class `Estimator` over the registry
-// (ident/regression/estimator_registry.h); python/ident/estimators.py names them (RLS, Cauchy, Student,
+// (ident/registry/estimator_registry.h); python/ident/estimators.py names them (RLS, Cauchy, Student,
 // Huber, CauchyML). update_many runs its loop in C++ with the GIL released.
 #include <cstdint>
 #include <memory>
@@ -14,7 +14,7 @@
 #include <pybind11/stl.h>
 
 #include "common/error.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/workflow/estimator_spec.h"
 #include "python/src/bindings.h"
 

@@ -16,7 +16,7 @@
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/regression/regression_prior.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"

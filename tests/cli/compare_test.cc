@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/workflow/compare.h"
 #include "ident/workflow/compare_record.h"
 #include "ident/io/mat_file.h"

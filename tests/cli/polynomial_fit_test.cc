@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/workflow/fit.h"
 #include "ident/workflow/model_spec.h"
 #include "ident/workflow/polynomial_order_selection.h"

@@ -12,7 +12,7 @@
 
 #include "common/error.h"
 #include "ident/regression/batch_regression.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 #include "ident/regression/student_regression.h"

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "ident/io/csv.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/workflow/compare.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"

@@ -13,7 +13,7 @@
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
-#include "ident/observers/observer_registry.h"
+#include "ident/registry/observer_registry.h"
 #include "ident/observers/truncated_gaussian_filter.h"
 #include "models/measurement.h"
 #include "models/state_space.h"
@@ -308,7 +308,7 @@ TEST(TruncatedGaussianRealtime, UpdateAllocatesNothingOver10kSteps) {
   P0 << 0.3, 0, 0, 1;
   TruncatedGaussianFilter f(model, sensor, Eigen::Vector2d(0, 2), P0);
   const ObserverProblem problem{model, std::make_shared<models::ThresholdSensor>(sensor), Eigen::Vector2d(0, 2), P0};
-  auto registered = MakeStateObserver(ParseObserverSpec("lc_truncated"), problem);
+  auto registered = MakeStateObserver(ParseEstimatorSpec("lc_truncated"), problem);
   int updated = 0, events = 0;
   {
     testing::AllocationCounter count;

@@ -5,7 +5,8 @@
 //   ident/linalg/       common/
 //   ident/<concept>/    common/, models/, approx/, ident/linalg/ as listed below, and itself
 // No folder of ident/ includes another except linalg/, regression/, which runs the log-concave Gaussian filter of
-// observers/ as a regression estimator, and workflow/, which builds on regression/, smoothing/ and io/.
+// observers/ as a regression estimator, registry/, which builds the estimators of regression/ and observers/ by
+// name, and workflow/, which builds on registry/, regression/, smoothing/ and io/.
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -38,13 +39,15 @@ const std::map<std::string, std::set<std::string>>& Allowed() {
       {"ident/linalg", {"common", "ident/linalg"}},
       {"ident/regression", {"common", "models", "approx", "ident/linalg", "ident/observers", "ident/regression"}},
       {"ident/observers", {"common", "models", "approx", "ident/linalg", "ident/observers"}},
+      {"ident/registry",
+       {"common", "models", "approx", "ident/linalg", "ident/observers", "ident/regression", "ident/registry"}},
       {"ident/smoothing", {"common", "models", "ident/linalg", "ident/smoothing"}},
       {"ident/density", {"common", "models", "ident/density"}},
       {"ident/control", {"common", "ident/control"}},
       {"ident/io", {"common", "ident/io"}},
       {"ident/workflow",
-       {"common", "models", "approx", "ident/linalg", "ident/regression", "ident/smoothing", "ident/io",
-        "ident/workflow"}},
+       {"common", "models", "approx", "ident/linalg", "ident/regression", "ident/registry", "ident/smoothing",
+        "ident/io", "ident/workflow"}},
   };
   return allowed;
 }

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/regression/rls.h"
 #include "tests/support/alloc_counter.h"
 

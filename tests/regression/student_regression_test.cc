@@ -10,7 +10,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/regression/rls.h"
 #include "tests/support/alloc_counter.h"
 

@@ -18,7 +18,7 @@
 #include <Eigen/Core>
 
 #include "common/error.h"
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/weighted_regression.h"
 #include "tests/support/alloc_counter.h"

@@ -1,6 +1,5 @@
-#include "ident/observers/observer_registry.h"
+#include "ident/registry/observer_registry.h"
 
-#include <charconv>
 #include <cmath>
 #include <functional>
 #include <utility>
@@ -17,29 +16,14 @@
 namespace ident {
 namespace {
 
-using Factory = std::function<std::unique_ptr<AnyStateObserver>(const ObserverSettings&, const ObserverProblem&)>;
+using ObserverFactory = std::function<std::unique_ptr<AnyStateObserver>(const EstimatorSettings&, const ObserverProblem&)>;
 
-double ParseNumber(const std::string& observer, const std::string& key, std::string_view text) {
-  double value = 0;
-  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-  IDENT_REQUIRE(!text.empty() && ec == std::errc() && ptr == text.data() + text.size() && std::isfinite(value),
-                "observer '{}': option {} = '{}' is not a finite number", observer, key, text);
-  return value;
-}
-
-int ParseInt(const std::string& observer, const std::string& key, std::string_view text) {
-  const double value = ParseNumber(observer, key, text);
-  IDENT_REQUIRE(value == std::floor(value) && std::abs(value) < 1e9,
-                "observer '{}': option {} = '{}' is not an integer", observer, key, text);
-  return static_cast<int>(value);
-}
-
-void RequireNoOptions(const ObserverSettings& s) {
+void RequireNoObserverOptions(const EstimatorSettings& s) {
   if (s.options.empty()) return;
   IDENT_REQUIRE(false, "observer '{}' takes no options; got '{}'", s.name, s.options.begin()->first);
 }
 
-std::shared_ptr<const models::ProjectedMeasurement> Projected(const ObserverSettings& s, const ObserverProblem& p) {
+std::shared_ptr<const models::ProjectedMeasurement> Projected(const EstimatorSettings& s, const ObserverProblem& p) {
   IDENT_REQUIRE(p.measurement != nullptr, "observer '{}': measurement must not be null", s.name);
   auto projected = std::dynamic_pointer_cast<const models::ProjectedMeasurement>(p.measurement);
   IDENT_REQUIRE(projected != nullptr,
@@ -48,23 +32,26 @@ std::shared_ptr<const models::ProjectedMeasurement> Projected(const ObserverSett
   return projected;
 }
 
-std::unique_ptr<AnyStateObserver> MakeKalman(const ObserverSettings& s, const ObserverProblem& p) {
-  RequireNoOptions(s);
+std::unique_ptr<AnyStateObserver> MakeKalman(const EstimatorSettings& s, const ObserverProblem& p) {
+  RequireNoObserverOptions(s);
   const auto projected = Projected(s, p);
   const auto* gaussian = dynamic_cast<const models::GaussianMeasurement*>(projected.get());
   IDENT_REQUIRE(gaussian != nullptr,
                 "observer 'kalman' needs a linear-Gaussian measurement; '{}' is not (use lc_gaussian or grid)",
                 p.measurement->name());
-  return std::make_unique<StateObserverModel<KalmanFilter>>("kalman", p.model, *gaussian, p.x0, p.P0);
+  return std::make_unique<StateObserverModel<KalmanFilter>>("kalman", p.model, projected->c(), p.model, *gaussian,
+                                                           p.x0, p.P0);
 }
 
-std::unique_ptr<AnyStateObserver> MakeLcGaussian(const ObserverSettings& s, const ObserverProblem& p) {
-  RequireNoOptions(s);
-  return std::make_unique<StateObserverModel<LcGaussianFilter>>("lc_gaussian", p.model, Projected(s, p), p.x0, p.P0);
+std::unique_ptr<AnyStateObserver> MakeLcGaussian(const EstimatorSettings& s, const ObserverProblem& p) {
+  RequireNoObserverOptions(s);
+  const auto projected = Projected(s, p);
+  return std::make_unique<StateObserverModel<LcGaussianFilter>>("lc_gaussian", p.model, projected->c(), p.model,
+                                                                projected, p.x0, p.P0);
 }
 
-std::unique_ptr<AnyStateObserver> MakeLcTruncated(const ObserverSettings& s, const ObserverProblem& p) {
-  RequireNoOptions(s);
+std::unique_ptr<AnyStateObserver> MakeLcTruncated(const EstimatorSettings& s, const ObserverProblem& p) {
+  RequireNoObserverOptions(s);
   IDENT_REQUIRE(p.measurement != nullptr, "observer 'lc_truncated': measurement must not be null");
   const auto* threshold = dynamic_cast<const models::ThresholdSensor*>(p.measurement.get());
   IDENT_REQUIRE(threshold != nullptr && threshold->num_states() == 2,
@@ -73,11 +60,12 @@ std::unique_ptr<AnyStateObserver> MakeLcTruncated(const ObserverSettings& s, con
   IDENT_REQUIRE(p.x0.size() == 2 && p.P0.rows() == 2 && p.P0.cols() == 2,
                 "observer 'lc_truncated': x0 has {} entries and P0 is {}×{}; need 2 and 2×2", p.x0.size(), p.P0.rows(),
                 p.P0.cols());
-  return std::make_unique<StateObserverModel<TruncatedGaussianFilter>>("lc_truncated", p.model, *threshold,
+  return std::make_unique<StateObserverModel<TruncatedGaussianFilter>>("lc_truncated", p.model, threshold->c(),
+                                                                       p.model, *threshold,
                                                                        Eigen::Vector2d(p.x0), Eigen::Matrix2d(p.P0));
 }
 
-std::unique_ptr<AnyStateObserver> MakeGrid(const ObserverSettings& s, const ObserverProblem& p) {
+std::unique_ptr<AnyStateObserver> MakeGrid(const EstimatorSettings& s, const ObserverProblem& p) {
   IDENT_REQUIRE(p.measurement != nullptr, "observer 'grid': measurement must not be null");
   const int n = static_cast<int>(p.x0.size());
   IDENT_REQUIRE(n >= 1 && n <= 3, "observer 'grid' handles 1 to 3 states; the problem has {}", n);
@@ -89,7 +77,7 @@ std::unique_ptr<AnyStateObserver> MakeGrid(const ObserverSettings& s, const Obse
       std::string_view rest = value;
       while (true) {
         const auto x = rest.find('x');
-        points.push_back(ParseInt("grid", key, rest.substr(0, x)));
+        points.push_back(ParseOptionInteger("grid", key, rest.substr(0, x)));
         if (x == std::string_view::npos) break;
         rest.remove_prefix(x + 1);
       }
@@ -98,15 +86,15 @@ std::unique_ptr<AnyStateObserver> MakeGrid(const ObserverSettings& s, const Obse
                     points.size(), n);
       o.points = points.size() == 1 ? std::vector<int>(n, points.front()) : points;
     } else if (key == "initial_sigmas") {
-      o.initial_sigmas = ParseNumber("grid", key, value);
+      o.initial_sigmas = ParseOptionNumber("grid", key, value);
     } else if (key == "noise_sigmas") {
-      o.noise_sigmas = ParseNumber("grid", key, value);
+      o.noise_sigmas = ParseOptionNumber("grid", key, value);
     } else if (key == "support_level") {
-      o.support_level = ParseNumber("grid", key, value);
+      o.support_level = ParseOptionNumber("grid", key, value);
     } else if (key == "min_half_width") {
-      o.min_half_width = ParseNumber("grid", key, value);
+      o.min_half_width = ParseOptionNumber("grid", key, value);
     } else if (key == "padding") {
-      o.padding = ParseInt("grid", key, value);
+      o.padding = ParseOptionInteger("grid", key, value);
     } else {
       IDENT_REQUIRE(false,
                     "observer 'grid' has no option '{}' (options: points, initial_sigmas, noise_sigmas, "
@@ -116,11 +104,13 @@ std::unique_ptr<AnyStateObserver> MakeGrid(const ObserverSettings& s, const Obse
   }
   const std::string problem = o.Validate();
   IDENT_REQUIRE(problem.empty(), "observer 'grid': option {}", problem);
-  return std::make_unique<StateObserverModel<GridObserver>>("grid", p.model, p.measurement, p.x0, p.P0, o);
+  const auto* projected = dynamic_cast<const models::ProjectedMeasurement*>(p.measurement.get());
+  return std::make_unique<StateObserverModel<GridObserver>>(
+      "grid", p.model, projected != nullptr ? projected->c() : Eigen::VectorXd(), p.model, p.measurement, p.x0, p.P0, o);
 }
 
-const std::vector<std::pair<std::string, Factory>>& Registry() {
-  static const std::vector<std::pair<std::string, Factory>> registry = {
+const std::vector<std::pair<std::string, ObserverFactory>>& ObserverEntries() {
+  static const std::vector<std::pair<std::string, ObserverFactory>> registry = {
       {"kalman", MakeKalman},
       {"lc_gaussian", MakeLcGaussian},
       {"lc_truncated", MakeLcTruncated},
@@ -131,31 +121,11 @@ const std::vector<std::pair<std::string, Factory>>& Registry() {
 
 }  // namespace
 
-ObserverSettings ParseObserverSpec(std::string_view spec) {
-  ObserverSettings s;
-  const auto colon = spec.find(':');
-  s.name = std::string(spec.substr(0, colon));
-  IDENT_REQUIRE(!s.name.empty(), "observer '{}' has no name", spec);
-  if (colon == std::string_view::npos) return s;
-  std::string_view rest = spec.substr(colon + 1);
-  while (!rest.empty()) {
-    const auto comma = rest.find(',');
-    const std::string_view item = rest.substr(0, comma);
-    const auto eq = item.find('=');
-    IDENT_REQUIRE(eq != std::string_view::npos && eq > 0,
-                  "observer '{}': '{}' is not key=value (use e.g. grid:points=64)", spec, item);
-    const std::string key(item.substr(0, eq));
-    IDENT_REQUIRE(!s.options.contains(key), "observer '{}': option {} given twice", spec, key);
-    s.options[key] = std::string(item.substr(eq + 1));
-    if (comma == std::string_view::npos) break;
-    rest.remove_prefix(comma + 1);
-    IDENT_REQUIRE(!rest.empty(), "observer '{}' ends with ','", spec);
-  }
-  return s;
-}
-
-std::unique_ptr<AnyStateObserver> MakeStateObserver(const ObserverSettings& settings, const ObserverProblem& problem) {
-  for (const auto& [name, factory] : Registry()) {
+std::unique_ptr<AnyStateObserver> MakeStateObserver(const EstimatorSettings& settings, const ObserverProblem& problem) {
+  const std::string setting = settings.first_regression_setting();
+  IDENT_REQUIRE(setting.empty(), "{} does not apply to observer '{}' (a regression estimator's setting)", setting,
+                settings.name);
+  for (const auto& [name, factory] : ObserverEntries()) {
     if (name == settings.name) return factory(settings, problem);
   }
   IDENT_REQUIRE(false, "unknown observer '{}' (known: {})", settings.name, fmt::join(StateObserverNames(), ", "));
@@ -164,7 +134,7 @@ std::unique_ptr<AnyStateObserver> MakeStateObserver(const ObserverSettings& sett
 
 std::vector<std::string> StateObserverNames() {
   std::vector<std::string> names;
-  for (const auto& [name, factory] : Registry()) names.push_back(name);
+  for (const auto& [name, factory] : ObserverEntries()) names.push_back(name);
   return names;
 }
 

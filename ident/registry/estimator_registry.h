@@ -1,5 +1,8 @@
-// Run-time selection of regression estimators by name.
+// The one registry: every estimator and state observer by name, built from EstimatorSettings
+// (estimator_settings.h) for a problem of its kind, behind the one interface AnyEstimator
+// (common/estimator.h).
 //
+//   Regression estimators (RegressionProblem: ρ parameters; items (y, z)):
 //   "rls"                     RecursiveLeastSquares
 //   "cauchy"                  SafeStudentRegression with k = 1 (Kárný–Hangos; rejects dof ≠ 1)
 //   "student" (needs dof)     SafeStudentRegression with k = dof ("student:3" or dof = 3)
@@ -9,12 +12,15 @@
 //   "lc:<noise>"              the log-concave Gaussian filter for y = z'θ + e, e of a log-concave density
 //                             (ident/regression/lc_regression.h): lc:laplace, lc:huber[:k] (k = 1.345),
 //                             lc:logistic, lc:gengauss:p (1 ≤ p ≤ 2), lc:gaussian (= RLS)
-//   (further names are registered in estimator_registry.cc as estimators are added)
+//   State observers (ObserverProblem, observer_registry.h; items (u(k−1), y(k))):
+//   "kalman", "lc_gaussian", "lc_truncated", "grid"
+//   (further regression estimators are registered with RegisterRegressionEstimator)
 //
 // Example:
-//   ident::EstimatorSettings s = ident::ParseEstimatorSpec("rls");
-//   s.forgetting.factor = 0.99;
-//   auto est = ident::MakeRegressionEstimator(s, /*num_parameters=*/4);   // throws on bad options
+//   auto est = ident::MakeEstimator(ident::ParseEstimatorSpec("student:3"), ident::RegressionProblem{4});
+//   auto obs = ident::MakeEstimator(ident::ParseEstimatorSpec("grid:points=64"), observer_problem);
+//   est->Update(ident::RegressionItem{y, z});  obs->Update(ident::StateSpaceItem{u, y});
+//   The typed forms: MakeRegressionEstimator(settings, ρ) and MakeStateObserver(settings, problem).
 #pragma once
 
 #include <functional>
@@ -24,44 +30,33 @@
 #include <string_view>
 #include <vector>
 
-#include "ident/regression/forgetting.h"
+#include "common/estimator.h"
 #include "ident/regression/regression_estimator.h"
-#include "ident/regression/regression_prior.h"
+#include "ident/registry/estimator_settings.h"
+#include "ident/registry/observer_registry.h"
 
 namespace ident {
 
-// The lock-in safeguard of the robust estimators (ident/regression/safe_student_regression.h); unset = its defaults
-// (window max(100, 20ρ), threshold 0.3, restart on).
-struct LockInSettings {
-  std::optional<int> window;        // M in 2..1000000 (kMaxLockInWindow; 0 = automatic)
-  std::optional<double> threshold;  // 0 < threshold < (k+1)/k
-  bool restart = true;              // false: flag lock-ins only, never restart
-  std::optional<long> history;      // samples kept for restarts to replay (0 = all; SafeStudentOptions::history_limit)
-  bool any() const { return window || threshold || !restart || history; }
+// What a regression estimator needs besides its settings: the number of parameters ρ.
+struct RegressionProblem {
+  int num_parameters = 0;
 };
 
-// Options common to the command line and the registry; each estimator reads those it knows and
-// rejects ones that make no sense for it, naming the option.
-struct EstimatorSettings {
-  std::string name = "rls";
-  ForgettingOptions forgetting;
-  std::optional<RegressionPrior> prior;  // explicit (ν(0), V(0)); otherwise the estimator's default
-  std::optional<double> dof;             // Student-t degrees of freedom k
-  std::string noise;                     // "lc": the noise law ("laplace", "huber:1.345", …)
-  std::optional<int> delta;              // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos; unset: 1)
-  bool exact = false;                    // switch off every safeguard beyond the spec's recursion
-  LockInSettings lock_in;                // refused (if any() is set) for "rls" and together with `exact`
-};
+// Builds the estimator `settings.name` for `problem`; throws InvalidArgument naming the option for an
+// unknown name, a bad option, or a problem of the other kind ("'kalman' is a state observer: …").
+std::unique_ptr<AnyEstimator> MakeEstimator(const EstimatorSettings& settings, const RegressionProblem& problem);
+std::unique_ptr<AnyEstimator> MakeEstimator(const EstimatorSettings& settings, const ObserverProblem& problem);
 
-// Parses "name" or "name:value" / "name:k=value" (e.g. "student:3", "student:k=3") into
-// settings.name and settings.dof, and "lc:<noise>" (e.g. "lc:huber:1.345") into name "lc" and settings.noise.
-// Throws InvalidArgument for a malformed spec.
-EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base = {});
+// Every registered name, the regression estimators first, in the order they are documented.
+std::vector<std::string> EstimatorNames();
+// The kind of item the estimator `name` takes; throws InvalidArgument for an unknown name.
+ItemKind EstimatorItemKind(std::string_view name);
 
-// Builds the estimator; throws InvalidArgument naming the option for an unknown name or bad option.
+// The typed form for regressions: builds the estimator; throws InvalidArgument naming the option for an
+// unknown name or bad option.
 std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings, int num_parameters);
 
-// The registered names, in the order they are documented.
+// The registered regression estimators' names, in the order they are documented.
 std::vector<std::string> RegressionEstimatorNames();
 
 // What a workflow needs to know of a registered estimator before it builds one.
@@ -82,15 +77,16 @@ EstimatorTraits RegressionEstimatorTraits(std::string_view name);
 using RegressionEstimatorFactory =
     std::function<std::unique_ptr<AnyRegressionEstimator>(const EstimatorSettings&, int num_parameters)>;
 
-// Adds an estimator under `name` (after the built-in ones): MakeRegressionEstimator, RegressionEstimatorNames,
-// the workflow and the command line's --estimator then know it. The usual one is the LD-form shell with a
-// weight rule of one's own (ident/regression/weighted_regression.h), e.g.
+// Adds an estimator under `name` (after the built-in ones): MakeEstimator, MakeRegressionEstimator,
+// EstimatorNames, the workflow and the command line's --estimator then know it. The usual one is the
+// LD-form shell with a weight rule of one's own (ident/regression/weighted_regression.h), e.g.
 //   RegisterRegressionEstimator("huber-weight", [](const EstimatorSettings& s, int rho) {
 //     return std::make_unique<RegressionEstimatorModel<BasicWeightedRegression<MyRule>>>(
 //         "huber-weight", rho, RlsOptions{s.forgetting, s.prior});
 //   });
-// Throws InvalidArgument for an empty name, one with ':', ',' or a space, a taken name or no factory.
-// Register before building estimators, from one thread (the registry is not locked).
+// A regression estimator takes the typed settings only: the registry refuses any other option of its spec.
+// Throws InvalidArgument for an empty name, one with ':', ',' or a space, a taken name (an observer's
+// too) or no factory. Register before building estimators, from one thread (the registry is not locked).
 void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFactory factory,
                                  EstimatorTraits traits = {});
 

@@ -1,6 +1,5 @@
-#include "ident/regression/estimator_registry.h"
+#include "ident/registry/estimator_registry.h"
 
-#include <charconv>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -135,41 +134,63 @@ std::vector<Entry>& Registry() {
   return registry;
 }
 
-const Entry& Find(std::string_view name) {
+// The regression entry `name`, or null.
+const Entry* Find(std::string_view name) {
   for (const Entry& entry : Registry())
-    if (entry.name == name) return entry;
+    if (entry.name == name) return &entry;
+  return nullptr;
+}
+
+[[noreturn]] void UnknownEstimator(std::string_view name) {
+  for (const std::string& observer : StateObserverNames())
+    if (observer == name)
+      throw InvalidArgument(fmt::format(
+          "'{}' is a state observer: it takes a state-space problem (model, measurement, prior), not a regression",
+          name));
   throw InvalidArgument(
       fmt::format("unknown estimator '{}' (known: {})", name, fmt::join(RegressionEstimatorNames(), ", ")));
 }
 
-}  // namespace
-
-EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings base) {
-  const auto colon = spec.find(':');
-  base.name = std::string(spec.substr(0, colon));
-  IDENT_REQUIRE(!base.name.empty(), "estimator '{}' has no name", spec);
-  if (base.name == "lc") {  // "lc:<noise>", the noise law with its own parameter ("lc:huber:1.345")
-    IDENT_REQUIRE(colon != std::string_view::npos && colon + 1 < spec.size(),
-                  "estimator '{}' needs a noise law: lc:laplace, lc:huber[:k], lc:logistic, lc:gengauss:p or "
-                  "lc:gaussian",
-                  spec);
-    base.noise = std::string(spec.substr(colon + 1));
-    return base;
-  }
-  if (colon != std::string_view::npos) {
-    std::string_view arg = spec.substr(colon + 1);
-    if (arg.starts_with("k=")) arg.remove_prefix(2);
-    double value = 0;
-    const auto [ptr, ec] = std::from_chars(arg.data(), arg.data() + arg.size(), value);
-    IDENT_REQUIRE(ec == std::errc() && ptr == arg.data() + arg.size() && !arg.empty(),
-                  "estimator '{}': '{}' is not a number (use e.g. student:3)", spec, arg);
-    base.dof = value;
-  }
-  return base;
+// The regression estimators take the typed settings only (estimator_settings.h).
+void RequireNoOptions(const EstimatorSettings& s) {
+  if (s.options.empty()) return;
+  throw InvalidArgument(fmt::format(
+      "estimator '{}' has no option '{}' (options: k, dof, forgetting, delta, lock_in_window, lock_in_threshold)",
+      s.name, s.options.begin()->first));
 }
 
+}  // namespace
+
 std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings, int num_parameters) {
-  return Find(settings.name).factory(settings, num_parameters);
+  const Entry* entry = Find(settings.name);
+  if (entry == nullptr) UnknownEstimator(settings.name);
+  RequireNoOptions(settings);
+  return entry->factory(settings, num_parameters);
+}
+
+std::unique_ptr<AnyEstimator> MakeEstimator(const EstimatorSettings& settings, const RegressionProblem& problem) {
+  return MakeRegressionEstimator(settings, problem.num_parameters);
+}
+
+std::unique_ptr<AnyEstimator> MakeEstimator(const EstimatorSettings& settings, const ObserverProblem& problem) {
+  if (Find(settings.name) != nullptr)
+    throw InvalidArgument(fmt::format(
+        "'{}' is a regression estimator: it takes a regression problem (items y, z), not a state-space one",
+        settings.name));
+  return MakeStateObserver(settings, problem);
+}
+
+std::vector<std::string> EstimatorNames() {
+  std::vector<std::string> names = RegressionEstimatorNames();
+  for (std::string& name : StateObserverNames()) names.push_back(std::move(name));
+  return names;
+}
+
+ItemKind EstimatorItemKind(std::string_view name) {
+  if (Find(name) != nullptr) return ItemKind::kRegression;
+  for (const std::string& observer : StateObserverNames())
+    if (observer == name) return ItemKind::kStateSpace;
+  UnknownEstimator(name);
 }
 
 std::vector<std::string> RegressionEstimatorNames() {
@@ -178,13 +199,18 @@ std::vector<std::string> RegressionEstimatorNames() {
   return names;
 }
 
-EstimatorTraits RegressionEstimatorTraits(std::string_view name) { return Find(name).traits; }
+EstimatorTraits RegressionEstimatorTraits(std::string_view name) {
+  const Entry* entry = Find(name);
+  if (entry == nullptr) UnknownEstimator(name);
+  return entry->traits;
+}
 
 void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFactory factory, EstimatorTraits traits) {
   IDENT_REQUIRE(!name.empty() && name.find_first_of(":, ") == std::string::npos,
                 "estimator name '{}': need a non-empty name without ':', ',' or spaces", name);
   IDENT_REQUIRE(factory, "estimator '{}': no factory", name);
-  for (const Entry& entry : Registry()) IDENT_REQUIRE(entry.name != name, "estimator '{}' is registered already", name);
+  for (const std::string& taken : EstimatorNames())
+    IDENT_REQUIRE(taken != name, "estimator '{}' is registered already", name);
   Registry().push_back({name, std::move(factory), traits});
 }
 

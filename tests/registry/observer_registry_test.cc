@@ -15,7 +15,7 @@
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
-#include "ident/observers/observer_registry.h"
+#include "ident/registry/observer_registry.h"
 #include "ident/observers/truncated_gaussian_filter.h"
 #include "tests/observers/linear_gaussian_data.h"
 
@@ -34,7 +34,7 @@ ObserverProblem GaussianProblem() {
 
 std::string ErrorOf(const std::string& spec, const ObserverProblem& problem) {
   try {
-    MakeStateObserver(ParseObserverSpec(spec), problem);
+    MakeStateObserver(ParseEstimatorSpec(spec), problem);
   } catch (const InvalidArgument& e) {
     return e.what();
   }
@@ -48,9 +48,9 @@ TEST(ObserverRegistry, ListsTheFourObservers) {
 TEST(ObserverRegistry, EachNameBuildsTheDocumentedObserver) {
   const auto problem = GaussianProblem();
   const auto items = testing::SimulateLinearGaussian(problem.model, Eigen::Vector2d(1.0, 0.5), 0.2, 60, 4);
-  auto kalman = MakeStateObserver(ParseObserverSpec("kalman"), problem);
-  auto lc = MakeStateObserver(ParseObserverSpec("lc_gaussian"), problem);
-  auto grid = MakeStateObserver(ParseObserverSpec("grid:points=96"), problem);
+  auto kalman = MakeStateObserver(ParseEstimatorSpec("kalman"), problem);
+  auto lc = MakeStateObserver(ParseEstimatorSpec("lc_gaussian"), problem);
+  auto grid = MakeStateObserver(ParseEstimatorSpec("grid:points=96"), problem);
   EXPECT_EQ(kalman->name(), "kalman");
   EXPECT_EQ(lc->name(), "lc_gaussian");
   EXPECT_EQ(grid->name(), "grid");
@@ -91,7 +91,7 @@ TEST(ObserverRegistry, EachNameBuildsTheDocumentedObserver) {
 }
 
 TEST(ObserverRegistry, GridTakesPointsPerAxisAndItsOtherOptions) {
-  auto grid = MakeStateObserver(ParseObserverSpec("grid:points=40x24,noise_sigmas=5,initial_sigmas=7,padding=10"),
+  auto grid = MakeStateObserver(ParseEstimatorSpec("grid:points=40x24,noise_sigmas=5,initial_sigmas=7,padding=10"),
                                 GaussianProblem());
   const auto& g = static_cast<StateObserverModel<GridObserver>&>(*grid).get();
   EXPECT_EQ(g.points(0), 40);
@@ -112,13 +112,13 @@ TEST(ObserverRegistry, BadSpecsOptionsAndProblemsNameTheObserverAndOption) {
   EXPECT_CONTAINS(ErrorOf("grid:points=8x8x8", problem), "has 3 counts; need 1 or 2");
   EXPECT_CONTAINS(ErrorOf("grid:noise_sigmas=-1", problem), "option noise_sigmas = -1; need >= 0");
   EXPECT_CONTAINS(ErrorOf("grid:support_level=nan", problem), "support_level = 'nan' is not a finite number");
-  EXPECT_CONTAINS(ErrorOf("grid:points", problem), "'points' is not key=value");
+  EXPECT_CONTAINS(ErrorOf("grid:points", problem), "'points' is not a number or key=value");
   EXPECT_CONTAINS(ErrorOf("grid:points=8,points=9", problem), "option points given twice");
   EXPECT_CONTAINS(ErrorOf(":points=8", problem), "has no name");
   auto threshold = problem;
   threshold.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
   EXPECT_CONTAINS(ErrorOf("kalman", threshold), "'kalman' needs a linear-Gaussian measurement; 'threshold'");
-  EXPECT_NO_THROW(MakeStateObserver(ParseObserverSpec("lc_gaussian"), threshold));
+  EXPECT_NO_THROW(MakeStateObserver(ParseEstimatorSpec("lc_gaussian"), threshold));
   auto bad_prior = problem;
   bad_prior.P0 = Eigen::Matrix2d::Zero();
   EXPECT_CONTAINS(ErrorOf("kalman", bad_prior), "P0 is not positive definite");
@@ -139,7 +139,7 @@ TEST(ObserverRegistry, LcTruncatedEqualsTheDirectlyDrivenFilterBitForBit) {
   Eigen::Matrix2d P0;
   P0 << 0.3, 0, 0, 1;
   const auto items = testing::SimulateThresholdSensor(model, *sensor, 400, 11);
-  auto obs = MakeStateObserver(ParseObserverSpec("lc_truncated"), {model, sensor, x0, P0});
+  auto obs = MakeStateObserver(ParseEstimatorSpec("lc_truncated"), {model, sensor, x0, P0});
   EXPECT_EQ(obs->name(), "lc_truncated");
   EXPECT_EQ(obs->num_states(), 2);
   TruncatedGaussianFilter direct(*sensor, x0, P0);
@@ -165,7 +165,7 @@ TEST(ObserverRegistry, LcTruncatedNeedsATwoStateThresholdSensorAndTakesNoOptions
             "'gaussian' is not (use lc_gaussian or grid)");
   mems.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
   EXPECT_EQ(ErrorOf("lc_truncated:points=3", mems), "observer 'lc_truncated' takes no options; got 'points'");
-  EXPECT_NO_THROW(MakeStateObserver(ParseObserverSpec("lc_truncated"), mems));
+  EXPECT_NO_THROW(MakeStateObserver(ParseEstimatorSpec("lc_truncated"), mems));
   auto three = mems;
   three.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector3d(1, 0, 0), 1.0);
   EXPECT_EQ(ErrorOf("lc_truncated", three),
