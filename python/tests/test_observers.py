@@ -52,6 +52,20 @@ def test_lc_gaussian_filter_with_a_gaussian_reading_is_the_kalman_filter():
     np.testing.assert_allclose(lc.covariance, P, atol=1e-9)
 
 
+def test_predict_is_the_kalman_predicted_reading():
+    Y, U = simulate(n=60)
+    kf = ident.KalmanFilter(A, Q, C, R, X0, P0, B=B)
+    x, P = X0.copy(), P0.copy()
+    for y, u in zip(Y, U):
+        x, P = A @ x + B @ u, A @ P @ A.T + Q
+        assert kf.predict(u) == pytest.approx(C @ x, abs=1e-10)
+        k = P @ C / (C @ P @ C + R)
+        x, P = x + k * (y - C @ x), P - np.outer(k, C @ P)
+        kf.update(y, u)
+    with pytest.raises(ValueError, match="u has 2 entries"):
+        kf.predict(np.zeros(2))
+
+
 def test_grid_observer_approaches_the_exact_posterior():
     Y, U = simulate(n=50)
     grid = ident.GridObserver(A, Q, ident.GaussianMeasurement(C, R), X0, P0, B=B, points=96)
