@@ -17,7 +17,7 @@
 namespace ident::models {
 namespace {
 
-const char* const kFamilies[] = {"gaussian", "laplace", "huber", "huber:0.5", "logistic", "gengauss:1.5",
+const char* const kFamilies[] = {"gaussian", "laplace", "huber", "huber:0.5", "logistic", "gengauss:1.3", "gengauss:1.5",
                                  "gengauss:2"};
 
 double Integrate(const LogConcaveNoise& f, double power, double lo, double hi) {
