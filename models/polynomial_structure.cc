@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -75,6 +76,15 @@ bool MonicStable(const double* p, int n, double* work) {
     }
   }
   return true;
+}
+
+double LargestRootModulus(const double* p, int n) {
+  if (n <= 0) return 0;
+  // z^n + p1 z^(n−1) + … + p_n: companion matrix with −p in the first row.
+  Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(n, n);
+  for (int j = 0; j < n; ++j) companion(0, j) = -p[j];
+  for (int i = 1; i < n; ++i) companion(i, i - 1) = 1;
+  return companion.eigenvalues().cwiseAbs().maxCoeff();
 }
 
 }  // namespace ident::models

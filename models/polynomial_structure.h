@@ -68,4 +68,8 @@ class PolynomialStructure {
 // complement C5.1). `work` holds at least n doubles; no allocation. O(n²).
 bool MonicStable(const double* p, int n, double* work);
 
+// The largest modulus of the roots of 1 + p1 q⁻¹ + … + p_n q⁻ⁿ (the eigenvalues of its companion matrix; 0 for
+// n = 0). Allocates; for reports, not for the recursion.
+double LargestRootModulus(const double* p, int n);
+
 }  // namespace ident::models

@@ -77,6 +77,7 @@ class PseudoLinearRegressor {
   bool HoldsCleaned() const { return arx_.HoldsCleaned(); }
 
   const PolynomialStructure& structure() const { return structure_; }
+  Recursion recursion() const { return recursion_; }
   const OutputCleaner& cleaner() const { return arx_.cleaner(); }
   long projections() const { return projections_; }  // estimates refused by TrackEstimate
 

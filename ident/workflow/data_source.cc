@@ -1,5 +1,8 @@
 #include "ident/workflow/data_source.h"
 
+#include <algorithm>
+#include <tuple>
+
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
@@ -94,6 +97,20 @@ class PolynomialSource final : public DynamicSource<models::PseudoLinearRegresso
   void ClearEstimate() override { regressor().ClearEstimate(); }
   double RegressionOutput(double y) const override { return regressor().LinearisedOutput(y); }
   bool RegressorHoldsCleaned() const override { return regressor().HoldsCleaned(); }
+  std::string UnstablePredictor(const Eigen::Ref<const Eigen::VectorXd>& theta) const override {
+    const models::PolynomialStructure& s = regressor().structure();
+    std::vector<double> work(static_cast<std::size_t>(std::max(s.nc(), s.nf())));
+    const bool rpem = regressor().recursion() == models::Recursion::kPredictionError;
+    for (const auto& [name, offset, n] : {std::tuple{'C', s.c_offset(), s.nc()}, std::tuple{'F', s.f_offset(), s.nf()}}) {
+      if (n == 0 || models::MonicStable(theta.data() + offset, n, work.data())) continue;
+      return fmt::format(
+          "the estimated {0}(q) has a root of modulus {1:.4g}, on or outside the unit circle, so the one-step "
+          "predictor, which divides by {0}(q), is unstable ({2})",
+          name, models::LargestRootModulus(theta.data() + offset, n),
+          rpem ? "try lower orders or another estimator" : "--recursion rpem keeps C and F stable while estimating");
+    }
+    return {};
+  }
 };
 
 class StaticSource final : public DataSource {

@@ -79,6 +79,10 @@ class DataSource {
   virtual double RegressionOutput(double y) const { return y; }
   // No estimate: the measured outputs stand in for the residuals and noise-free outputs.
   virtual void ClearEstimate() {}
+  // Why the one-step predictor of the model θ is unstable — a C or F polynomial (ARMAX, OE, BJ) with a root
+  // on or outside the unit circle, which the predictor divides by — or empty if it is stable (always for ARX
+  // and static structures).
+  virtual std::string UnstablePredictor(const Eigen::Ref<const Eigen::VectorXd>& /*theta*/) const { return {}; }
 };
 
 // Throws DataError for an unknown column, InvalidArgument for bad orders.

@@ -151,7 +151,7 @@ FitResult FitPrepared(const io::DataTable& data, Segment estimation, Segment val
   result.passes = passes;
   result.updates = updates;
   result.rejected = rejected;
-  RequireUsable(result, estimator, data.source);
+  RequireUsable(result, estimator, source, data.source);
   result.validation = Score(data, validation, source, result.theta);
   return result;
 }

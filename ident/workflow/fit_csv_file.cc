@@ -246,7 +246,7 @@ FitResult FinishStreamedEstimation(Estimation& estimating, DataSource& source, A
   result.passes = passes;
   result.updates = updates;
   result.rejected = rejected;
-  RequireUsable(result, estimator, path);
+  RequireUsable(result, estimator, source, path);
   return result;
 }
 

@@ -9,6 +9,7 @@
 #include "ident/registry/estimator_registry.h"
 #include "ident/workflow/data_source.h"
 #include "ident/workflow/fit.h"
+#include "models/polynomial_structure.h"
 #include "tests/support/forwarding_estimator.h"
 #include "tests/support/test_data.h"
 
@@ -55,6 +56,25 @@ TEST(BatchEstimatorInTheWorkflow, IsSolvedOncePerFitNotOncePerRow) {
     EXPECT_EQ(estimator.updates, 496) << name;  // rows 4..500 of the estimation half
     EXPECT_LE(estimator.solves, 2) << name;
     EXPECT_GT(fit.validation.one_step, 90) << name;  // the fit itself is unchanged by how often it is read
+  }
+}
+
+// ARMAX, whose regressors hold residuals of the current estimate: a batch estimator is read at geometrically
+// spaced updates (10 % more samples each time), not at every row, which would be O(N²).
+TEST(BatchEstimatorInTheWorkflow, ArmaxReadsTheBatchEstimateAtGeometricallySpacedUpdates) {
+  const std::string path = testing::DatasetPath("dryer.csv");
+  for (const char* name : {"cauchy-ml", "huber"}) {
+    auto source = workflow::MakePolynomialSource(io::CsvReader(path).names(), "y", {"u"},
+                                                 models::PolynomialStructure::Armax(2, {2}, 1, {3}), path);
+    EstimatorSettings settings;
+    settings.name = name;
+    SolveCounter estimator(MakeRegressionEstimator(settings, source->num_parameters()));
+    const workflow::FitResult fit = workflow::Fit(io::ReadCsv(path), *source, estimator, {});
+    EXPECT_EQ(estimator.updates, 496) << name;
+    // reads from update 20 on at 10 % steps: log(496 / 20) / log(1.1) ≈ 34, plus the result's
+    EXPECT_LE(estimator.solves, 40) << name;
+    EXPECT_GE(estimator.solves, 30) << name;
+    EXPECT_GT(fit.validation.one_step, 94) << name;  // ARX's 93.8 % and the recursive ARMAX's 95.2 %
   }
 }
 

@@ -16,7 +16,13 @@
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 #include "ident/regression/student_regression.h"
+#include "ident/workflow/data_source.h"
+#include "ident/workflow/fit.h"
+#include "ident/io/csv.h"
+#include "models/polynomial_structure.h"
 #include "tests/support/cli.h"
+#include "tests/support/forwarding_estimator.h"
+#include "tests/support/test_data.h"
 #include "tests/cli/scaled_dryer.h"
 
 namespace ident::testing {
@@ -28,6 +34,62 @@ nlohmann::json UsableFitJson(const std::string& args) {
   const CliResult r = RunCli(args + " --json");
   EXPECT_EQ(r.exit_code, 0) << args << ": " << r.err;
   return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
+}
+
+// The roots of the monic polynomials below are known in closed form: 1 − 1.5 q⁻¹ has its root at 1.5,
+// 1 − 2.5 q⁻¹ + q⁻² at 2 and 0.5, 1 + 0.36 q⁻² at ±0.6i.
+TEST(UsableResult, LargestRootModulusOfKnownPolynomials) {
+  const double c[] = {-1.5}, f[] = {-2.5, 1.0}, g[] = {0.0, 0.36};
+  EXPECT_NEAR(models::LargestRootModulus(c, 1), 1.5, 1e-12);
+  EXPECT_NEAR(models::LargestRootModulus(f, 2), 2.0, 1e-12);
+  EXPECT_NEAR(models::LargestRootModulus(g, 2), 0.6, 1e-12);
+  EXPECT_EQ(models::LargestRootModulus(c, 0), 0.0);
+}
+
+// A model whose one-step predictor divides by an unstable C or F has no predictions: the source names the
+// polynomial and its largest root; a stable one, and ARX, pass.
+TEST(UsableResult, UnstablePredictorNamesThePolynomialAndItsRoot) {
+  const std::vector<std::string> columns = {"u", "y"};
+  auto armax = workflow::MakePolynomialSource(columns, "y", {"u"}, models::PolynomialStructure::Armax(1, {1}, 1, {1}),
+                                              "test");
+  EXPECT_EQ(armax->parameter_names(), (std::vector<std::string>{"a1", "b1", "c1"}));
+  EXPECT_EQ(armax->UnstablePredictor(Eigen::Vector3d(-0.5, 1.0, -0.5)), "");
+  EXPECT_NE(armax->UnstablePredictor(Eigen::Vector3d(-0.5, 1.0, -1.5)).find("C(q) has a root of modulus 1.5,"),
+            std::string::npos);
+  auto oe = workflow::MakePolynomialSource(columns, "y", {"u"}, models::PolynomialStructure::OutputError(1, 2, 1),
+                                           "test");
+  EXPECT_NE(oe->UnstablePredictor(Eigen::Vector3d(1.0, -2.5, 1.0)).find("F(q) has a root of modulus 2,"),
+            std::string::npos);
+  EXPECT_EQ(oe->UnstablePredictor(Eigen::Vector3d(1.0, 0.0, 0.36)), "");
+  auto arx = workflow::MakeArxSource(columns, "y", {"u"}, models::ArxStructure(1, {1}, {1}), "test");
+  EXPECT_EQ(arx->UnstablePredictor(Eigen::Vector2d(-5.0, 1.0)), "");
+}
+
+// The workflow refuses such a model instead of reporting undefined predictions: an estimator whose estimate
+// is read with C(q) = 1 − 1.5 q⁻¹.
+class UnstableCEstimate final : public ForwardingEstimator {
+ public:
+  using ForwardingEstimator::ForwardingEstimator;
+  Eigen::VectorXd parameters() const override {
+    Eigen::VectorXd theta = ForwardingEstimator::parameters();
+    theta(theta.size() - 1) = -1.5;
+    return theta;
+  }
+};
+
+TEST(UsableResult, AModelWithAnUnstablePredictorIsRefused) {
+  const std::string path = DatasetPath("dryer.csv");
+  auto source = workflow::MakePolynomialSource(io::CsvReader(path).names(), "y", {"u"},
+                                               models::PolynomialStructure::Armax(2, {2}, 1, {3}), path);
+  UnstableCEstimate estimator(MakeRegressionEstimator(ParseEstimatorSpec("rls"), source->num_parameters()));
+  try {
+    workflow::Fit(io::ReadCsv(path), *source, estimator, {});
+    ADD_FAILURE() << "no error";
+  } catch (const DataError& e) {
+    EXPECT_NE(std::string(e.what()).find("the result is unusable: the estimated C(q) has a root of modulus 1.5"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // Forgetting 0.5 keeps about two samples of information for four parameters: the noise std is not

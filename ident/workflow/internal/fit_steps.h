@@ -96,7 +96,8 @@ class Estimation {
         max_abs_(Eigen::VectorXd::Zero(source.num_parameters())),
         judged_(estimator.judges_outliers()),
         in_startup_(estimator.in_startup()),
-        uses_estimate_(source.uses_estimate()) {
+        uses_estimate_(source.uses_estimate()),
+        batch_(estimator.kind() == "batch") {
     source_.Reset();
     // ARMAX/OE/BJ: the first pass starts with no estimate (the caller clears it), a further pass from the
     // residuals of the pass before.
@@ -104,7 +105,11 @@ class Estimation {
     // prior (ε = v = y) would make the C and D columns copies of the output's: a least-squares shadow
     // estimate forms them until the start is made, with the measured y for the noise-free output (noise-free
     // outputs of a few samples' estimates would set the window's column scales and its robust fit).
-    if (uses_estimate_ && in_startup_) shadow_.emplace(source.num_parameters());
+    // A batch estimator solves on all its samples whenever it is read: the regressors take its estimate at
+    // geometrically spaced updates (from 4ρ on, then 10 % more samples each time: O(N) solving in all) and keep
+    // it in between; before the first, the least-squares shadow forms them.
+    if (uses_estimate_ && (in_startup_ || batch_)) shadow_.emplace(source.num_parameters());
+    next_batch_read_ = std::max(20, 4 * source.num_parameters());
   }
 
   // `r` is the 0-based row index in the record (the trace prints r + 1). Returns the estimator's step, or
@@ -143,8 +148,12 @@ class Estimation {
         source_.EndCleaningWarmUp();
       }
       // RPLR: the a-posteriori residual ε(t) = y(t) − θ(t)'z(t) and w(t) enter later regressors.
-      if (uses_estimate_ && !in_startup_) {
+      if (uses_estimate_ && !in_startup_ && !batch_) {
         source_.TrackEstimate(estimator_.parameters(), /*start_up=*/false);
+      } else if (batch_ && uses_estimate_ && report.updated() && updates_ + 1 >= next_batch_read_) {
+        source_.TrackEstimate(estimator_.parameters(), /*start_up=*/false);
+        next_batch_read_ = std::max(next_batch_read_ + 1, static_cast<long>(1.1 * (updates_ + 1)));
+        shadow_.reset();
       } else if (shadow_) {
         shadow_->Update(y_regressed, z_);
         source_.TrackEstimate(shadow_->parameters(), /*start_up=*/true);
@@ -256,6 +265,8 @@ class Estimation {
   bool judged_;              // the estimator gives outlier verdicts (cleaning applies)
   bool in_startup_;          // the estimator is in its start-up (asked after each update only while true)
   bool uses_estimate_;       // the source's regressor depends on θ (ARMAX/OE/BJ)
+  bool batch_;               // the estimator solves on all samples when read (kind() "batch")
+  long next_batch_read_ = 0;  // batch_ and uses_estimate_: the update at which its estimate is next tracked
   std::optional<RecursiveLeastSquares> shadow_;  // θ for the regressors during a robust start-up
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
 };
@@ -447,9 +458,12 @@ inline FitResult Summarise(const DataSource& source, const AnyRegressionEstimato
   return result;
 }
 
-// Throws DataError if the result of the estimation part cannot be reported (see UnusableResult).
-inline void RequireUsable(const FitResult& result, const AnyRegressionEstimator& estimator, const std::string& name) {
-  const std::string why = UnusableResult(estimator, result.parameter_names, result.updates);
+// Throws DataError if the result of the estimation part cannot be reported (see UnusableResult), or if the
+// model's one-step predictor is unstable (DataSource::UnstablePredictor): its predictions are undefined.
+inline void RequireUsable(const FitResult& result, const AnyRegressionEstimator& estimator, const DataSource& source,
+                          const std::string& name) {
+  std::string why = UnusableResult(estimator, result.parameter_names, result.updates);
+  if (why.empty()) why = source.UnstablePredictor(result.theta);
   if (!why.empty()) throw DataError(fmt::format("{}: the result is unusable: {}", name, why));
 }
 
