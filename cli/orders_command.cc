@@ -141,6 +141,10 @@ void RunOrders(const OrdersOptions& o) {
     j["best"] = ScoreJson(r.structures.front(), dof.has_value());
     auto& list = j["structures"] = nlohmann::ordered_json::array();
     for (const auto& s : r.structures) list.push_back(ScoreJson(s, dof.has_value()));
+    auto& left_out = j["left_out"] = nlohmann::ordered_json::array();
+    for (const auto& [s, why] : r.left_out)
+      left_out.push_back({{"na", s.na}, {"nb", s.nb}, {"nk", s.nk}, {"nc", s.nc}, {"nd", s.nd}, {"nf", s.nf},
+                          {"reason", why}});
     std::cout << j.dump(2) << "\n";
     return;
   }
@@ -193,6 +197,11 @@ void RunOrders(const OrdersOptions& o) {
     }
   }
   if (shown < r.structures.size()) fmt::print("  … {} more (--top, --json)\n", r.structures.size() - shown);
+  if (!r.left_out.empty()) {
+    const auto& [s, why] = r.left_out.front();
+    fmt::print("  {} structure{} left out, unusable (--json lists them), e.g. na {} nb {} nk {} nc {} nd {} nf {}: {}\n",
+               r.left_out.size(), r.left_out.size() == 1 ? "" : "s", s.na, s.nb, s.nk, s.nc, s.nd, s.nf, why);
+  }
   const auto& best = r.structures.front();
   const std::string fit_data =
       fmt::format("{}", fmt::join(o.data, " ")) +

@@ -31,6 +31,7 @@
 
 #include <Eigen/Core>
 
+#include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/regression/outlier_decision.h"
 #include "ident/regression/regression_estimator.h"
@@ -76,6 +77,13 @@ struct FitScores {
   // An unstable model: the 1-based row at which the simulated output first left 1000 times the segment's
   // largest measured |y| (or stopped being finite). The simulation then has no fit % (simulation unset).
   std::optional<int> simulation_diverged_at;
+};
+
+// A fit whose result cannot be reported (UnusableResult, DataSource::UnstablePredictor): a DataError of its
+// own, so that a caller fitting many structures (ident orders) can leave that one out.
+class UnusableFit : public DataError {
+ public:
+  using DataError::DataError;
 };
 
 struct FitResult {

@@ -53,6 +53,8 @@ struct OrderSelection {
   int validation_samples = 0;              // scored validation samples (0 without a validation part)
   std::string criterion;                   // the one the structures are sorted by
   std::vector<StructureScore> structures;  // best first
+  // ARMAX/OE/BJ grids: the structures whose fit was unusable (an unstable predictor, …), with the reason.
+  std::vector<std::pair<StructureScore, std::string>> left_out;
 };
 
 // "aic", "bic", "fpe", "mdl" or "validation" (needs split < 1). `output` and `input` are column indices of

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "ident/workflow/fit.h"
 #include "ident/workflow/predictions.h"
 #include "ident/workflow/student_likelihood.h"
 
@@ -172,9 +173,27 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
   result.criterion = criterion;
   for (const ModelSpec& spec : specs) {
     request.model = spec;
-    result.structures.push_back(ScorePolynomialStructure(table, name, request, t0, dof, &result));
-    if (progress) progress(static_cast<long>(result.structures.size()), static_cast<long>(specs.size()), "structures");
+    try {
+      result.structures.push_back(ScorePolynomialStructure(table, name, request, t0, dof, &result));
+    } catch (const UnusableFit& e) {  // this structure's estimate is no model; the others still rank
+      StructureScore s;
+      s.na = spec.na;
+      s.nb = spec.nb[0];
+      s.nk = spec.nk[0];
+      s.nc = spec.nc;
+      s.nd = spec.nd;
+      s.nf = spec.nf;
+      const std::string why = e.what();
+      const auto at = why.find("the result is unusable: ");
+      result.left_out.emplace_back(s, at == std::string::npos ? why : why.substr(at + 24));
+    }
+    if (progress)
+      progress(static_cast<long>(result.structures.size() + result.left_out.size()), static_cast<long>(specs.size()),
+               "structures");
   }
+  if (result.structures.empty())
+    throw UnusableFit(fmt::format("{}: no structure of the grid gave a usable fit (e.g. {})", name,
+                                  result.left_out.front().second));
   std::stable_sort(result.structures.begin(), result.structures.end(),
                    [&criterion](const StructureScore& a, const StructureScore& b) {
                      const double x = CriterionValue(a, criterion), y = CriterionValue(b, criterion);

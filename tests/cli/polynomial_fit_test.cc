@@ -334,5 +334,22 @@ TEST(PolynomialOrders, LossIsTheMeanSquareOfThePredictedResiduals) {
   EXPECT_EQ(j["samples"], n);
 }
 
+// A structure of the grid whose estimate has no stable predictor is left out with its reason, not the whole
+// command refused: every structure is ranked (with finite criteria) or left out, and what the JSON lists as
+// left out `ident fit` refuses alike.
+TEST(PolynomialOrders, AStructureWithAnUnstablePredictorIsLeftOutWithItsReason) {
+  const nlohmann::json j = JsonOf("orders dryer --output y --input u --na 1:3 --nb 1:3 --nk 1:3 --nc 0:1 --json");
+  ASSERT_EQ(j["structures"].size() + j["left_out"].size(), 54u);
+  for (const auto& s : j["structures"]) EXPECT_TRUE(std::isfinite(s["aic"].get<double>())) << s.dump();
+  ASSERT_GE(j["left_out"].size(), 1u);
+  for (const auto& s : j["left_out"]) {
+    const std::string reason = s["reason"];
+    EXPECT_NE(reason.find("has a root of modulus"), std::string::npos) << reason;
+    const std::string fit = fmt::format("fit dryer --output y --input u --na {} --nb {} --nk {} --nc {} --passes 3",
+                                        s["na"].get<int>(), s["nb"].get<int>(), s["nk"].get<int>(), s["nc"].get<int>());
+    ExpectCliError(fit, "the result is unusable: " + reason.substr(0, reason.find(',')));
+  }
+}
+
 }  // namespace
 }  // namespace ident::testing
