@@ -22,6 +22,22 @@ constexpr double kMaxStartLeverage = 0.8;
 // A relative weight below this is a gross error (the workflow's output cleaning threshold).
 constexpr double kGrossWeight = 0.2;
 
+// A regressor's robust scale for the leverage test: the larger of the MAD scale and the central 80 %'s
+// half-width in normal units, (q90 − q10)/2.5631 (both σ for Gaussian data). The MAD alone is the noise
+// around one level of a two-level input (a PRBS or step test signal), which would make every sample at the
+// other level a far-out regressor; the deciles see both levels and still ignore up to 10 % gross errors.
+double LeverageScale(const Eigen::VectorXd& column) {
+  const Eigen::Index n = column.size();
+  if (n == 0) return 0;
+  std::vector<double> v(column.data(), column.data() + n);
+  const auto lo = v.begin() + n / 10, hi = v.begin() + (9 * n) / 10;
+  std::nth_element(v.begin(), lo, v.end());
+  const double q10 = *lo;
+  std::nth_element(lo, hi, v.end());
+  const double q90 = *hi;
+  return std::max(MadScale(column), (q90 - q10) / 2.5631031310892007);
+}
+
 LcRegressionOptions CheckedLcOptions(int rho, LcRegressionOptions o) {
   IDENT_REQUIRE(rho >= 1, "lc regression: num_parameters = {}; need >= 1", rho);
   IDENT_REQUIRE(o.scale == 0 || (std::isfinite(o.scale) && o.scale > 0), "lc regression: scale = {}; need > 0 (or 0: estimated)",
@@ -109,14 +125,14 @@ bool LcRegression::Start() noexcept {
     const long n = std::min<long>(kept_count_, 5L * window_);
     const Eigen::VectorXd Yall = kept_.block(0, kept_count_ - n, 1, n).transpose();
     const Eigen::MatrixXd Zall = kept_.block(1, kept_count_ - n, rho_, n).transpose();
-    // Each regressor's median and robust scale in the window; rows with a coordinate beyond kLeverage
-    // scales are left out of the fit and of the prior's information (they would carry it alone).
+    // Each regressor's median and robust scale (LeverageScale) in the window; rows with a coordinate beyond
+    // kLeverage scales are left out of the fit and of the prior's information (they would carry it alone).
     for (int j = 0; j < rho_; ++j) {
       const Eigen::VectorXd column = Zall.col(j);
       Eigen::VectorXd sorted = column;
       std::nth_element(sorted.data(), sorted.data() + n / 2, sorted.data() + n);
       centre_(j) = sorted(n / 2);
-      spread_(j) = MadScale(column);
+      spread_(j) = LeverageScale(column);
     }
     have_window_ = true;
     std::vector<Eigen::Index> inliers;
