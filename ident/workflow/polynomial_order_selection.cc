@@ -86,6 +86,18 @@ std::vector<ModelSpec> PolynomialGridModels(const io::DataTable& table, const st
   return specs;
 }
 
+// A score that names the structure's orders (the figures to be filled in).
+StructureScore OrdersOf(const ModelSpec& spec) {
+  StructureScore s;
+  s.na = spec.na;
+  s.nb = spec.nb[0];
+  s.nk = spec.nk[0];
+  s.nc = spec.nc;
+  s.nd = spec.nd;
+  s.nf = spec.nf;
+  return s;
+}
+
 // The structure request.model fitted by FitRecord and scored on its one-step residuals from row t0 on: loss,
 // criteria (Student-t likelihood ones with `dof`), validation loss; the sample counts go to *result.
 StructureScore ScorePolynomialStructure(const io::DataTable& table, const std::string& name,
@@ -98,13 +110,7 @@ StructureScore ScorePolynomialStructure(const io::DataTable& table, const std::s
       OneStepResiduals(PredictSegment(fit.prepared, fit.estimation, *source, fit.result.theta), fit.prepared, t0);
   const double loss = MeanSquare(residuals);
   const int n = static_cast<int>(residuals.size());
-  StructureScore s;
-  s.na = spec.na;
-  s.nb = spec.nb[0];
-  s.nk = spec.nk[0];
-  s.nc = spec.nc;
-  s.nd = spec.nd;
-  s.nf = spec.nf;
+  StructureScore s = OrdersOf(spec);
   s.n_parameters = static_cast<int>(fit.result.theta.size());
   s.theta = fit.result.theta;
   const double d = s.n_parameters;
@@ -176,16 +182,9 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
     try {
       result.structures.push_back(ScorePolynomialStructure(table, name, request, t0, dof, &result));
     } catch (const UnusableFit& e) {  // this structure's estimate is no model; the others still rank
-      StructureScore s;
-      s.na = spec.na;
-      s.nb = spec.nb[0];
-      s.nk = spec.nk[0];
-      s.nc = spec.nc;
-      s.nd = spec.nd;
-      s.nf = spec.nf;
       const std::string why = e.what();
       const auto at = why.find("the result is unusable: ");
-      result.left_out.emplace_back(s, at == std::string::npos ? why : why.substr(at + 24));
+      result.left_out.emplace_back(OrdersOf(spec), at == std::string::npos ? why : why.substr(at + 24));
     }
     if (progress)
       progress(static_cast<long>(result.structures.size() + result.left_out.size()), static_cast<long>(specs.size()),

@@ -47,16 +47,9 @@ RegressionData SimulateRegression(const Eigen::VectorXd& theta, int n, unsigned 
   return d;
 }
 
-std::string SpecError(const std::string& spec, const RegressionProblem& problem) {
-  try {
-    MakeEstimator(ParseEstimatorSpec(spec), problem);
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-std::string SpecError(const std::string& spec, const ObserverProblem& problem) {
+// The registry's message for `spec` on `problem` (a RegressionProblem or an ObserverProblem).
+template <class Problem>
+std::string SpecError(const std::string& spec, const Problem& problem) {
   try {
     MakeEstimator(ParseEstimatorSpec(spec), problem);
   } catch (const InvalidArgument& e) {
