@@ -150,7 +150,11 @@ void PrintTable(const workflow::CompareResult& r, const std::string& name, const
   else
     fmt::print("no outliers injected\n");
   if (cleaning == "on") fmt::print("regressor cleaning on (outputs flagged by the estimator are cleaned)\n");
-  fmt::print("clean-data least squares: one-step fit {:.2f} %", r.reference.one_step);
+  // An ARMAX/OE/BJ reference whose C or F is unstable has no one-step predictor (NaN): said in words.
+  if (std::isfinite(r.reference.one_step))
+    fmt::print("clean-data least squares: one-step fit {:.2f} %", r.reference.one_step);
+  else
+    fmt::print("clean-data least squares: one-step fit undefined (its predictor is unstable)");
   if (r.reference.simulation) fmt::print(", simulation fit {:.2f} %", *r.reference.simulation);
   fmt::print("\n\n");
   const int w = trials > 1 ? 16 : 10;

@@ -30,8 +30,6 @@ void SetTypedKey(EstimatorSettings& s, const std::string& key, std::string_view 
 
 }  // namespace
 
-bool EstimatorSettings::any_regression_setting() const { return !first_regression_setting().empty(); }
-
 std::string EstimatorSettings::first_regression_setting() const {
   if (dof) return "dof";
   if (forgetting.factor != 1 || forgetting.stabilised) return "forgetting";

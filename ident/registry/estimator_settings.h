@@ -50,10 +50,8 @@ struct EstimatorSettings {
   LockInSettings lock_in;                // refused (if any() is set) for "rls" and together with `exact`
   std::map<std::string, std::string> options;  // the estimator's own options, key → value (text)
 
-  // True if any typed field differs from its default (the name and `options` aside): what an estimator
-  // that takes none of them refuses.
-  bool any_regression_setting() const;
-  // The first typed field set, by its spec key ("dof", "forgetting", …), for messages; empty if none.
+  // The first typed field that differs from its default, by its spec key ("dof", "forgetting", …), or empty:
+  // what an estimator that takes none of them (an observer) refuses, named.
   std::string first_regression_setting() const;
 };
 
