@@ -17,6 +17,7 @@
 #include "common/estimator.h"
 #include "ident/registry/estimator_registry.h"
 #include "tests/observers/linear_gaussian_data.h"
+#include "tests/registry/spec_error.h"
 
 namespace ident {
 namespace {
@@ -47,16 +48,7 @@ RegressionData SimulateRegression(const Eigen::VectorXd& theta, int n, unsigned 
   return d;
 }
 
-// The registry's message for `spec` on `problem` (a RegressionProblem or an ObserverProblem).
-template <class Problem>
-std::string SpecError(const std::string& spec, const Problem& problem) {
-  try {
-    MakeEstimator(ParseEstimatorSpec(spec), problem);
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using testing::SpecError;
 
 TEST(EstimatorInterface, OneRegistryNamesEveryEstimatorAndObserver) {
   EXPECT_EQ(EstimatorNames(), (std::vector<std::string>{"rls", "cauchy", "student", "huber", "cauchy-ml", "lc",

@@ -18,6 +18,7 @@
 #include "ident/registry/observer_registry.h"
 #include "ident/observers/truncated_gaussian_filter.h"
 #include "tests/observers/linear_gaussian_data.h"
+#include "tests/registry/spec_error.h"
 
 namespace ident {
 namespace {
@@ -32,14 +33,7 @@ ObserverProblem GaussianProblem() {
           Eigen::Vector2d(0.0, 0.0), Eigen::Matrix2d::Identity()};
 }
 
-std::string ErrorOf(const std::string& spec, const ObserverProblem& problem) {
-  try {
-    MakeStateObserver(ParseEstimatorSpec(spec), problem);
-  } catch (const InvalidArgument& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
+using testing::SpecError;
 
 TEST(ObserverRegistry, ListsTheFourObservers) {
   EXPECT_EQ(StateObserverNames(), (std::vector<std::string>{"kalman", "lc_gaussian", "lc_truncated", "grid"}));
@@ -101,33 +95,33 @@ TEST(ObserverRegistry, GridTakesPointsPerAxisAndItsOtherOptions) {
 
 TEST(ObserverRegistry, BadSpecsOptionsAndProblemsNameTheObserverAndOption) {
   const auto problem = GaussianProblem();
-  EXPECT_CONTAINS(ErrorOf("kalmann", problem),
+  EXPECT_CONTAINS(SpecError("kalmann", problem),
                   "unknown observer 'kalmann' (known: kalman, lc_gaussian, lc_truncated, grid)");
-  EXPECT_CONTAINS(ErrorOf("kalman:points=3", problem), "observer 'kalman' takes no options; got 'points'");
-  EXPECT_CONTAINS(ErrorOf("lc_gaussian:x=1", problem), "observer 'lc_gaussian' takes no options; got 'x'");
-  EXPECT_CONTAINS(ErrorOf("grid:point=64", problem), "observer 'grid' has no option 'point'");
-  EXPECT_CONTAINS(ErrorOf("grid:points=abc", problem), "option points = 'abc' is not a finite number");
-  EXPECT_CONTAINS(ErrorOf("grid:points=6.5", problem), "option points = '6.5' is not an integer");
-  EXPECT_CONTAINS(ErrorOf("grid:points=4", problem), "observer 'grid': option points = 4; need 8 <= points");
-  EXPECT_CONTAINS(ErrorOf("grid:points=8x8x8", problem), "has 3 counts; need 1 or 2");
-  EXPECT_CONTAINS(ErrorOf("grid:noise_sigmas=-1", problem), "option noise_sigmas = -1; need >= 0");
-  EXPECT_CONTAINS(ErrorOf("grid:support_level=nan", problem), "support_level = 'nan' is not a finite number");
-  EXPECT_CONTAINS(ErrorOf("grid:points", problem), "'points' is not a number or key=value");
-  EXPECT_CONTAINS(ErrorOf("grid:points=8,points=9", problem), "option points given twice");
-  EXPECT_CONTAINS(ErrorOf(":points=8", problem), "has no name");
+  EXPECT_CONTAINS(SpecError("kalman:points=3", problem), "observer 'kalman' takes no options; got 'points'");
+  EXPECT_CONTAINS(SpecError("lc_gaussian:x=1", problem), "observer 'lc_gaussian' takes no options; got 'x'");
+  EXPECT_CONTAINS(SpecError("grid:point=64", problem), "observer 'grid' has no option 'point'");
+  EXPECT_CONTAINS(SpecError("grid:points=abc", problem), "option points = 'abc' is not a finite number");
+  EXPECT_CONTAINS(SpecError("grid:points=6.5", problem), "option points = '6.5' is not an integer");
+  EXPECT_CONTAINS(SpecError("grid:points=4", problem), "observer 'grid': option points = 4; need 8 <= points");
+  EXPECT_CONTAINS(SpecError("grid:points=8x8x8", problem), "has 3 counts; need 1 or 2");
+  EXPECT_CONTAINS(SpecError("grid:noise_sigmas=-1", problem), "option noise_sigmas = -1; need >= 0");
+  EXPECT_CONTAINS(SpecError("grid:support_level=nan", problem), "support_level = 'nan' is not a finite number");
+  EXPECT_CONTAINS(SpecError("grid:points", problem), "'points' is not a number or key=value");
+  EXPECT_CONTAINS(SpecError("grid:points=8,points=9", problem), "option points given twice");
+  EXPECT_CONTAINS(SpecError(":points=8", problem), "has no name");
   auto threshold = problem;
   threshold.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
-  EXPECT_CONTAINS(ErrorOf("kalman", threshold), "'kalman' needs a linear-Gaussian measurement; 'threshold'");
+  EXPECT_CONTAINS(SpecError("kalman", threshold), "'kalman' needs a linear-Gaussian measurement; 'threshold'");
   EXPECT_NO_THROW(MakeStateObserver(ParseEstimatorSpec("lc_gaussian"), threshold));
   auto bad_prior = problem;
   bad_prior.P0 = Eigen::Matrix2d::Zero();
-  EXPECT_CONTAINS(ErrorOf("kalman", bad_prior), "P0 is not positive definite");
+  EXPECT_CONTAINS(SpecError("kalman", bad_prior), "P0 is not positive definite");
   auto four = problem;
   four.x0 = Eigen::Vector4d::Zero();
-  EXPECT_CONTAINS(ErrorOf("grid", four), "observer 'grid' handles 1 to 3 states; the problem has 4");
+  EXPECT_CONTAINS(SpecError("grid", four), "observer 'grid' handles 1 to 3 states; the problem has 4");
   auto null_meas = problem;
   null_meas.measurement = nullptr;
-  EXPECT_CONTAINS(ErrorOf("lc_gaussian", null_meas), "measurement must not be null");
+  EXPECT_CONTAINS(SpecError("lc_gaussian", null_meas), "measurement must not be null");
 }
 
 // lc_truncated on the MEMS accelerometer with its threshold sensor: the registry's observer is the filter
@@ -160,23 +154,23 @@ TEST(ObserverRegistry, LcTruncatedEqualsTheDirectlyDrivenFilterBitForBit) {
 TEST(ObserverRegistry, LcTruncatedNeedsATwoStateThresholdSensorAndTakesNoOptions) {
   auto mems = GaussianProblem();
   mems.model = models::MemsAccelerometerDynamics(0.01, 1.0);
-  EXPECT_EQ(ErrorOf("lc_truncated", mems),
+  EXPECT_EQ(SpecError("lc_truncated", mems),
             "observer 'lc_truncated' needs a threshold sensor on 2 states; "
             "'gaussian' is not (use lc_gaussian or grid)");
   mems.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector2d(1, 0), 1.0);
-  EXPECT_EQ(ErrorOf("lc_truncated:points=3", mems), "observer 'lc_truncated' takes no options; got 'points'");
+  EXPECT_EQ(SpecError("lc_truncated:points=3", mems), "observer 'lc_truncated' takes no options; got 'points'");
   EXPECT_NO_THROW(MakeStateObserver(ParseEstimatorSpec("lc_truncated"), mems));
   auto three = mems;
   three.measurement = std::make_shared<models::ThresholdSensor>(Eigen::Vector3d(1, 0, 0), 1.0);
-  EXPECT_EQ(ErrorOf("lc_truncated", three),
+  EXPECT_EQ(SpecError("lc_truncated", three),
             "observer 'lc_truncated' needs a threshold sensor on 2 states; "
             "'threshold' is not (use lc_gaussian or grid)");
   auto bad_prior = mems;
   bad_prior.P0 = Eigen::Matrix2d::Zero();
-  EXPECT_CONTAINS(ErrorOf("lc_truncated", bad_prior), "prior covariance not positive definite");
+  EXPECT_CONTAINS(SpecError("lc_truncated", bad_prior), "prior covariance not positive definite");
   auto wrong_size = mems;
   wrong_size.x0 = Eigen::Vector3d::Zero();
-  EXPECT_EQ(ErrorOf("lc_truncated", wrong_size),
+  EXPECT_EQ(SpecError("lc_truncated", wrong_size),
             "observer 'lc_truncated': x0 has 3 entries and P0 is 2×2; need 2 and 2×2");
 }
 
