@@ -69,12 +69,13 @@ inline std::string LogcondensProperty(const std::uint8_t* data, std::size_t size
   if (!(kkt.max_knot_residual <= 1e-7 * range)) return "KKT: D_j = 0 at the knots";
   if (!(kkt.mass_error <= 1e-7)) return "KKT: the density integrates to 1";
   // Concave up to the rounding of the stored φ: a slope over a gap g carries an error of about
-  // ε·|φ|/g, which dominates at tiny (e.g. subnormal) spacings.
+  // ε·|φ|/g, which dominates at tiny (e.g. subnormal) spacings; where φ is 0 (a uniform density) there is
+  // none, also when 1/g overflows (0·∞ would be NaN).
   for (int j = 1; j + 1 < m; ++j) {
     const double gl = mle.x(j) - mle.x(j - 1), gr = mle.x(j + 1) - mle.x(j);
     const double left = (mle.phi(j) - mle.phi(j - 1)) / gl, right = (mle.phi(j + 1) - mle.phi(j)) / gr;
     const double size = std::max({std::abs(mle.phi(j - 1)), std::abs(mle.phi(j)), std::abs(mle.phi(j + 1))});
-    const double rounding = 8 * std::numeric_limits<double>::epsilon() * size * (1 / gl + 1 / gr);
+    const double rounding = size == 0 ? 0.0 : 8 * std::numeric_limits<double>::epsilon() * size * (1 / gl + 1 / gr);
     if (!(right - left <= 1e-7 * max_slope + rounding)) return "phi is concave";
   }
   return {};
