@@ -27,6 +27,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -81,9 +82,15 @@ struct FitScores {
 
 // A fit whose result cannot be reported (UnusableResult, DataSource::UnstablePredictor): a DataError of its
 // own, so that a caller fitting many structures (ident orders) can leave that one out.
+// what() is "<source>: the result is unusable: <reason>"; reason() is the reason alone.
 class UnusableFit : public DataError {
  public:
-  using DataError::DataError;
+  UnusableFit(const std::string& source, std::string reason)
+      : DataError(source + ": the result is unusable: " + reason), reason_(std::move(reason)) {}
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string reason_;
 };
 
 struct FitResult {

@@ -182,17 +182,15 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
     try {
       result.structures.push_back(ScorePolynomialStructure(table, name, request, t0, dof, &result));
     } catch (const UnusableFit& e) {  // this structure's estimate is no model; the others still rank
-      const std::string why = e.what();
-      const auto at = why.find("the result is unusable: ");
-      result.left_out.emplace_back(OrdersOf(spec), at == std::string::npos ? why : why.substr(at + 24));
+      result.left_out.emplace_back(OrdersOf(spec), e.reason());
     }
     if (progress)
       progress(static_cast<long>(result.structures.size() + result.left_out.size()), static_cast<long>(specs.size()),
                "structures");
   }
   if (result.structures.empty())
-    throw UnusableFit(fmt::format("{}: no structure of the grid gave a usable fit (e.g. {})", name,
-                                  result.left_out.front().second));
+    throw DataError(fmt::format("{}: no structure of the grid gave a usable fit (e.g. {})", name,
+                                result.left_out.front().second));
   std::stable_sort(result.structures.begin(), result.structures.end(),
                    [&criterion](const StructureScore& a, const StructureScore& b) {
                      const double x = CriterionValue(a, criterion), y = CriterionValue(b, criterion);

@@ -464,7 +464,7 @@ inline void RequireUsable(const FitResult& result, const AnyRegressionEstimator&
                           const std::string& name) {
   std::string why = UnusableResult(estimator, result.parameter_names, result.updates);
   if (why.empty()) why = source.UnstablePredictor(result.theta);
-  if (!why.empty()) throw UnusableFit(fmt::format("{}: the result is unusable: {}", name, why));
+  if (!why.empty()) throw UnusableFit(name, why);
 }
 
 // Σ of (y², z_1², …, z_ρ²) and the count over rows fed to Add (usable samples only).
