@@ -17,16 +17,36 @@ EstimatorSettings EstimatorSpec::Resolve(int num_parameters, const std::string& 
     IDENT_REQUIRE(!s.dof || *s.dof == *dof, "--dof {} contradicts estimator '{}'", *dof, name);
     s.dof = dof;
   }
-  IDENT_REQUIRE(!delta || *delta == 0 || *delta == 1, "delta = {}; need 0 or 1", delta.value_or(1));
-  s.delta = delta;
-  s.forgetting.factor = forgetting;
+  // A spec key ("rls:forgetting=0.99") and its option (--forgetting) set one field: either may give it,
+  // both only with the same value.
+  if (delta) {
+    IDENT_REQUIRE(!s.delta || *s.delta == *delta, "--delta {} contradicts estimator '{}'", *delta, name);
+    s.delta = delta;
+  }
+  IDENT_REQUIRE(!s.delta || *s.delta == 0 || *s.delta == 1, "delta = {}; need 0 or 1", s.delta.value_or(1));
+  if (forgetting != 1) {
+    IDENT_REQUIRE(s.forgetting.factor == 1 || s.forgetting.factor == forgetting,
+                  "--forgetting {} contradicts estimator '{}'", forgetting, name);
+    s.forgetting.factor = forgetting;
+  }
   s.forgetting.stabilised = stabilised;
   s.exact = exact;
-  IDENT_REQUIRE(!lock_in_window || estimation_rows <= 0 || *lock_in_window <= estimation_rows,
-                "--lock-in-window {} exceeds the estimation part's {} rows: the monitor could never fill; need at "
-                "most {}",
-                lock_in_window.value_or(0), estimation_rows, estimation_rows);
-  s.lock_in = {lock_in_window, lock_in_threshold, !no_lock_in_restart, history_limit};
+  if (lock_in_window) {
+    IDENT_REQUIRE(!s.lock_in.window || *s.lock_in.window == *lock_in_window,
+                  "--lock-in-window {} contradicts estimator '{}'", *lock_in_window, name);
+    s.lock_in.window = lock_in_window;
+  }
+  if (lock_in_threshold) {
+    IDENT_REQUIRE(!s.lock_in.threshold || *s.lock_in.threshold == *lock_in_threshold,
+                  "--lock-in-threshold {} contradicts estimator '{}'", *lock_in_threshold, name);
+    s.lock_in.threshold = lock_in_threshold;
+  }
+  IDENT_REQUIRE(!s.lock_in.window || estimation_rows <= 0 || *s.lock_in.window <= estimation_rows,
+                "{} {} exceeds the estimation part's {} rows: the monitor could never fill; need at most {}",
+                lock_in_window ? std::string("--lock-in-window") : fmt::format("estimator '{}': lock_in_window", name),
+                s.lock_in.window.value_or(0), estimation_rows, estimation_rows);
+  s.lock_in.restart = !no_lock_in_restart;
+  s.lock_in.history = history_limit;
   if (nu0) s.prior = RegressionPrior::Diagonal(num_parameters, *nu0, *vy0, *vz0);
   IDENT_REQUIRE(!(prior && (nu0 || !prior_file.empty())),
                 "give one prior: an explicit prior, nu0/vy0/vz0 or a prior file");

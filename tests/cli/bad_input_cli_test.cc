@@ -166,6 +166,35 @@ TEST(BadInput, DofContradictingTheEstimatorSpecNamesIt) {
   ExpectCliError("fit dryer" + kArx + " --estimator student:3 --dof 5", "--dof 5 contradicts estimator 'student:3'");
 }
 
+// A spec key and its option set the same field: either one alone takes effect, the same value twice is
+// accepted, and two different values are refused, naming both.
+TEST(BadInput, SpecKeysAndTheirOptionsSetTheSameField) {
+  const auto theta = [](const std::string& args) {
+    const CliResult r = RunCli("fit dryer" + kArx + " " + args + " --json");
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << r.err;
+    return r.exit_code == 0 ? nlohmann::json::parse(r.out)["theta"] : nlohmann::json();
+  };
+  for (const auto& [spec, option] :
+       {std::pair<std::string, std::string>{"rls:forgetting=0.9", "rls --forgetting 0.9"},
+        {"cauchy:delta=0", "cauchy --delta 0"},
+        {"cauchy:lock_in_window=50,lock_in_threshold=0.5", "cauchy --lock-in-window 50 --lock-in-threshold 0.5"}}) {
+    const auto by_spec = theta("--estimator " + spec), by_option = theta("--estimator " + option);
+    const auto plain = theta("--estimator " + option.substr(0, option.find(' ')));
+    ASSERT_EQ(by_spec.size(), 4u) << spec;
+    EXPECT_EQ(by_spec, by_option) << spec;
+    EXPECT_EQ(theta("--estimator " + spec + " " + option.substr(option.find(' ') + 1)), by_spec) << spec;
+    if (spec != "cauchy:lock_in_window=50,lock_in_threshold=0.5") EXPECT_NE(by_spec, plain) << spec;
+  }
+  ExpectCliError("fit dryer" + kArx + " --estimator rls:forgetting=0.9 --forgetting 0.99",
+                 "--forgetting 0.99 contradicts estimator 'rls:forgetting=0.9'");
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy:delta=0 --delta 1",
+                 "--delta 1 contradicts estimator 'cauchy:delta=0'");
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy:lock_in_window=50 --lock-in-window 60",
+                 "--lock-in-window 60 contradicts estimator 'cauchy:lock_in_window=50'");
+  ExpectCliError("fit dryer" + kArx + " --estimator cauchy:lock_in_window=5000",
+                 "estimator 'cauchy:lock_in_window=5000': lock_in_window 5000 exceeds the estimation part's 500 rows");
+}
+
 TEST(BadInput, InadmissibleForgettingIsBlamedOnTheForgettingFactor) {
   ExpectCliError("fit dryer" + kArx + " --estimator cauchy --forgetting 0.5",
                  "forgetting = 0.5 is inadmissible with nu0 = 6: the first step has nu(1) = forgetting*nu0 + 1 = 4");
