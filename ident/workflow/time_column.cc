@@ -34,41 +34,51 @@ std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::st
   if (!(t > previous_))
     throw DataError(fmt::format("{}: time column '{}' does not increase: {} after {}", where(), column, t, previous_));
   const double step = t - previous_;
-  std::optional<TimeGap> gap;
-  if (count_ > 0 && step > kTimeGapFactor * median_) {
-    const double samples = std::round(step / median_);
+  // The median of the window is at least its smallest step: a step up to kTimeGapFactor times that is
+  // regular without the median (the common case: the median is sorted out only when it decides).
+  double median = 0;
+  if (count_ > 0 && step > kTimeGapFactor * min_ && step > kTimeGapFactor * (median = median_step())) {
+    const double samples = std::round(step / median);
     if (!(samples - 1 <= static_cast<double>(taken_)))
       throw DataError(fmt::format(
           "{}: time column '{}' jumps from {} to {}: the gap misses more samples than the {} rows before it; cut the "
           "record at its gaps",
           where(), column, previous_, t, taken_));
-    gap = TimeGap{.row = static_cast<int>(std::min<long>(row, std::numeric_limits<int>::max())),
-                  .t_before = previous_,
-                  .t_after = t,
-                  .missing = std::max(1L, static_cast<long>(samples) - 1),
-                  .filled = 0,
-                  .step = median_};
-  } else {  // a regular step: into the window of the last kSteps, kept sorted (the oldest leaves it)
-    const int held = std::min(count_, kSteps);
-    double* const sorted = sorted_.data();
-    if (held == kSteps) {
-      const double oldest = steps_[static_cast<std::size_t>(count_ % kSteps)];
-      double* const at = std::lower_bound(sorted, sorted + held, oldest);
-      std::copy(at + 1, sorted + held, at);
-    }
-    const int size = held == kSteps ? held - 1 : held;
-    double* const to = std::upper_bound(sorted, sorted + size, step);
-    std::copy_backward(to, sorted + size, sorted + size + 1);
-    *to = step;
-    steps_[static_cast<std::size_t>(count_ % kSteps)] = step;
-    ++count_;
-    if (count_ == 2 * kSteps) count_ = kSteps;  // keeps the index cycling without overflow
-    const int now = size + 1;
-    median_ = now % 2 ? sorted[now / 2] : (sorted[now / 2 - 1] + sorted[now / 2]) / 2;
+    const TimeGap gap{.row = static_cast<int>(std::min<long>(row, std::numeric_limits<int>::max())),
+                      .t_before = previous_,
+                      .t_after = t,
+                      .missing = std::max(1L, static_cast<long>(samples) - 1),
+                      .filled = 0,
+                      .step = median};
+    previous_ = t;
+    ++taken_;
+    return gap;
+  }
+  // A regular step: into the window of the last kSteps (a ring; the oldest leaves it).
+  double& slot = steps_[static_cast<std::size_t>(count_ % kSteps)];
+  const double oldest = slot;
+  const bool full = count_ >= kSteps;
+  slot = step;
+  ++count_;
+  if (count_ == 2 * kSteps) count_ = kSteps;  // keeps the index cycling without overflow
+  if (!full || step <= min_) {
+    min_ = full || count_ > 1 ? std::min(min_, step) : step;
+  } else if (oldest == min_) {  // the smallest left the window: the next smallest
+    min_ = steps_[0];
+    for (int k = 1; k < kSteps; ++k) min_ = std::min(min_, steps_[static_cast<std::size_t>(k)]);
   }
   previous_ = t;
   ++taken_;
-  return gap;
+  return std::nullopt;
+}
+
+double ArrivingTimeCheck::median_step() const {
+  const int held = std::min(count_, kSteps);
+  if (held == 0) return 0;
+  std::array<double, kSteps> sorted = steps_;
+  std::sort(sorted.begin(), sorted.begin() + held);
+  return held % 2 ? sorted[static_cast<std::size_t>(held / 2)]
+                  : (sorted[static_cast<std::size_t>(held / 2 - 1)] + sorted[static_cast<std::size_t>(held / 2)]) / 2;
 }
 
 std::optional<TimeCheck> CheckTimeColumn(const io::DataTable& table, const std::vector<int>& used_columns) {

@@ -65,14 +65,15 @@ class ArrivingTimeCheck {
   }
   // The same, `where` given as a source and its 1-based line ("source:line"), formatted only for an error.
   std::optional<TimeGap> Next(double t, long row, const std::string& column, const std::string& source, long line);
-  double median_step() const { return median_; }
+  // The median of the last kSteps regular steps (0 before the first).
+  double median_step() const;
 
  private:
-  std::array<double, kSteps> steps_{};   // in arrival order (a ring)
-  std::array<double, kSteps> sorted_{};  // the same steps, ascending
+  std::array<double, kSteps> steps_{};  // in arrival order (a ring)
   int count_ = 0;  // steps held (up to kSteps); the next goes to steps_[count_ % kSteps] once full
   long taken_ = 0;
-  double previous_ = 0, median_ = 0;
+  double previous_ = 0;
+  double min_ = 0;  // the smallest step held
   bool started_ = false;
 };
 

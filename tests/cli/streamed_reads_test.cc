@@ -252,5 +252,44 @@ TEST(ArrivingTimeCheck, ItsMedianIsThatOfTheLastRegularSteps) {
   }
 }
 
+// Jittered and repeated steps with gaps among them: each row is a gap exactly when its step exceeds
+// kTimeGapFactor times the median of the last kSteps regular steps (sorted here, by brute force), and the
+// gap's step is that median.
+TEST(ArrivingTimeCheck, FindsTheGapsThatTheMedianOfTheLastRegularStepsDefines) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> jitter(0.5, 1.4), unit(0, 1);
+  const double repeated[] = {0.75, 1.0, 1.25};
+  workflow::ArrivingTimeCheck check;
+  std::vector<double> regular;
+  double t = 0;
+  int gaps = 0;
+  ASSERT_FALSE(check.Next(t, 1, "t", "test").has_value());
+  for (int k = 2; k < 20'000; ++k) {
+    const double u = unit(rng);
+    const double before = t;
+    t += u < 0.02 ? 3 + 5 * unit(rng) : u < 0.5 ? repeated[k % 3] : jitter(rng);
+    const double s = t - before;  // the step as the check sees it
+    const std::optional<workflow::TimeGap> gap = check.Next(t, k, "t", "test");
+    const std::size_t n = std::min<std::size_t>(regular.size(), workflow::ArrivingTimeCheck::kSteps);
+    std::vector<double> window(regular.end() - static_cast<std::ptrdiff_t>(n), regular.end());
+    std::sort(window.begin(), window.end());
+    const double median = n == 0 ? 0 : n % 2 ? window[n / 2] : (window[n / 2 - 1] + window[n / 2]) / 2;
+    const bool close_call = n > 0 && std::abs(s - workflow::kTimeGapFactor * median) <= 1e-9;
+    if (!close_call)
+      ASSERT_EQ(gap.has_value(), n > 0 && s > workflow::kTimeGapFactor * median)
+          << "row " << k << ", step " << s << ", median " << median;
+    if (gap) {
+      ++gaps;
+      EXPECT_NEAR(gap->step, median, 1e-12) << k;
+    } else {
+      regular.push_back(s);
+    }
+  }
+  EXPECT_GT(gaps, 100);
+  std::vector<double> last(regular.end() - workflow::ArrivingTimeCheck::kSteps, regular.end());
+  std::sort(last.begin(), last.end());
+  EXPECT_EQ(check.median_step(), last[workflow::ArrivingTimeCheck::kSteps / 2]);
+}
+
 }  // namespace
 }  // namespace ident
