@@ -11,6 +11,18 @@
 namespace ident::internal {
 namespace {
 
+// The end of a polish round: kept if max |rho| fell to `next` (into *rho_max), else v and u are restored.
+bool KeepRound(double next, double* rho_max, Eigen::MatrixXd& v, Eigen::MatrixXd& u, const Eigen::MatrixXd& v_prev,
+               const Eigen::MatrixXd& u_prev) {
+  if (next < *rho_max) {
+    *rho_max = next;
+    return true;
+  }
+  v = v_prev;
+  u = u_prev;
+  return false;
+}
+
 // PolishMapSmootherDual (dual_polish.h) for a state dimension fixed at compile time: the same rounds on n x n blocks held by value,
 // N's block Cholesky (C_t C_t' = D_t - G_t G_t', G_t = E_t C_{t-1}^-T, as ident/linalg/block_tridiagonal.h)
 // formed step by step from the weights, and no allocation inside the rounds.
@@ -106,13 +118,7 @@ double PolishDualFixed(const MapSmootherProblem& p, const MapSmootherDualIterate
         for (int j = 0; j < nz; ++j) ut[j] -= Wg[j + i * nz] * hx;
       }
     }
-    const double next = residual();
-    if (!(next < rho_max)) {
-      v = v_prev;
-      u = u_prev;
-      return rho_max;
-    }
-    rho_max = next;
+    if (!KeepRound(residual(), &rho_max, v, u, v_prev, u_prev)) break;
   }
   return rho_max;
 }
@@ -168,13 +174,7 @@ double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dua
       AddMatVec(p.Ht(t).data(), nz, n, xi.col(t).data(), gstep.data(), 1.0);  // H xi
       AddMatVec(dual.measurement_weight.col(t).data(), nz, nz, gstep.data(), u.col(t).data(), -1.0);
     }
-    const double next = residual(&rho);
-    if (!(next < rho_max)) {
-      v = v_prev;
-      u = u_prev;
-      return rho_max;
-    }
-    rho_max = next;
+    if (!KeepRound(residual(&rho), &rho_max, v, u, v_prev, u_prev)) break;
   }
   return rho_max;
 }
