@@ -116,20 +116,26 @@ struct Entry {
   std::string name;
   Factory factory;
   EstimatorTraits traits;
+  const char* keys;  // the spec keys it takes (estimator_settings.h), for the refusal of others
 };
 
 std::vector<Entry>& Registry() {
   static std::vector<Entry> registry = {
-      {"rls", MakeRls, {.data_scaled_prior = true}},
-      {"cauchy", MakeCauchy, {.lock_in = true, .robust = true}},
-      {"student", MakeStudentT, {.lock_in = true, .robust = true}},
+      {"rls", MakeRls, {.data_scaled_prior = true}, "forgetting"},
+      {"cauchy", MakeCauchy, {.lock_in = true, .robust = true}, "forgetting, delta, lock_in_window, lock_in_threshold"},
+      {"student",
+       MakeStudentT,
+       {.lock_in = true, .robust = true},
+       "k, dof, forgetting, delta, lock_in_window, lock_in_threshold"},
       {"huber",
        [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); },
-       {.robust = true}},
+       {.robust = true},
+       ""},
       {"cauchy-ml",
        [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "cauchy-ml", BatchMethod::kCauchyMl); },
-       {.robust = true}},
-      {"lc", MakeLc, {.robust = true}},
+       {.robust = true},
+       ""},
+      {"lc", MakeLc, {.robust = true}, ""},
   };
   return registry;
 }
@@ -152,11 +158,10 @@ const Entry* Find(std::string_view name) {
 }
 
 // The regression estimators take the typed settings only (estimator_settings.h).
-void RequireNoOptions(const EstimatorSettings& s) {
+void RequireNoOptions(const Entry& entry, const EstimatorSettings& s) {
   if (s.options.empty()) return;
-  throw InvalidArgument(fmt::format(
-      "estimator '{}' has no option '{}' (options: k, dof, forgetting, delta, lock_in_window, lock_in_threshold)",
-      s.name, s.options.begin()->first));
+  throw InvalidArgument(fmt::format("estimator '{}' has no option '{}' ({})", s.name, s.options.begin()->first,
+                                    *entry.keys ? fmt::format("options: {}", entry.keys) : "it takes no options"));
 }
 
 }  // namespace
@@ -164,7 +169,7 @@ void RequireNoOptions(const EstimatorSettings& s) {
 std::unique_ptr<AnyRegressionEstimator> MakeRegressionEstimator(const EstimatorSettings& settings, int num_parameters) {
   const Entry* entry = Find(settings.name);
   if (entry == nullptr) UnknownEstimator(settings.name);
-  RequireNoOptions(settings);
+  RequireNoOptions(*entry, settings);
   return entry->factory(settings, num_parameters);
 }
 

@@ -195,6 +195,14 @@ TEST(BadInput, SpecKeysAndTheirOptionsSetTheSameField) {
                  "estimator 'cauchy:lock_in_window=5000': lock_in_window 5000 exceeds the estimation part's 500 rows");
 }
 
+// ident orders ranks ARX structures by batch least squares: a recursion's setting in the spec would be
+// ignored there, so it is refused.
+TEST(BadInput, OrdersRefusesRecursionSettingsForItsLeastSquaresGrid) {
+  ExpectCliError("orders dryer --output y --input u --na 1:2 --nb 1:2 --nk 3 --estimator rls:forgetting=0.9",
+                 "orders --estimator 'rls:forgetting=0.9': forgetting does not apply to the ARX grid's least-squares "
+                 "fits (give plain rls)");
+}
+
 TEST(BadInput, InadmissibleForgettingIsBlamedOnTheForgettingFactor) {
   ExpectCliError("fit dryer" + kArx + " --estimator cauchy --forgetting 0.5",
                  "forgetting = 0.5 is inadmissible with nu0 = 6: the first step has nu(1) = forgetting*nu0 + 1 = 4");

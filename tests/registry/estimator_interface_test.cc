@@ -211,7 +211,10 @@ TEST(EstimatorInterface, OneOptionsMechanism) {
 
   const RegressionProblem regression{3};
   const ObserverProblem observer = TwoStateGaussianProblem();
-  EXPECT_CONTAINS(SpecError("rls:points=3", regression), "estimator 'rls' has no option 'points'");
+  EXPECT_CONTAINS(SpecError("rls:points=3", regression),
+                  "estimator 'rls' has no option 'points' (options: forgetting)");
+  EXPECT_CONTAINS(SpecError("huber:window=3", regression),
+                  "estimator 'huber' has no option 'window' (it takes no options)");
   EXPECT_CONTAINS(SpecError("rls:forgetting=fast", regression), "option forgetting = 'fast' is not a finite number");
   EXPECT_CONTAINS(SpecError("student:dof=3,k=4", regression), "option k given twice");
   EXPECT_CONTAINS(SpecError("student:dof=3,", regression), "ends with ','");
