@@ -21,8 +21,10 @@ ArxStructure CheckedArx(int na, std::vector<int> nb, std::vector<int> nk, int nc
                 "na = {} with nf = {}: an output-error or Box-Jenkins model has no A polynomial (give na = 0)", na,
                 nf);
   IDENT_REQUIRE(nd == 0 || nf >= 1, "nd = {} needs nf >= 1 (Box-Jenkins); ARMAX has C only", nd);
-  IDENT_REQUIRE(nf == 0 || nb.size() == 1, "nf = {} with {} inputs: OE and Box-Jenkins models take one input", nf,
-                nb.size());
+  IDENT_REQUIRE(nf == 0 || nb.size() == 1,
+                "nf = {} with {} inputs: the recursive OE and Box-Jenkins estimators take one input (ARX and ARMAX "
+                "take several)",
+                nf, nb.size());
   IDENT_REQUIRE(nf == 0 || nb[0] >= 1, "nf = {} with nb = 0: an output-error model needs nb >= 1", nf);
   IDENT_REQUIRE(static_cast<long long>(nc) + nd + nf <= ArxStructure::kMaxParameters,
                 "nc + nd + nf = {}; need at most {}", static_cast<long long>(nc) + nd + nf,

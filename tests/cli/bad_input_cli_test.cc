@@ -183,7 +183,9 @@ TEST(BadInput, SpecKeysAndTheirOptionsSetTheSameField) {
     ASSERT_EQ(by_spec.size(), 4u) << spec;
     EXPECT_EQ(by_spec, by_option) << spec;
     EXPECT_EQ(theta("--estimator " + spec + " " + option.substr(option.find(' ') + 1)), by_spec) << spec;
-    if (spec != "cauchy:lock_in_window=50,lock_in_threshold=0.5") EXPECT_NE(by_spec, plain) << spec;
+    if (spec != "cauchy:lock_in_window=50,lock_in_threshold=0.5") {
+      EXPECT_NE(by_spec, plain) << spec;
+    }
   }
   ExpectCliError("fit dryer" + kArx + " --estimator rls:forgetting=0.9 --forgetting 0.99",
                  "--forgetting 0.99 contradicts estimator 'rls:forgetting=0.9'");

@@ -261,6 +261,9 @@ TEST(PolynomialFit, RefusesStructuresThatAreNoneOfArmaxOeBj) {
   ExpectCliError("fit dryer --output y --input u --na 2 --nf 2", "has no A polynomial");
   ExpectCliError("fit dryer --nd 1", "needs nf >= 1");
   ExpectCliError("fit dryer --recursion rpem", "--recursion rpem needs an ARMAX");
+  ExpectCliError("fit cd_player_arm --output y1 --input u1,u2 --nb 2,2 --nk 1,1 --nf 2",
+                 "nf = 2 with 2 inputs: the recursive OE and Box-Jenkins estimators take one input (ARX and ARMAX "
+                 "take several)");
   ExpectCliError("fit dryer --nc -1", "orders must be >= 0");
   ExpectCliError("compare dryer --nf -2", "orders must be >= 0");
   ExpectCliError("fit stackloss --output stack_loss --regressors air_flow --nc 1", "do not apply to --regressors");
