@@ -29,7 +29,6 @@ PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structur
     past_psi_.setZero(structure.num_parameters(), box_jenkins_ ? std::max(nc + nf, nd) : (nf > 0 ? nf : nc));
     if (box_jenkins_) {
       pre_.setZero(structure.num_parameters());
-      grouped_psi_.setZero(structure.num_parameters());
       cf_.setZero(nc + nf);
     }
   }
@@ -71,8 +70,10 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   const int offset = structure_.nf() > 0 ? structure_.f_offset() : structure_.c_offset();
   psi_ = phi_;
   const Eigen::Index n = past_psi_.cols();
-  for (Eigen::Index k = 0; k < n; ++k)
-    psi_.noalias() -= theta_(offset + k) * past_psi_.col((newest_psi_ + k) % n);
+  for (Eigen::Index k = 0, column = newest_psi_; k < n; ++k) {  // ψ(t−1−k): the ring from the newest on
+    psi_.noalias() -= theta_(offset + k) * past_psi_.col(column);
+    if (++column == n) column = 0;
+  }
   z = psi_;
   return true;
 }
@@ -97,18 +98,38 @@ void PseudoLinearRegressor::BoxJenkinsGradient() {
     for (int i = std::max(1, k - nf); i <= std::min(nc, k - 1); ++i) h += theta_(c + i - 1) * theta_(f + k - i - 1);
     cf_(k - 1) = h;
   }
-  const Eigen::Index n = past_psi_.cols();
-  const auto past = [&](int k) { return past_psi_.col((newest_psi_ + k - 1) % n); };  // p(t−k), k ≥ 1
+  // Plain loops on the ring's columns: at these lengths (a few entries per tap) the per-expression set-up
+  // of Eigen's dynamic-size segment operations costs more than their arithmetic. Each entry takes its
+  // taps in the order k = 1, 2, … as a vector operation per tap would.
+  // p(t−k) for k = 1, 2, …: the ring's columns from the newest on, stepped without a division.
+  const Eigen::Index n = past_psi_.cols(), rows = past_psi_.rows();
+  const double* const ring = past_psi_.data();
+  const auto each_past = [&](int taps, auto&& op) {
+    Eigen::Index column = newest_psi_;
+    for (int k = 1; k <= taps; ++k) {
+      op(k, ring + column * rows);
+      if (++column == n) column = 0;
+    }
+  };
   Grouped(phi_, pre_);
-  for (int k = 1; k <= nc + nf; ++k) pre_.head(nbf).noalias() -= cf_(k - 1) * past(k).head(nbf);
-  for (int k = 1; k <= nc; ++k) pre_.tail(ncd).noalias() -= theta_(c + k - 1) * past(k).tail(ncd);
-  grouped_psi_ = pre_;
-  for (int k = 1; k <= nd; ++k) grouped_psi_.head(nbf).noalias() += theta_(d + k - 1) * past(k).head(nbf);
-  // Back to θ's order.
+  double* const pre = pre_.data();
+  each_past(nc + nf, [&](int k, const double* p) {
+    const double g = cf_(k - 1);
+    for (int i = 0; i < nbf; ++i) pre[i] -= g * p[i];
+  });
+  each_past(nc, [&](int k, const double* p) {
+    const double g = theta_(c + k - 1);
+    for (int i = 0; i < ncd; ++i) pre[nbf + i] -= g * p[nbf + i];
+  });
+  // ψ = D(q) p in B and F, back in θ's order [b, c, d, f]; ψ = p in C and D.
   const int nb = nbf - nf;
-  psi_.head(nb) = grouped_psi_.head(nb);
-  psi_.segment(f, nf) = grouped_psi_.segment(nb, nf);
-  psi_.segment(c, ncd) = grouped_psi_.tail(ncd);
+  double* const psi = psi_.data();
+  for (int i = 0; i < nbf; ++i) psi[i < nb ? i : f + i - nb] = pre[i];
+  each_past(nd, [&](int k, const double* p) {
+    const double g = theta_(d + k - 1);
+    for (int i = 0; i < nbf; ++i) psi[i < nb ? i : f + i - nb] += g * p[i];
+  });
+  for (int i = 0; i < ncd; ++i) psi[c + i] = pre[nbf + i];
 }
 
 double PseudoLinearRegressor::LinearisedOutput(double y) const {

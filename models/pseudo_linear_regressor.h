@@ -96,7 +96,7 @@ class PseudoLinearRegressor {
   Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
   Eigen::MatrixXd past_psi_;                  // ψ(t−1−k), k < nc (ARMAX) or nf (OE), in column (newest_psi_ + k) mod n;
                                               // Box–Jenkins: p(t−1−k) (BoxJenkinsGradient), k < max(nc + nf, nd)
-  Eigen::VectorXd pre_, grouped_psi_, cf_;    // Box–Jenkins: p(t) and ψ(t) as [b, f, c, d]; C(q)F(q)'s coefficients
+  Eigen::VectorXd pre_, cf_;                  // Box–Jenkins: p(t) as [b, f, c, d]; C(q)F(q)'s coefficients
   bool box_jenkins_ = false;                  // RPEM with F and C or D
   Eigen::Index newest_psi_ = 0;
   bool gradient_ = false;                     // z = ψ(t) for the current sample
