@@ -90,18 +90,18 @@ void RunOrders(const OrdersOptions& o) {
   const std::optional<double> dof = workflow::OrderCriterionDof(o.estimator);  // a robust estimator's k
   IDENT_REQUIRE(!dof || o.criterion != "fpe", "--criterion fpe is not likelihood-based; with --estimator {} use aic, "
                 "bic, mdl or validation", o.estimator.estimator);
+  const EstimatorSettings spec = ParseEstimatorSpec(o.estimator.estimator);
   if (!dof && !with_noise_model) {  // the ARX grid's least squares are batch solves: no recursion to set up
-    const EstimatorSettings s = ParseEstimatorSpec(o.estimator.estimator);
-    const std::string setting = !s.first_regression_setting().empty() ? s.first_regression_setting()
-                                : !s.options.empty()                  ? s.options.begin()->first
-                                                                      : std::string();
+    const std::string setting = !spec.first_regression_setting().empty() ? spec.first_regression_setting()
+                                : !spec.options.empty()                  ? spec.options.begin()->first
+                                                                         : std::string();
     IDENT_REQUIRE(setting.empty(),
                   "orders --estimator '{}': {} does not apply to the ARX grid's least-squares fits (give plain rls)",
                   o.estimator.estimator, setting);
   }
-  const std::string estimator_name =
-      !dof ? "rls"
-           : ParseEstimatorSpec(o.estimator.estimator).name == "cauchy" ? "cauchy" : fmt::format("student:{:g}", *dof);
+  const std::string estimator_name = !dof                    ? "rls"
+                                     : spec.name == "cauchy" ? "cauchy"
+                                                             : fmt::format("student:{:g}", *dof);
   // Several experiments (several files, an experiment column) in one table, as ident fit reads them: no
   // regressor straddles two. The time column of a single record is checked (its gaps filled with --missing).
   ExperimentRecords records =

@@ -62,7 +62,7 @@ std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::st
   ++count_;
   if (count_ == 2 * kSteps) count_ = kSteps;  // keeps the index cycling without overflow
   if (!full || step <= min_) {
-    min_ = full || count_ > 1 ? std::min(min_, step) : step;
+    min_ = std::min(min_, step);
   } else if (oldest == min_) {  // the smallest left the window: the next smallest
     min_ = steps_[0];
     for (int k = 1; k < kSteps; ++k) min_ = std::min(min_, steps_[static_cast<std::size_t>(k)]);

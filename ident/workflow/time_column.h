@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,7 +74,7 @@ class ArrivingTimeCheck {
   int count_ = 0;  // steps held (up to kSteps); the next goes to steps_[count_ % kSteps] once full
   long taken_ = 0;
   double previous_ = 0;
-  double min_ = 0;  // the smallest step held
+  double min_ = std::numeric_limits<double>::infinity();  // the smallest step held (none: +inf)
   bool started_ = false;
 };
 
