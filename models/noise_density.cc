@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "models/internal/half_line_rules.h"
 #include "models/internal/noise_density_shared.h"
 
 namespace ident::models {
@@ -158,6 +159,9 @@ LogConcaveNoise::LogConcaveNoise(Family family, double shape) : family_(family),
                     shape);
       const double p = shape;
       internal::BuildHermiteRules();
+      internal::HalfLineRules<16>::Get();
+      internal::HalfLineRules<20>::Get();
+      internal::HalfLineRules<28>::Get();
       log_norm_ = std::log(2.0) + std::lgamma(1 / p) - std::log(p);
       median_abs_ = std::pow(boost::math::gamma_p_inv(1 / p, 0.5), 1 / p);
       sd_ = std::exp(0.5 * (std::lgamma(3 / p) - std::lgamma(1 / p)));
@@ -225,7 +229,7 @@ double LogConcaveNoise::Score(double u) const {
     case Family::kLogistic:
       return std::tanh(0.5 * u);
     case Family::kGeneralizedGaussian:
-      return s * shape_ * std::pow(au, shape_ - 1);
+      return s * shape_ * (shape_ == 1.5 ? std::sqrt(au) : shape_ == 2 ? au : std::pow(au, shape_ - 1));
   }
   return kNoiseNaN;
 }
@@ -298,7 +302,8 @@ TiltedMoments LogConcaveNoise::ResidualMoments(double a, double v) const noexcep
       // not smooth at 0, so 0 must lie 12 prior widths away, and f's slope ψ(a) stretches v to v·ψ(a)².
       double v_eff = v;
       if (family_ == Family::kGeneralizedGaussian) {
-        if (!(std::abs(a) >= 12 * std::sqrt(v))) return RuleMoments(a, v);
+        if (!(std::abs(a) >= 12 * std::sqrt(v)))
+          return v <= internal::kHalfLineMaxVariance ? HalfLineMoments(a, v) : RuleMoments(a, v);
         v_eff = v * std::max(1.0, Score(a) * Score(a));
       }
       for (std::size_t r = 0; r < kHermiteMaxVariance.size(); ++r)

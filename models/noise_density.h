@@ -15,12 +15,14 @@
 //   gaussian         closed form (a product of Gaussians)
 //   laplace, huber   closed form: a mixture of two or three truncated normals (models/measurement.h
 //                    TruncatedNormalMoments), combined in log space and centred
-//   logistic,        a prior small against f's scale (the steady state): 8- to 64-point Gauss–Hermite in the
-//   gengauss         prior N(a, v), the rule chosen by v (gengauss only with 0 twelve prior widths away, where
-//                    |u|^p is not smooth). Otherwise composite 10-point Gauss–Legendre on panels of width ≤ 2
-//                    over ±16 widths (wider until the density has fallen by e^{−45}) around the mode of the (log-concave, unimodal) tilted
-//                    density, the mode by safeguarded Newton; gengauss with a panel boundary at 0 and
-//                    panels graded towards it
+//   logistic         a prior small against f's scale (the steady state): 8- to 64-point Gauss–Hermite in the
+//                    prior N(a, v), the rule chosen by v; otherwise composite 10-point Gauss–Legendre on panels
+//                    of width ≤ 2 around the mode of the (log-concave, unimodal) tilted density, until it has
+//                    fallen by e^{−45}, the mode by safeguarded Newton
+//   gengauss         |u|^p is not smooth at 0. With 0 twelve prior widths away: Gauss–Hermite in the prior, or
+//                    (f steep across the prior) centred on the mode with its curvature; with 0 inside a prior of
+//                    √v ≤ 0.5: Gauss rules on each half-line in s = √|r| (models/internal/half_line_rules.h);
+//                    else the Gauss–Legendre panels, with a boundary at 0 and panels graded towards it
 //   The laplace and huber tails: Mills-ratio continued fractions beyond 5 standard deviations, erfc below;
 //   a mixture piece whose weight bound is below e^{−80} of the largest is not evaluated.
 //   All agree with adaptive quadrature to 1e−10 relative (tests/models/noise_density_test.cc).
@@ -77,6 +79,10 @@ class LogConcaveNoise {
   TiltedMoments RuleMoments(double a, double v) const noexcept;
   // logistic and gengauss away from 0: a Gauss–Hermite rule (index into the rules) in the prior N(a, v).
   TiltedMoments HermiteMoments(double a, double v, int rule) const noexcept;
+  // gengauss with the mode 12 widths (1/√(−(log h)'')) from 0: the 20-point Gauss–Hermite rule centred on the mode.
+  TiltedMoments ModeHermiteMoments(double a, double v, double mode, double width, double log_peak) const noexcept;
+  // gengauss, v ≤ internal::kHalfLineMaxVariance and |a| < 12√v: Gauss rules on each half-line in √|r|.
+  TiltedMoments HalfLineMoments(double a, double v) const noexcept;
 
   Family family_;
   double shape_ = 0;

@@ -170,7 +170,8 @@ TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
       const double t = std::tanh(0.5 * r);
       return 0.5 * (1 - t * t);
     }
-    return shape_ * (shape_ - 1) * std::pow(std::max(std::abs(r), 0.5), shape_ - 2);
+    const double ar = std::max(std::abs(r), 0.5);
+    return shape_ * (shape_ - 1) * (shape_ == 1.5 ? 1 / std::sqrt(ar) : shape_ == 2 ? 1.0 : std::pow(ar, shape_ - 2));
   };
   double lo = std::min(0.0, a), hi = std::max(0.0, a), r = std::clamp(a / (1 + 0.25 * v), lo, hi);
   // The mode only places the panels (which reach 16 widths either side) and scales the integrand, so a
@@ -187,6 +188,7 @@ TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
   }
   const double width = 1 / std::sqrt(curvature(r) + 1 / v);
   const double log_peak = -Rho(family_, shape_, r) - 0.5 * (r - a) * (r - a) / v;
+  if (!logistic && std::abs(r) >= 12 * width) return ModeHermiteMoments(a, v, r, width, log_peak);
   // log h is concave: ±16 widths, widened until log h has fallen by 45 from its peak at both ends (so the
   // mass beyond is below e^{−45} of the peak's per unit slope), in panels of width at most 2 (f's own
   // scale; 12 at least, 400 at most) of 10 Gauss–Legendre points.
@@ -227,6 +229,44 @@ TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
   const double var = std::max(0.0, m2 / z - mean_d * mean_d);
   // Z = ∫ f(r)·N(r; a, v) dr = e^{log_peak − log_norm}·z/√(2πv).
   return {log_peak - log_norm_ + std::log(z) - 0.5 * std::log(2 * std::numbers::pi * v), r + mean_d, var, true};
+}
+
+TiltedMoments LogConcaveNoise::ModeHermiteMoments(double a, double v, double mode, double width,
+                                                  double log_peak) const noexcept {
+  // r = mode + width·x: ∫ h(r) dr = width·√(2π)·E[h(mode + width·X)·e^{X²/2}], X ~ N(0, 1), by the 20-point
+  // rule. log h(mode + width·x) − log_peak + x²/2 is the departure of log h from its osculating parabola
+  // (curvature 1/width² at the mode): smooth and slowly varying while the kink of |r|^p at 0 is 12 widths away.
+  constexpr int kRule = 3;  // 20 points (kHermiteSizes)
+  const HermiteRule& rule = HermiteRules()[kRule];
+  // The differences from the mode are formed without cancellation (log h is of the order of a², its change
+  // over a width of order 1): ρ(A) − ρ(B) = (A − B)·(…) with A − B exact, and the Gaussian's
+  // ((r − a)² − (mode − a)²)/(2v) = wx·(2(mode − a) + wx)/(2v). |r| and |mode| share a sign since the rule's
+  // nodes lie within 8 widths.
+  const double am = std::abs(mode), sign = mode >= 0 ? 1.0 : -1.0, p = shape_;
+  const double sqrt_am = std::sqrt(am), am_p = GengaussPower(am, p);
+  double z = 0, m1 = 0, m2 = 0;
+  for (int i = 0; i < rule.n; ++i) {
+    const double x = rule.x[i], wx = width * x, d = sign * wx, ar = am + d;
+    double d_rho;
+    if (p == 2)
+      d_rho = d * (ar + am);
+    else if (p == 1)
+      d_rho = d;
+    else if (p == 1.5)
+      d_rho = d * (ar * ar + ar * am + am * am) / (ar * std::sqrt(ar) + am * sqrt_am);
+    else
+      d_rho = am_p * std::expm1(p * std::log1p(d / am));
+    const double value = std::exp(-d_rho - wx * (2 * (mode - a) + wx) / (2 * v) + 0.5 * x * x);
+    const double wv = rule.w[i] * value;
+    z += wv;
+    m1 += wv * x;
+    m2 += wv * x * x;
+  }
+  if (!(z > 0) || !std::isfinite(z)) return {};
+  const double mean_x = m1 / z;
+  const double var = width * width * std::max(0.0, m2 / z - mean_x * mean_x);
+  // Z = e^{log_peak − log_norm}·width·√(2π)·z / √(2πv).
+  return {log_peak - log_norm_ + std::log(z * width) - 0.5 * std::log(v), mode + width * mean_x, var, true};
 }
 
 TiltedMoments LogConcaveNoise::QuadratureResidualMoments(double a, double v) const {
