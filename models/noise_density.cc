@@ -159,9 +159,14 @@ LogConcaveNoise::LogConcaveNoise(Family family, double shape) : family_(family),
                     shape);
       const double p = shape;
       internal::BuildHermiteRules();
-      internal::HalfLineRules<16>::Get();
+      // The half-line rules HalfLineMoments uses for this p (noise_density_half_line.cc).
       internal::HalfLineRules<20>::Get();
-      internal::HalfLineRules<28>::Get();
+      if (p == 1 || p == 1.5) {
+        internal::HalfLineRules<16>::Get();
+      } else if (p != 2) {
+        internal::HalfLineRules<28>::Get();
+        internal::HalfLineRules<40>::Get();
+      }
       log_norm_ = std::log(2.0) + std::lgamma(1 / p) - std::log(p);
       median_abs_ = std::pow(boost::math::gamma_p_inv(1 / p, 0.5), 1 / p);
       sd_ = std::exp(0.5 * (std::lgamma(3 / p) - std::lgamma(1 / p)));
@@ -301,6 +306,12 @@ TiltedMoments LogConcaveNoise::ResidualMoments(double a, double v) const noexcep
       // on a grid of a; the unit test holds it to 1e−10 against adaptive quadrature). gengauss: |r|^p is
       // not smooth at 0, so 0 must lie 12 prior widths away, and f's slope ψ(a) stretches v to v·ψ(a)².
       double v_eff = v;
+      if (family_ == Family::kGeneralizedGaussian && shape_ == 2) {
+        // e^{−r²}/√π = N(r; 0, ½): φ-products in closed form, N(r; 0, ½)·N(r; a, v) = N(a; 0, ½ + v)·N(r; a/(1 + 2v),
+        // v/(1 + 2v)).
+        const double s = 0.5 + v;
+        return {-0.5 * a * a / s - 0.5 * std::log(s) - kNoiseLogSqrt2Pi, 0.5 * a / s, 0.5 * v / s, true};
+      }
       if (family_ == Family::kGeneralizedGaussian) {
         if (!(std::abs(a) >= 12 * std::sqrt(v)))
           return v <= internal::kHalfLineMaxVariance ? HalfLineMoments(a, v) : RuleMoments(a, v);

@@ -19,9 +19,9 @@
 //                    prior N(a, v), the rule chosen by v; otherwise composite 10-point Gauss–Legendre on panels
 //                    of width ≤ 2 around the mode of the (log-concave, unimodal) tilted density, until it has
 //                    fallen by e^{−45}, the mode by safeguarded Newton
-//   gengauss         |u|^p is not smooth at 0. With 0 twelve prior widths away: Gauss–Hermite in the prior, or
+//   gengauss         p = 2: closed form. Otherwise |u|^p is not smooth at 0. With 0 twelve prior widths away: Gauss–Hermite in the prior, or
 //                    (f steep across the prior) centred on the mode with its curvature; with 0 inside a prior of
-//                    √v ≤ 0.5: Gauss rules on each half-line in s = √|r| (models/internal/half_line_rules.h);
+//                    √v ≤ 0.75: Gauss rules on each half-line in s = √|r| (models/internal/half_line_rules.h);
 //                    else the Gauss–Legendre panels, with a boundary at 0 and panels graded towards it
 //   The laplace and huber tails: Mills-ratio continued fractions beyond 5 standard deviations, erfc below;
 //   a mixture piece whose weight bound is below e^{−80} of the largest is not evaluated.

@@ -92,5 +92,6 @@ const HalfLineRule<N>& HalfLineRules<N>::Nearest(double alpha) const noexcept {
 template class HalfLineRules<16>;
 template class HalfLineRules<20>;
 template class HalfLineRules<28>;
+template class HalfLineRules<40>;
 
 }  // namespace ident::models::internal

@@ -21,7 +21,7 @@ inline constexpr double kHalfLineAlphaStep = 0.25;
 inline constexpr int kHalfLineRuleCount = 97;  // 2·12/0.25 + 1
 // The largest prior variance v (in f's units) for which LogConcaveNoise uses these rules; beyond it e^{−(√v·t)^p}
 // varies too fast across the weight.
-inline constexpr double kHalfLineMaxVariance = 0.25;
+inline constexpr double kHalfLineMaxVariance = 0.5625;
 
 template <int N>
 struct HalfLineRule {
@@ -42,8 +42,9 @@ class HalfLineRules {
   HalfLineRule<N> rules_[kHalfLineRuleCount];
 };
 
-extern template class HalfLineRules<16>;
+extern template class HalfLineRules<16>;  // the sizes LogConcaveNoise uses
 extern template class HalfLineRules<20>;
 extern template class HalfLineRules<28>;
+extern template class HalfLineRules<40>;
 
 }  // namespace ident::models::internal
