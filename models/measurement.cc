@@ -1,20 +1,16 @@
 #include "models/measurement.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numbers>
 
 #include <boost/math/quadrature/gauss.hpp>
 #include <boost/math/quadrature/gauss_kronrod.hpp>
-#include <boost/math/special_functions/erf.hpp>
 
 #include "common/error.h"
 
 namespace ident::models {
 namespace {
-
-// erf/erfc evaluated in double (Boost's 53-bit rational approximations, error below a few ulp) instead of
-// the default promotion to long double, which costs about half of an LC filter's step (window EP: perf).
-constexpr boost::math::policies::policy<boost::math::policies::promote_double<false>> kDoublePolicy{};
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -71,7 +67,7 @@ TiltedMoments UpperStandardTruncatedMoments(double a, double b) {
   } else {  // a < 0 < b: Z = ½ erf(b/√2) + ½ erf(−a/√2), a sum of positive terms
     // erf(x) rounds to 1 for x >= 5.93 (1 − erf(5.93) = 5.0e−17 < ε/2): a bound that far out costs no call.
     const double r = std::numbers::sqrt2 / 2;
-    auto erf_to = [r](double bound) { return bound * r >= 5.93 ? 1.0 : boost::math::erf(bound * r, kDoublePolicy); };
+    auto erf_to = [r](double bound) { return bound * r >= 5.93 ? 1.0 : std::erf(bound * r); };
     const double z = 0.5 * erf_to(b) + 0.5 * erf_to(-a);
     if (b - a <= 1.0) {  // narrow interval around 0: quadrature avoids cancellation in the variance
       using Gauss = boost::math::quadrature::gauss<double, 40>;
@@ -96,7 +92,7 @@ TiltedMoments UpperStandardTruncatedMoments(double a, double b) {
 double LogNormalDensity(double x) { return LogPhi(x); }
 
 double LogNormalTail(double x) {
-  if (x < 30.0) return std::log(0.5 * boost::math::erfc(x * std::numbers::sqrt2 / 2, kDoublePolicy));
+  if (x < 30.0) return std::log(0.5 * std::erfc(x * std::numbers::sqrt2 / 2));
   // Mills ratio Q(x)/φ(x) = 1/(x + 1/(x + 2/(x + 3/(x + ...)))), converged for x ≥ 30.
   double f = x;
   for (int k = 60; k >= 1; --k) f = x + k / f;

@@ -23,7 +23,7 @@
 //                    (f steep across the prior) centred on the mode with its curvature; with 0 inside a prior of
 //                    √v ≤ 0.75: Gauss rules on each half-line in s = √|r| (models/internal/half_line_rules.h);
 //                    else the Gauss–Legendre panels, with a boundary at 0 and panels graded towards it
-//   The laplace and huber tails: Mills-ratio continued fractions beyond 5 standard deviations, erfc below;
+//   The laplace and huber tails: Mills-ratio continued fractions beyond 25 standard deviations, erfc below;
 //   a mixture piece whose weight bound is below e^{−80} of the largest is not evaluated.
 //   All agree with adaptive quadrature to 1e−10 relative (tests/models/noise_density_test.cc).
 // No allocation.

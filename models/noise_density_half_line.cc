@@ -60,11 +60,15 @@ TiltedMoments HalfLineMomentsOf(double a, double v, double p, double log_norm) {
 
 TiltedMoments LogConcaveNoise::HalfLineMoments(double a, double v) const noexcept {
   // The rules' error grows with the variation of e^{−σ^p s^{2p}} across the weight. Where s^{2p} is a
-  // polynomial (p = 1, 1.5; p = 2 has a closed form) 16 points reach 1e−10 up to √v = 0.5 and 20 up to 0.75;
-  // for other p, 20 points up to √v = 0.4, 28 up to 0.5 and 40 up to 0.75 (tests/models/noise_density_test.cc).
-  const bool polynomial = shape_ == 1 || shape_ == 1.5 || shape_ == 2;
-  if (polynomial)
-    return v <= 0.25 ? HalfLineMomentsOf<16>(a, v, shape_, log_norm_) : HalfLineMomentsOf<20>(a, v, shape_, log_norm_);
+  // polynomial (p = 1, 1.5; p = 2 has a closed form) 10 points reach 1e−11 up to √v = 0.15, 12 up to 0.25,
+  // 16 up to 0.5 and 20 up to 0.75; for other p, 20 points reach 1e−10 up to √v = 0.4, 28 up to 0.5 and 40
+  // up to 0.75 (tests/models/noise_density_test.cc).
+  if (shape_ == 1 || shape_ == 1.5) {
+    if (v <= 0.0225) return HalfLineMomentsOf<10>(a, v, shape_, log_norm_);
+    if (v <= 0.0625) return HalfLineMomentsOf<12>(a, v, shape_, log_norm_);
+    if (v <= 0.25) return HalfLineMomentsOf<16>(a, v, shape_, log_norm_);
+    return HalfLineMomentsOf<20>(a, v, shape_, log_norm_);
+  }
   if (v <= 0.16) return HalfLineMomentsOf<20>(a, v, shape_, log_norm_);
   if (v <= 0.25) return HalfLineMomentsOf<28>(a, v, shape_, log_norm_);
   return HalfLineMomentsOf<40>(a, v, shape_, log_norm_);

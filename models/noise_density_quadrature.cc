@@ -112,15 +112,22 @@ const LegendreRule& Legendre() {
   return rule;
 }
 
-// ρ(r) at every node of a panel, as Rho() (noise_density_shared.h) for logistic and gengauss, in Eigen's
-// vectorised log/exp/sqrt: the panels' integrand is the moments' whole cost.
-Legendre10 RhoAtNodes(LogConcaveNoise::Family family, double p, const Legendre10& r) {
-  const Legendre10 ar = r.abs();
-  if (family == LogConcaveNoise::Family::kLogistic) return ar + 2 * (-ar).exp().log1p();
+// |r|^p at every node (r ≥ 0), as GengaussPower; r = 0 gives exp(−∞) = 0.
+template <class Nodes>
+Nodes GengaussPowerAtNodes(const Nodes& ar, double p) {
   if (p == 1.5) return ar * ar.sqrt();
   if (p == 2) return ar.square();
   if (p == 1) return ar;
-  return (p * ar.log()).exp();  // |r|^p; r = 0 gives exp(−∞) = 0
+  return (p * ar.log()).exp();
+}
+
+// ρ(r) at every node of a rule, as Rho() (noise_density_shared.h) for logistic and gengauss, in Eigen's
+// vectorised log/exp/sqrt: the integrand is the moments' whole cost.
+template <class Nodes>
+Nodes RhoAtNodes(LogConcaveNoise::Family family, double p, const Nodes& r) {
+  const Nodes ar = r.abs();
+  if (family == LogConcaveNoise::Family::kLogistic) return ar + 2 * (-ar).exp().log1p();
+  return GengaussPowerAtNodes(ar, p);
 }
 
 }  // namespace
@@ -133,26 +140,23 @@ void internal::BuildHermiteRules() {
 TiltedMoments LogConcaveNoise::HermiteMoments(double a, double v, int rule_index) const noexcept {
   // Z = E f(a + √v X) = e^{−ρ(a) − log_norm}·E e^{ρ(a) − ρ(r)}: the factor e^{−ρ(a)} taken out so that
   // outliers do not underflow; logistic's e^{ρ(a) − ρ(r)} = e^{|a| − |r|}·(1 + e^{−|a|})²/(1 + e^{−|r|})².
+  // The nodes in Eigen arrays of at most 64 entries (on the stack), for its vectorised exp.
+  using Nodes = Eigen::Array<double, Eigen::Dynamic, 1, Eigen::ColMajor, 64, 1>;
   const HermiteRule& rule = HermiteRules()[static_cast<std::size_t>(rule_index)];
+  const Eigen::Map<const Eigen::ArrayXd> x(rule.x.data(), rule.n), w(rule.w.data(), rule.n);
   const double sd = std::sqrt(v), aa = std::abs(a);
   const bool logistic = family_ == Family::kLogistic;
-  const double ea = std::exp(-aa), p = shape_;
-  const double rho_a = logistic ? 0.0 : GengaussPower(aa, p);
-  double z = 0, m1 = 0, m2 = 0;
-  for (int i = 0; i < rule.n; ++i) {
-    const double d = sd * rule.x[i], ar = std::abs(a + d);
-    double value;
-    if (logistic) {
-      const double e_rel = std::exp(aa - ar), e = e_rel * ea;  // e^{−|r|}·e^{|a|}, e^{−|r|}
-      value = e_rel / ((1 + e) * (1 + e));
-    } else {
-      value = std::exp(rho_a - GengaussPower(ar, p));
-    }
-    const double wv = rule.w[i] * value;
-    z += wv;
-    m1 += wv * d;
-    m2 += wv * d * d;
+  const double rho_a = logistic ? 0.0 : GengaussPower(aa, shape_);
+  const Nodes d = sd * x;
+  const Nodes ar = (a + d).abs();
+  Nodes wv;
+  if (logistic) {
+    const Nodes e_rel = (aa - ar).exp();  // e^{|a| − |r|}; e^{−|r|} = e_rel·e^{−|a|}
+    wv = w * e_rel / (1 + std::exp(-aa) * e_rel).square();
+  } else {
+    wv = w * (rho_a - GengaussPowerAtNodes(ar, shape_)).exp();
   }
+  const double z = wv.sum(), m1 = (wv * d).sum(), m2 = (wv * d.square()).sum();
   if (!(z > 0) || !std::isfinite(z)) return {};
   const double mean_d = m1 / z;
   const double log_z = std::log(z) + (logistic ? -aa : -rho_a - log_norm_);

@@ -89,6 +89,8 @@ const HalfLineRule<N>& HalfLineRules<N>::Nearest(double alpha) const noexcept {
   return rules_[std::clamp<long>(j, 0, kHalfLineRuleCount - 1)];
 }
 
+template class HalfLineRules<10>;
+template class HalfLineRules<12>;
 template class HalfLineRules<16>;
 template class HalfLineRules<20>;
 template class HalfLineRules<28>;

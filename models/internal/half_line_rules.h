@@ -42,7 +42,9 @@ class HalfLineRules {
   HalfLineRule<N> rules_[kHalfLineRuleCount];
 };
 
-extern template class HalfLineRules<16>;  // the sizes LogConcaveNoise uses
+extern template class HalfLineRules<10>;  // the sizes LogConcaveNoise uses
+extern template class HalfLineRules<12>;
+extern template class HalfLineRules<16>;
 extern template class HalfLineRules<20>;
 extern template class HalfLineRules<28>;
 extern template class HalfLineRules<40>;

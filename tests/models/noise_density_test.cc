@@ -165,7 +165,7 @@ TEST(LogConcaveNoise, GengaussMomentsAroundTheKinkAgreeWithQuadratureTo1e10) {
        {"gengauss:1", "gengauss:1.1", "gengauss:1.3", "gengauss:1.5", "gengauss:1.75", "gengauss:2"}) {
     const LogConcaveNoise f = LogConcaveNoise::Parse(spec);
     std::vector<std::pair<double, double>> cases;  // (a, v)
-    for (double sd : {1e-3, 0.01, 0.05, 0.1, 0.2, 0.3, 0.4, 0.45, 0.5, 0.6, 0.7, 0.75})
+    for (double sd : {1e-3, 0.01, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.45, 0.5, 0.6, 0.7, 0.75})
       for (double alpha = -11.9; alpha < 12; alpha += 0.37) cases.emplace_back(alpha * sd, sd * sd);
     for (double a : {4.0, 10.0, 50.0, 300.0})
       for (double v : {0.3, 1.0, 3.0}) cases.emplace_back(a, v);
