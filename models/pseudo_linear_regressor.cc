@@ -26,7 +26,8 @@ PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structur
   if (recursion_ == Recursion::kPredictionError) {
     const int nc = structure.nc(), nd = structure.nd(), nf = structure.nf();
     box_jenkins_ = nf > 0 && nc + nd > 0;
-    past_psi_.setZero(structure.num_parameters(), box_jenkins_ ? std::max(nc + nf, nd) : (nf > 0 ? nf : nc));
+    taps_ = box_jenkins_ ? std::max(nc + nf, nd) : (nf > 0 ? nf : nc);
+    history_.setZero(2 * taps_, structure.num_parameters());
     if (box_jenkins_) {
       pre_.setZero(structure.num_parameters());
       cf_.setZero(nc + nf);
@@ -39,8 +40,8 @@ void PseudoLinearRegressor::Reset() {
   past_e_.setZero();
   past_v_.setZero();
   past_w_.setZero();
-  past_psi_.setZero();
-  newest_psi_ = 0;
+  history_.setZero();
+  newest_ = 0;
   formed_ = gradient_ = false;
   samples_ = 0;
 }
@@ -67,69 +68,34 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
     return true;
   }
   // ψ(t) = φ(t) − Σ_k g_k ψ(t−k), G = C (ARMAX) or F (OE) of the tracked estimate.
-  const int offset = structure_.nf() > 0 ? structure_.f_offset() : structure_.c_offset();
-  psi_ = phi_;
-  const Eigen::Index n = past_psi_.cols();
-  for (Eigen::Index k = 0, column = newest_psi_; k < n; ++k) {  // ψ(t−1−k): the ring from the newest on
-    psi_.noalias() -= theta_(offset + k) * past_psi_.col(column);
-    if (++column == n) column = 0;
-  }
+  const double* const g = theta_.data() + (structure_.nf() > 0 ? structure_.f_offset() : structure_.c_offset());
+  for (int i = 0; i < rho; ++i) psi_(i) = Filtered(phi_(i), g, taps_, Past(i));
   z = psi_;
   return true;
 }
 
-void PseudoLinearRegressor::Grouped(const Eigen::VectorXd& x, Eigen::VectorXd& out) const {
-  // θ's order [b, c, d, f] to the ring's [b, f, c, d]: the coordinates filtered alike are contiguous.
-  const int nb = structure_.arx().num_parameters(), nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
-  out.head(nb) = x.head(nb);
-  out.segment(nb, nf) = x.segment(structure_.f_offset(), nf);
-  out.segment(nb + nf, nc + nd) = x.segment(structure_.c_offset(), nc + nd);
-}
-
 void PseudoLinearRegressor::BoxJenkinsGradient() {
   // ŷ = (D/C)(B/F) u + (1 − D/C) y, so −∂ε/∂θ is (D/(C F)) φ in the B and F coordinates and φ/C in the C
-  // and D ones. The ring holds p(t) grouped as [b, f, c, d]: p = φ/(C F) in B, F (where ψ = D(q) p) and
-  // p = ψ = φ/C in C, D.
-  const int nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
-  const int nbf = structure_.arx().num_parameters() + nf, ncd = nc + nd;
+  // and D ones. The history holds p(t): p = φ/(C F) in B and F (where ψ = D(q) p) and p = ψ = φ/C in C and D.
+  const int nb = structure_.arx().num_parameters(), nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
   const int c = structure_.c_offset(), d = structure_.d_offset(), f = structure_.f_offset();
+  const double* const theta = theta_.data();
   for (int k = 1; k <= nc + nf; ++k) {  // C(q)F(q) = 1 + Σ_k cf_k q^−k
-    double h = (k <= nc ? theta_(c + k - 1) : 0.0) + (k <= nf ? theta_(f + k - 1) : 0.0);
-    for (int i = std::max(1, k - nf); i <= std::min(nc, k - 1); ++i) h += theta_(c + i - 1) * theta_(f + k - i - 1);
+    double h = (k <= nc ? theta[c + k - 1] : 0.0) + (k <= nf ? theta[f + k - 1] : 0.0);
+    for (int i = std::max(1, k - nf); i <= std::min(nc, k - 1); ++i) h += theta[c + i - 1] * theta[f + k - i - 1];
     cf_(k - 1) = h;
   }
-  // Plain loops on the ring's columns: at these lengths (a few entries per tap) the per-expression set-up
-  // of Eigen's dynamic-size segment operations costs more than their arithmetic. Each entry takes its
-  // taps in the order k = 1, 2, … as a vector operation per tap would.
-  // p(t−k) for k = 1, 2, …: the ring's columns from the newest on, stepped without a division.
-  const Eigen::Index n = past_psi_.cols(), rows = past_psi_.rows();
-  const double* const ring = past_psi_.data();
-  const auto each_past = [&](int taps, auto&& op) {
-    Eigen::Index column = newest_psi_;
-    for (int k = 1; k <= taps; ++k) {
-      op(k, ring + column * rows);
-      if (++column == n) column = 0;
-    }
+  auto b_or_f = [&](int i) {
+    const double p = Filtered(phi_(i), cf_.data(), nc + nf, Past(i));
+    const double* const past = Past(i);
+    double s = p;
+    for (int k = 0; k < nd; ++k) s += theta[d + k] * past[k];
+    pre_(i) = p;
+    psi_(i) = s;
   };
-  Grouped(phi_, pre_);
-  double* const pre = pre_.data();
-  each_past(nc + nf, [&](int k, const double* p) {
-    const double g = cf_(k - 1);
-    for (int i = 0; i < nbf; ++i) pre[i] -= g * p[i];
-  });
-  each_past(nc, [&](int k, const double* p) {
-    const double g = theta_(c + k - 1);
-    for (int i = 0; i < ncd; ++i) pre[nbf + i] -= g * p[nbf + i];
-  });
-  // ψ = D(q) p in B and F, back in θ's order [b, c, d, f]; ψ = p in C and D.
-  const int nb = nbf - nf;
-  double* const psi = psi_.data();
-  for (int i = 0; i < nbf; ++i) psi[i < nb ? i : f + i - nb] = pre[i];
-  each_past(nd, [&](int k, const double* p) {
-    const double g = theta_(d + k - 1);
-    for (int i = 0; i < nbf; ++i) psi[i < nb ? i : f + i - nb] += g * p[i];
-  });
-  for (int i = 0; i < ncd; ++i) psi[c + i] = pre[nbf + i];
+  for (int i = 0; i < nb; ++i) b_or_f(i);  // na = 0: θ starts with B
+  for (int i = f; i < f + nf; ++i) b_or_f(i);
+  for (int i = c; i < c + nc + nd; ++i) psi_(i) = pre_(i) = Filtered(phi_(i), theta + c, nc, Past(i));
 }
 
 double PseudoLinearRegressor::LinearisedOutput(double y) const {
@@ -189,20 +155,16 @@ void PseudoLinearRegressor::Store(double y) {
   Shift(past_e_, e);
   Shift(past_v_, v);
   Shift(past_w_, w);
-  if (past_psi_.cols() > 0) {
-    // ψ(t) enters the filter; φ(t) stands in for it while no estimate is tracked (G = 1), 0 before t0. The
-    // columns are a ring: the newest takes the place of the oldest.
-    newest_psi_ = (newest_psi_ + past_psi_.cols() - 1) % past_psi_.cols();
-    auto newest = past_psi_.col(newest_psi_);
-    if (!formed_) {
-      newest.setZero();
-    } else if (!box_jenkins_) {
-      newest = gradient_ ? psi_ : phi_;
-    } else {  // p(t), grouped (BoxJenkinsGradient)
-      if (!gradient_) Grouped(phi_, pre_);
-      newest = pre_;
-    }
-    if (!newest.allFinite()) newest.setZero();
+  if (taps_ > 0) {
+    // ψ(t) (Box–Jenkins: p(t)) enters the filter; φ(t) stands in for it while no estimate is tracked
+    // (G = 1), 0 before t0. Entry i's history is a window of column i: row newest_ is the newest, and each
+    // value is written twice (rows r and r + taps) so that the window rows newest_ … newest_ + taps − 1 are
+    // always contiguous.
+    newest_ = (newest_ + taps_ - 1) % taps_;
+    const Eigen::VectorXd& value = !gradient_ ? phi_ : (box_jenkins_ ? pre_ : psi_);
+    const bool finite = formed_ && value.allFinite();
+    for (Eigen::Index i = 0; i < history_.cols(); ++i)
+      history_(newest_, i) = history_(newest_ + taps_, i) = finite ? value(i) : 0.0;
   }
   formed_ = gradient_ = false;
 }

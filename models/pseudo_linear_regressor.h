@@ -84,7 +84,13 @@ class PseudoLinearRegressor {
  private:
   void Store(double y);  // after the ARX part has stored y: the residual, noise and noise-free output
   void BoxJenkinsGradient();  // pre_ and psi_ for the current φ (RPEM, Box–Jenkins)
-  void Grouped(const Eigen::VectorXd& x, Eigen::VectorXd& out) const;  // [b, c, d, f] → [b, f, c, d]
+  // The past of entry i, newest first: ψ_i(t−1−k) (Box–Jenkins: p_i(t−1−k)) at k < taps_.
+  const double* Past(Eigen::Index i) const { return history_.data() + i * history_.rows() + newest_; }
+  // x − Σ_(k<n) g_k w_k, the terms subtracted in the order k = 0, 1, ….
+  static double Filtered(double x, const double* g, int n, const double* w) {
+    for (int k = 0; k < n; ++k) x -= g[k] * w[k];
+    return x;
+  }
   static void Shift(Eigen::VectorXd& history, double value);
 
   PolynomialStructure structure_;
@@ -94,11 +100,14 @@ class PseudoLinearRegressor {
   Eigen::VectorXd work_;                      // the stability test's buffer
   Recursion recursion_;
   Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
-  Eigen::MatrixXd past_psi_;                  // ψ(t−1−k), k < nc (ARMAX) or nf (OE), in column (newest_psi_ + k) mod n;
-                                              // Box–Jenkins: p(t−1−k) (BoxJenkinsGradient), k < max(nc + nf, nd)
-  Eigen::VectorXd pre_, cf_;                  // Box–Jenkins: p(t) as [b, f, c, d]; C(q)F(q)'s coefficients
+  // The filter's past, per entry of θ: column i holds entry i's values, the newest in row newest_ and again
+  // in row newest_ + taps_ (Store): ψ(t−1−k) for ARMAX and OE, p(t−1−k) for Box–Jenkins (BoxJenkinsGradient),
+  // k < taps_ = nc (ARMAX), nf (OE) or max(nc + nf, nd) (Box–Jenkins).
+  Eigen::MatrixXd history_;
+  int taps_ = 0;
+  Eigen::Index newest_ = 0;
+  Eigen::VectorXd pre_, cf_;                  // Box–Jenkins: p(t); C(q)F(q)'s coefficients
   bool box_jenkins_ = false;                  // RPEM with F and C or D
-  Eigen::Index newest_psi_ = 0;
   bool gradient_ = false;                     // z = ψ(t) for the current sample
   bool known_ = false;                        // an estimate has been given
   bool measured_w_ = false;                   // w = y (TrackEstimate's measured_noise_free)

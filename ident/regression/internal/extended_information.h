@@ -181,15 +181,22 @@ class ExtendedInformation {
   // ν only (undoes ForgetExponential).
   void RestoreNu(double nu) noexcept { nu_ = nu; }
 
-  // Θ̂ = L_z⁻¹ l_zy (forward substitution, cached until the next change).
+  // Θ̂ = L_z⁻¹ l_zy (forward substitution, cached until the next change). Two columns at a time: once Θ̂_j
+  // and Θ̂_(j+1) are final they are taken off every later entry, in the order j, j + 1 per entry (the rounding
+  // of a row-by-row dot product), but the entries' updates are independent of one another (a dot product
+  // chains each row's subtractions through one accumulator) and start at the same parity every time (a
+  // vectorised pass one entry further on each time would read each pair just stored across two stores).
   const ParamVector& parameters() const {
     if (!theta_valid_) {
       const auto& L = V_.L();
       const Eigen::Index rho = theta_.size();
-      for (Eigen::Index i = 0; i < rho; ++i) {
-        double s = L(i + 1, 0);
-        for (Eigen::Index j = 0; j < i; ++j) s -= L(i + 1, j + 1) * theta_(j);
-        theta_(i) = s;
+      double* const theta = theta_.data();
+      for (Eigen::Index i = 0; i < rho; ++i) theta[i] = L(i + 1, 0);
+      for (Eigen::Index j = 0; j + 1 < rho; j += 2) {
+        const double t0 = theta[j];
+        theta[j + 1] -= L(j + 2, j + 1) * t0;
+        const double t1 = theta[j + 1];
+        for (Eigen::Index i = j + 2; i < rho; ++i) theta[i] = (theta[i] - L(i + 1, j + 1) * t0) - L(i + 1, j + 2) * t1;
       }
       theta_valid_ = true;
     }
