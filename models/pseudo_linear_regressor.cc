@@ -27,7 +27,7 @@ PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structur
     const int nc = structure.nc(), nd = structure.nd(), nf = structure.nf();
     box_jenkins_ = nf > 0 && nc + nd > 0;
     taps_ = box_jenkins_ ? std::max(nc + nf, nd) : (nf > 0 ? nf : nc);
-    history_.setZero(2 * taps_, structure.num_parameters());
+    history_.setZero(structure.num_parameters(), 2 * taps_);
     if (box_jenkins_) {
       pre_.setZero(structure.num_parameters());
       cf_.setZero(nc + nf);
@@ -69,7 +69,8 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   }
   // ψ(t) = φ(t) − Σ_k g_k ψ(t−k), G = C (ARMAX) or F (OE) of the tracked estimate.
   const double* const g = theta_.data() + (structure_.nf() > 0 ? structure_.f_offset() : structure_.c_offset());
-  for (int i = 0; i < rho; ++i) psi_(i) = Filtered(phi_(i), g, taps_, Past(i));
+  psi_ = phi_;
+  for (int k = 0; k < taps_; ++k) SubtractTap(g[k], k, 0, rho, psi_.data());
   z = psi_;
   return true;
 }
@@ -85,17 +86,19 @@ void PseudoLinearRegressor::BoxJenkinsGradient() {
     for (int i = std::max(1, k - nf); i <= std::min(nc, k - 1); ++i) h += theta[c + i - 1] * theta[f + k - i - 1];
     cf_(k - 1) = h;
   }
-  auto b_or_f = [&](int i) {
-    const double p = Filtered(phi_(i), cf_.data(), nc + nf, Past(i));
-    const double* const past = Past(i);
-    double s = p;
-    for (int k = 0; k < nd; ++k) s += theta[d + k] * past[k];
-    pre_(i) = p;
-    psi_(i) = s;
-  };
-  for (int i = 0; i < nb; ++i) b_or_f(i);  // na = 0: θ starts with B
-  for (int i = f; i < f + nf; ++i) b_or_f(i);
-  for (int i = c; i < c + nc + nd; ++i) psi_(i) = pre_(i) = Filtered(phi_(i), theta + c, nc, Past(i));
+  // θ = [b, c, d, f]: B and F are the entries [0, nb) and [f, ρ), C and D the entries [c, f) between them.
+  const int rho = structure_.num_parameters();
+  pre_ = phi_;
+  for (int k = 0; k < nc + nf; ++k) {
+    SubtractTap(cf_(k), k, 0, nb, pre_.data());
+    SubtractTap(cf_(k), k, f, rho, pre_.data());
+  }
+  for (int k = 0; k < nc; ++k) SubtractTap(theta[c + k], k, c, f, pre_.data());
+  psi_ = pre_;
+  for (int k = 0; k < nd; ++k) {
+    AddTap(theta[d + k], k, 0, nb, psi_.data());
+    AddTap(theta[d + k], k, f, rho, psi_.data());
+  }
 }
 
 double PseudoLinearRegressor::LinearisedOutput(double y) const {
@@ -157,14 +160,14 @@ void PseudoLinearRegressor::Store(double y) {
   Shift(past_w_, w);
   if (taps_ > 0) {
     // ψ(t) (Box–Jenkins: p(t)) enters the filter; φ(t) stands in for it while no estimate is tracked
-    // (G = 1), 0 before t0. Entry i's history is a window of column i: row newest_ is the newest, and each
-    // value is written twice (rows r and r + taps) so that the window rows newest_ … newest_ + taps − 1 are
-    // always contiguous.
+    // (G = 1), 0 before t0. The newest column moves one back (history_).
     newest_ = (newest_ + taps_ - 1) % taps_;
     const Eigen::VectorXd& value = !gradient_ ? phi_ : (box_jenkins_ ? pre_ : psi_);
-    const bool finite = formed_ && value.allFinite();
-    for (Eigen::Index i = 0; i < history_.cols(); ++i)
-      history_(newest_, i) = history_(newest_ + taps_, i) = finite ? value(i) : 0.0;
+    if (formed_ && value.allFinite())
+      history_.col(newest_) = value;
+    else
+      history_.col(newest_).setZero();
+    history_.col(newest_ + taps_) = history_.col(newest_);
   }
   formed_ = gradient_ = false;
 }

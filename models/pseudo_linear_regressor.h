@@ -84,12 +84,18 @@ class PseudoLinearRegressor {
  private:
   void Store(double y);  // after the ARX part has stored y: the residual, noise and noise-free output
   void BoxJenkinsGradient();  // pre_ and psi_ for the current φ (RPEM, Box–Jenkins)
-  // The past of entry i, newest first: ψ_i(t−1−k) (Box–Jenkins: p_i(t−1−k)) at k < taps_.
-  const double* Past(Eigen::Index i) const { return history_.data() + i * history_.rows() + newest_; }
-  // x − Σ_(k<n) g_k w_k, the terms subtracted in the order k = 0, 1, ….
-  static double Filtered(double x, const double* g, int n, const double* w) {
-    for (int k = 0; k < n; ++k) x -= g[k] * w[k];
-    return x;
+  // x[i] ∓= g·(the filter's value of entry i, k + 1 samples back) for i in [begin, end): one tap of the filter
+  // over a range of entries. Each entry takes its taps in the order k = 0, 1, …, whatever the range.
+  const double* Tap(int k) const { return history_.data() + (newest_ + k) * history_.rows(); }
+  // (x never aliases the history: __restrict spares the compiler's run-time overlap test, most of the cost
+  // at a few entries per range.)
+  void SubtractTap(double g, int k, int begin, int end, double* __restrict x) const {
+    const double* __restrict const past = Tap(k);
+    for (int i = begin; i < end; ++i) x[i] -= g * past[i];
+  }
+  void AddTap(double g, int k, int begin, int end, double* __restrict x) const {
+    const double* __restrict const past = Tap(k);
+    for (int i = begin; i < end; ++i) x[i] += g * past[i];
   }
   static void Shift(Eigen::VectorXd& history, double value);
 
@@ -100,9 +106,9 @@ class PseudoLinearRegressor {
   Eigen::VectorXd work_;                      // the stability test's buffer
   Recursion recursion_;
   Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
-  // The filter's past, per entry of θ: column i holds entry i's values, the newest in row newest_ and again
-  // in row newest_ + taps_ (Store): ψ(t−1−k) for ARMAX and OE, p(t−1−k) for Box–Jenkins (BoxJenkinsGradient),
-  // k < taps_ = nc (ARMAX), nf (OE) or max(nc + nf, nd) (Box–Jenkins).
+  // The filter's past: column newest_ + k holds ψ(t−1−k) for ARMAX and OE, p(t−1−k) for Box–Jenkins
+  // (BoxJenkinsGradient), k < taps_ = nc (ARMAX), nf (OE) or max(nc + nf, nd) (Box–Jenkins). Each value is
+  // stored twice (Store), in columns r and r + taps_, so that the taps' columns never wrap around.
   Eigen::MatrixXd history_;
   int taps_ = 0;
   Eigen::Index newest_ = 0;

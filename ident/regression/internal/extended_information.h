@@ -22,6 +22,7 @@
 
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include <Eigen/Core>
 
@@ -181,22 +182,32 @@ class ExtendedInformation {
   // ν only (undoes ForgetExponential).
   void RestoreNu(double nu) noexcept { nu_ = nu; }
 
-  // Θ̂ = L_z⁻¹ l_zy (forward substitution, cached until the next change). Two columns at a time: once Θ̂_j
-  // and Θ̂_(j+1) are final they are taken off every later entry, in the order j, j + 1 per entry (the rounding
-  // of a row-by-row dot product), but the entries' updates are independent of one another (a dot product
-  // chains each row's subtractions through one accumulator) and start at the same parity every time (a
-  // vectorised pass one entry further on each time would read each pair just stored across two stores).
+  // Θ̂ = L_z⁻¹ l_zy (forward substitution, cached until the next change). Four columns at a time: once Θ̂_j …
+  // Θ̂_(j+3) are final they are taken off every later entry, in the order j, j + 1, … per entry (the rounding of
+  // a row-by-row dot product), but the entries' updates are independent of one another (a dot product chains
+  // each row's subtractions through one accumulator, and waits for the entry just solved).
   const ParamVector& parameters() const {
     if (!theta_valid_) {
       const auto& L = V_.L();
+      static_assert(std::decay_t<decltype(L)>::IsRowMajor, "the blocks below read L(i, j … j + 3) contiguously");
       const Eigen::Index rho = theta_.size();
       double* const theta = theta_.data();
       for (Eigen::Index i = 0; i < rho; ++i) theta[i] = L(i + 1, 0);
-      for (Eigen::Index j = 0; j + 1 < rho; j += 2) {
+      Eigen::Index j = 0;
+      for (; j + 3 < rho; j += 4) {
         const double t0 = theta[j];
-        theta[j + 1] -= L(j + 2, j + 1) * t0;
-        const double t1 = theta[j + 1];
-        for (Eigen::Index i = j + 2; i < rho; ++i) theta[i] = (theta[i] - L(i + 1, j + 1) * t0) - L(i + 1, j + 2) * t1;
+        const double t1 = theta[j + 1] -= L(j + 2, j + 1) * t0;
+        const double t2 = theta[j + 2] = (theta[j + 2] - L(j + 3, j + 1) * t0) - L(j + 3, j + 2) * t1;
+        const double t3 = theta[j + 3] =
+            ((theta[j + 3] - L(j + 4, j + 1) * t0) - L(j + 4, j + 2) * t1) - L(j + 4, j + 3) * t2;
+        for (Eigen::Index i = j + 4; i < rho; ++i) {
+          const double* const l = &L(i + 1, j + 1);  // row-major: L(i + 1, j + 1 … j + 4)
+          theta[i] = (((theta[i] - l[0] * t0) - l[1] * t1) - l[2] * t2) - l[3] * t3;
+        }
+      }
+      for (; j + 1 < rho; ++j) {
+        const double t = theta[j];
+        for (Eigen::Index i = j + 1; i < rho; ++i) theta[i] -= L(i + 1, j + 1) * t;
       }
       theta_valid_ = true;
     }
