@@ -216,7 +216,7 @@ void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFac
   IDENT_REQUIRE(factory, "estimator '{}': no factory", name);
   for (const std::string& taken : EstimatorNames())
     IDENT_REQUIRE(taken != name, "estimator '{}' is registered already", name);
-  Registry().push_back({name, std::move(factory), traits});
+  Registry().push_back({name, std::move(factory), traits, ""});  // a registered estimator takes no spec keys
 }
 
 std::optional<RegressionPrior> DataScaledDefaultPrior(const EstimatorSettings& settings,

@@ -275,9 +275,10 @@ TEST(ArrivingTimeCheck, FindsTheGapsThatTheMedianOfTheLastRegularStepsDefines) {
     std::sort(window.begin(), window.end());
     const double median = n == 0 ? 0 : n % 2 ? window[n / 2] : (window[n / 2 - 1] + window[n / 2]) / 2;
     const bool close_call = n > 0 && std::abs(s - workflow::kTimeGapFactor * median) <= 1e-9;
-    if (!close_call)
+    if (!close_call) {
       ASSERT_EQ(gap.has_value(), n > 0 && s > workflow::kTimeGapFactor * median)
           << "row " << k << ", step " << s << ", median " << median;
+    }
     if (gap) {
       ++gaps;
       EXPECT_NEAR(gap->step, median, 1e-12) << k;

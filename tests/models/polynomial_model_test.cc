@@ -290,7 +290,9 @@ TEST(PseudoLinearRegressor, BoxJenkinsPredictionErrorGradientIsMinusTheErrorsDer
     plain.TrackEstimate(theta);
     const bool a = warm.Next(u, psi), b = plain.Next(u, phi);
     ASSERT_EQ(a, b);
-    if (a) EXPECT_EQ(psi, phi) << "t = " << t;
+    if (a) {
+      EXPECT_EQ(psi, phi) << "t = " << t;
+    }
     EXPECT_EQ(warm.LinearisedOutput(r.y[t]), r.y[t]);
     warm.PushOutput(r.y[t]);
     plain.PushOutput(r.y[t]);

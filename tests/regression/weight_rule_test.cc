@@ -98,6 +98,16 @@ TEST(WeightRule, ARuleOfOnesOwnIsInTheRegistryByName) {
   EstimatorSettings with_dof = Named(name);
   with_dof.dof = 3.0;
   EXPECT_THROW(MakeRegressionEstimator(with_dof, 3), InvalidArgument);
+  // A key of its own that no regression estimator takes: refused by name (a registered estimator takes none).
+  EstimatorSettings with_key = Named(name);
+  with_key.options["points"] = "9";
+  try {
+    MakeRegressionEstimator(with_key, 3);
+    ADD_FAILURE() << "the key was taken";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("has no option 'points' (it takes no options)"), std::string::npos)
+        << e.what();
+  }
 }
 
 // Over 20 seeds: the fading weight stays within a few hundredths of the truth where least squares is off
