@@ -32,7 +32,7 @@ std::string PolePlacementOptions::Validate(int na, int nb, int nk) const {
 }
 
 PolePlacement::PolePlacement(int na, int nb, int nk, const PolePlacementOptions& options)
-    : na_(na), nb_(nb), nk_(nk), options_(options) {
+    : na_(na), nb_(nb), options_(options) {
   const std::string error = options.Validate(na, nb, nk);
   IDENT_REQUIRE(error.empty(), "{}", error);
   deg_a_ = na + (options.integral_action ? 1 : 0);

@@ -69,7 +69,7 @@ class PolePlacement {
   int system_size() const { return n_; }
 
  private:
-  int na_, nb_, nk_, deg_a_, deg_b_, n_;
+  int na_, nb_, deg_a_, deg_b_, n_;  // deg_b_ = nk + nb − 1 carries the delay
   PolePlacementOptions options_;
   Eigen::VectorXd ac_, a_full_, b_full_, x_;
   Eigen::MatrixXd M_;
