@@ -158,13 +158,14 @@ LogConcaveNoise::LogConcaveNoise(Family family, double shape) : family_(family),
                     shape);
       const double p = shape;
       internal::BuildHermiteRules();
-      // The half-line rules HalfLineMoments uses for this p (noise_density_half_line.cc).
-      internal::HalfLineRules<20>::Get();
+      // The half-line rules HalfLineMoments uses for this p (noise_density_half_line.cc; p = 2 has a closed form).
       if (p == 1 || p == 1.5) {
         internal::HalfLineRules<10>::Get();
         internal::HalfLineRules<12>::Get();
         internal::HalfLineRules<16>::Get();
+        internal::HalfLineRules<20>::Get();
       } else if (p != 2) {
+        internal::HalfLineRules<20>::Get();
         internal::HalfLineRules<28>::Get();
         internal::HalfLineRules<40>::Get();
       }

@@ -26,8 +26,6 @@ HalfLineSums SumHalfLine(double alpha, double sd_p, double p) {
   Array t_p;
   if (p == 1.5)
     t_p = rule.t * rule.s;
-  else if (p == 2)
-    t_p = rule.t.square();
   else if (p == 1)
     t_p = rule.t;
   else

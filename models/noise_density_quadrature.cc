@@ -252,9 +252,7 @@ TiltedMoments LogConcaveNoise::ModeHermiteMoments(double a, double v, double mod
   for (int i = 0; i < rule.n; ++i) {
     const double x = rule.x[i], wx = width * x, d = sign * wx, ar = am + d;
     double d_rho;
-    if (p == 2)
-      d_rho = d * (ar + am);
-    else if (p == 1)
+    if (p == 1)  // p = 2 has a closed form (ResidualMoments)
       d_rho = d;
     else if (p == 1.5)
       d_rho = d * (ar * ar + ar * am + am * am) / (ar * std::sqrt(ar) + am * sqrt_am);
