@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "common/error.h"
 
@@ -10,16 +11,14 @@ namespace ident::models {
 PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structure,
                                              const OutputCleaningOptions& cleaning, Recursion recursion)
     : structure_(structure),
-      arx_(structure.arx(), [&] {
-        OutputCleaningOptions c = cleaning;
-        if (c.warm_up == 0) c.warm_up = 10 * structure.num_parameters();
-        return c;
-      }()),
+      arx_(structure.arx(),
+           [&] {
+             OutputCleaningOptions c = cleaning;
+             if (c.warm_up == 0) c.warm_up = 10 * structure.num_parameters();
+             return c;
+           }()),
       theta_(Eigen::VectorXd::Zero(structure.num_parameters())),
       phi_(Eigen::VectorXd::Zero(structure.num_parameters())),
-      past_e_(Eigen::VectorXd::Zero(structure.nc())),
-      past_v_(Eigen::VectorXd::Zero(structure.nd())),
-      past_w_(Eigen::VectorXd::Zero(structure.nf())),
       work_(Eigen::VectorXd::Zero(std::max(structure.nc(), structure.nf()))),
       recursion_(recursion),
       psi_(Eigen::VectorXd::Zero(structure.num_parameters())) {
@@ -37,13 +36,48 @@ PseudoLinearRegressor::PseudoLinearRegressor(const PolynomialStructure& structur
 
 void PseudoLinearRegressor::Reset() {
   arx_.Reset();
-  past_e_.setZero();
-  past_v_.setZero();
-  past_w_.setZero();
+  phi_.tail(structure_.num_parameters() - structure_.c_offset()).setZero();
   history_.setZero();
   newest_ = 0;
   formed_ = gradient_ = false;
   samples_ = 0;
+}
+
+[[gnu::always_inline]] inline void PseudoLinearRegressor::FilterRange(const double* g, int ng, const double* h, int nh,
+                                                                      int begin, int end, const double* in,
+                                                                      double* __restrict pre,
+                                                                      double* __restrict psi) const {
+  const Eigen::Index stride = history_.rows();
+  const double* __restrict const newest = history_.data() + newest_ * stride;
+  int i = begin;
+  for (; i + 1 < end; i += 2) {
+    double a0 = in[i], a1 = in[i + 1];
+    const double* p = newest + i;
+    for (int k = 0; k < ng; ++k, p += stride) {
+      a0 -= g[k] * p[0];
+      a1 -= g[k] * p[1];
+    }
+    pre[i] = a0;
+    pre[i + 1] = a1;
+    if (!psi) continue;
+    p = newest + i;
+    for (int k = 0; k < nh; ++k, p += stride) {
+      a0 += h[k] * p[0];
+      a1 += h[k] * p[1];
+    }
+    psi[i] = a0;
+    psi[i + 1] = a1;
+  }
+  if (i < end) {
+    double a = in[i];
+    const double* p = newest + i;
+    for (int k = 0; k < ng; ++k, p += stride) a -= g[k] * p[0];
+    pre[i] = a;
+    if (!psi) return;
+    p = newest + i;
+    for (int k = 0; k < nh; ++k, p += stride) a += h[k] * p[0];
+    psi[i] = a;
+  }
 }
 
 bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<Eigen::VectorXd> z) {
@@ -54,9 +88,6 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   const long t = samples_++;
   formed_ = arx_formed && t >= structure_.first_regression_index();
   if (!formed_) return false;
-  for (int k = 0; k < structure_.nc(); ++k) phi_(structure_.c_offset() + k) = past_e_(k);
-  for (int k = 0; k < structure_.nd(); ++k) phi_(structure_.d_offset() + k) = -past_v_(k);
-  for (int k = 0; k < structure_.nf(); ++k) phi_(structure_.f_offset() + k) = -past_w_(k);
   gradient_ = recursion_ == Recursion::kPredictionError && known_ && !fixed_ && !measured_w_;
   if (!gradient_) {
     z = phi_;
@@ -69,8 +100,7 @@ bool PseudoLinearRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eig
   }
   // ψ(t) = φ(t) − Σ_k g_k ψ(t−k), G = C (ARMAX) or F (OE) of the tracked estimate.
   const double* const g = theta_.data() + (structure_.nf() > 0 ? structure_.f_offset() : structure_.c_offset());
-  psi_ = phi_;
-  for (int k = 0; k < taps_; ++k) SubtractTap(g[k], k, 0, rho, psi_.data());
+  FilterRange(g, taps_, nullptr, 0, 0, rho, phi_.data(), psi_.data(), nullptr);
   z = psi_;
   return true;
 }
@@ -81,24 +111,24 @@ void PseudoLinearRegressor::BoxJenkinsGradient() {
   const int nb = structure_.arx().num_parameters(), nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
   const int c = structure_.c_offset(), d = structure_.d_offset(), f = structure_.f_offset();
   const double* const theta = theta_.data();
-  for (int k = 1; k <= nc + nf; ++k) {  // C(q)F(q) = 1 + Σ_k cf_k q^−k
-    double h = (k <= nc ? theta[c + k - 1] : 0.0) + (k <= nf ? theta[f + k - 1] : 0.0);
-    for (int i = std::max(1, k - nf); i <= std::min(nc, k - 1); ++i) h += theta[c + i - 1] * theta[f + k - i - 1];
-    cf_(k - 1) = h;
+  // C(q)F(q) = 1 + Σ_k cf_k q^−k, cf_k = c_k + f_k + Σ_{i=1}^{k−1} c_i f_{k−i} (the products added in the order i = 1, 2, …).
+  double* const cf = cf_.data();
+  for (int k = 1; k <= nc + nf; ++k)
+    cf[k - 1] = (k <= nc ? theta[c + k - 1] : 0.0) + (k <= nf ? theta[f + k - 1] : 0.0);
+  for (int i = 1; i <= nc; ++i) {
+    const double ci = theta[c + i - 1];
+    const double* const fj = theta + f;
+    double* const out = cf + i;
+    for (int j = 0; j < nf; ++j) out[j] += ci * fj[j];
   }
   // θ = [b, c, d, f]: B and F are the entries [0, nb) and [f, ρ), C and D the entries [c, f) between them.
   const int rho = structure_.num_parameters();
-  pre_ = phi_;
-  for (int k = 0; k < nc + nf; ++k) {
-    SubtractTap(cf_(k), k, 0, nb, pre_.data());
-    SubtractTap(cf_(k), k, f, rho, pre_.data());
-  }
-  for (int k = 0; k < nc; ++k) SubtractTap(theta[c + k], k, c, f, pre_.data());
-  psi_ = pre_;
-  for (int k = 0; k < nd; ++k) {
-    AddTap(theta[d + k], k, 0, nb, psi_.data());
-    AddTap(theta[d + k], k, f, rho, psi_.data());
-  }
+  double* const pre = pre_.data();
+  double* const psi = psi_.data();
+  FilterRange(cf, nc + nf, theta + d, nd, 0, nb, phi_.data(), pre, psi);
+  FilterRange(cf, nc + nf, theta + d, nd, f, rho, phi_.data(), pre, psi);
+  FilterRange(theta + c, nc, nullptr, 0, c, f, phi_.data(), pre, nullptr);
+  for (int i = c; i < f; ++i) psi[i] = pre[i];
 }
 
 double PseudoLinearRegressor::LinearisedOutput(double y) const {
@@ -133,35 +163,43 @@ bool PseudoLinearRegressor::TrackEstimate(const Eigen::Ref<const Eigen::VectorXd
   return true;
 }
 
-void PseudoLinearRegressor::Shift(Eigen::VectorXd& history, double value) {
-  const Eigen::Index m = history.size();
-  for (Eigen::Index k = m - 1; k > 0; --k) history(k) = history(k - 1);
-  if (m > 0) history(0) = value;
+void PseudoLinearRegressor::Shift(double* history, int n, double value) {
+  // A carried swap rather than a backward copy, which the compiler turns into a call to memmove.
+  double carry = value;
+  for (int k = 0; k < n; ++k) std::swap(carry, history[k]);
 }
 
 void PseudoLinearRegressor::Store(double y) {
   double e = 0, v = 0, w = y;
   if (formed_ && !known_) e = v = y;  // no estimate: y stands in, at the data's scale
   if (formed_ && known_) {
-    const int n_a = structure_.na(), n_b = structure_.arx().num_parameters() - n_a;
-    const int f = structure_.f_offset(), nf = structure_.nf();
-    const double y_hat = theta_.dot(phi_);
-    w = theta_.segment(n_a, n_b).dot(phi_.segment(n_a, n_b)) + theta_.segment(f, nf).dot(phi_.segment(f, nf));
-    e = y - y_hat;
-    v = y - theta_.head(n_a).dot(phi_.head(n_a)) - w;
+    // θ'φ by parts, θ = [a, b, c, d, f]: ŷ = A + W + N with A the a part, W = b + f parts, N = c + d parts.
+    const int n_a = structure_.na(), c = structure_.c_offset(), f = structure_.f_offset();
+    const int rho = structure_.num_parameters();
+    const double* const th = theta_.data();
+    const double* const ph = phi_.data();
+    const auto part = [th, ph](int begin, int end) {
+      double s = 0;
+      for (int i = begin; i < end; ++i) s += th[i] * ph[i];
+      return s;
+    };
+    const double a_part = part(0, n_a);
+    w = part(n_a, c) + part(f, rho);
+    e = y - ((a_part + w) + part(c, f));
+    v = y - a_part - w;
     if (measured_w_) w = y;
   }
   // A missing sample (NaN) would otherwise stay in the recursions for good: it restarts them instead.
   if (!std::isfinite(e)) e = 0;
   if (!std::isfinite(v)) v = 0;
   if (!std::isfinite(w)) w = std::isfinite(y) ? y : 0;
-  Shift(past_e_, e);
-  Shift(past_v_, v);
-  Shift(past_w_, w);
+  Shift(phi_.data() + structure_.c_offset(), structure_.nc(), e);
+  Shift(phi_.data() + structure_.d_offset(), structure_.nd(), -v);
+  Shift(phi_.data() + structure_.f_offset(), structure_.nf(), -w);
   if (taps_ > 0) {
     // ψ(t) (Box–Jenkins: p(t)) enters the filter; φ(t) stands in for it while no estimate is tracked
     // (G = 1), 0 before t0. The newest column moves one back (history_).
-    newest_ = (newest_ + taps_ - 1) % taps_;
+    newest_ = newest_ > 0 ? newest_ - 1 : taps_ - 1;
     const Eigen::VectorXd& value = !gradient_ ? phi_ : (box_jenkins_ ? pre_ : psi_);
     if (formed_ && value.allFinite())
       history_.col(newest_) = value;

@@ -84,25 +84,21 @@ class PseudoLinearRegressor {
  private:
   void Store(double y);  // after the ARX part has stored y: the residual, noise and noise-free output
   void BoxJenkinsGradient();  // pre_ and psi_ for the current φ (RPEM, Box–Jenkins)
-  // x[i] ∓= g·(the filter's value of entry i, k + 1 samples back) for i in [begin, end): one tap of the filter
-  // over a range of entries. Each entry takes its taps in the order k = 0, 1, …, whatever the range.
-  const double* Tap(int k) const { return history_.data() + (newest_ + k) * history_.rows(); }
-  // (x never aliases the history: __restrict spares the compiler's run-time overlap test, most of the cost
-  // at a few entries per range.)
-  void SubtractTap(double g, int k, int begin, int end, double* __restrict x) const {
-    const double* __restrict const past = Tap(k);
-    for (int i = begin; i < end; ++i) x[i] -= g * past[i];
-  }
-  void AddTap(double g, int k, int begin, int end, double* __restrict x) const {
-    const double* __restrict const past = Tap(k);
-    for (int i = begin; i < end; ++i) x[i] += g * past[i];
-  }
-  static void Shift(Eigen::VectorXd& history, double value);
+  // For each entry i in [begin, end): pre[i] = in[i] − Σ_{k<ng} g[k]·(the filter's value of entry i, k + 1
+  // samples back), then (psi non-null) psi[i] = pre[i] + Σ_{k<nh} h[k]·(the same, k + 1 back). The taps
+  // accumulate in registers, in the order k = 0, 1, …, two entries at a time. (No output aliases the history
+  // or the other output: __restrict spares the compiler's run-time overlap tests.)
+  void FilterRange(const double* g, int ng, const double* h, int nh, int begin, int end, const double* in,
+                   double* __restrict pre, double* __restrict psi) const;
+  // history[0 … n) ← [value, history[0 … n − 1)].
+  static void Shift(double* history, int n, double value);
 
   PolynomialStructure structure_;
   ArxRegressor arx_;
-  Eigen::VectorXd theta_, phi_;
-  Eigen::VectorXd past_e_, past_v_, past_w_;  // past_e_(k) = ε(t−1−k), …
+  Eigen::VectorXd theta_;
+  // φ(t): the ARX part from arx_; the C, D and F parts ε(t−1−k), −v(t−1−k), −w(t−1−k) are kept here
+  // from sample to sample (Store shifts them), also before t0.
+  Eigen::VectorXd phi_;
   Eigen::VectorXd work_;                      // the stability test's buffer
   Recursion recursion_;
   Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
