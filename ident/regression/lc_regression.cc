@@ -152,6 +152,14 @@ bool LcRegression::Start() noexcept {
       if (Z.row(i).dot(H.col(i)) > kMaxStartLeverage) return have_window_ = false;
     const BatchRegressionResult fit = CauchyMlRegression(Z, Y);
     if (!fit.theta.allFinite()) return have_window_ = false;
+    // Rows on the fit's hyperplane (to rounding). A Cauchy scale of 0 with rows off it: the likelihood is
+    // unbounded on a hyperplane through half of the window or more (e.g. the repeated rows of a constant
+    // stretch, the data at rest), which leaves θ undetermined off those rows: wait for more samples.
+    const Eigen::VectorXd residuals = Y - Z * fit.theta;
+    long exact = 0;
+    for (Eigen::Index i = 0; i < Z.rows(); ++i)
+      exact += std::abs(residuals(i)) <= 1e-9 * (std::abs(Y(i)) + Z.row(i).cwiseAbs().dot(fit.theta.cwiseAbs()));
+    if (!(fit.scale > 0) && exact < Z.rows()) return have_window_ = false;
     // The same with the fit's Cauchy weights w = 1/(1 + r²/γ²): rows the fit treats as outliers do not
     // determine a direction, so one inlier alone must not either (weighted leverage above 0.8).
     if (fit.scale > 0) {
@@ -166,12 +174,8 @@ bool LcRegression::Start() noexcept {
         if (w(i) * Z.row(i).dot(Hw.col(i)) > kMaxStartLeverage) return have_window_ = false;
     }
     if (options_.scale == 0) {
-      const Eigen::VectorXd residuals = Y - Z * fit.theta;
       // More than half of the rows fitted exactly (a quantised or constant stretch of output) leave the
       // noise scale undetermined: wait for more samples.
-      long exact = 0;
-      for (Eigen::Index i = 0; i < Z.rows(); ++i)
-        exact += std::abs(residuals(i)) <= 1e-9 * (std::abs(Y(i)) + Z.row(i).cwiseAbs().dot(fit.theta.cwiseAbs()));
       if (2 * exact > Z.rows()) return have_window_ = false;
       // MadScale = 1.4826·MAD; MAD/median|u| is σ of f.
       const double mad = MadScale(residuals) / 1.482602218505602;

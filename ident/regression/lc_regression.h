@@ -21,7 +21,8 @@
 //            N(θ0, σ_e²(Z'Z/W)⁻¹) — the information of one average sample, σ_e the noise standard deviation —
 //            and the window is replayed. A window whose Z'Z is singular, where one row alone decides a
 //            direction (leverage above 0.8, also with the fit's Cauchy weights), or where more than half of the rows are fitted exactly (the scale
-//            undetermined), waits for the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
+//            undetermined), or whose Cauchy fit has scale 0 with rows off it (its likelihood unbounded on a hyperplane
+//            through repeated rows, e.g. data at rest), waits for the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
 //            (mean and covariance, with a scale) skips the start.
 //   Leverage: a grossly mispredicted sample (relative weight below 0.2) with a regressor coordinate beyond
 //            five robust scales of the start window is an error in the regressor (an ARX output outlier
