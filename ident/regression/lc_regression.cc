@@ -19,6 +19,8 @@ constexpr double kLcInfinity = std::numeric_limits<double>::infinity();
 constexpr double kScaleGain = 2.5;
 // The start waits while a row of its window has a leverage above this.
 constexpr double kMaxStartLeverage = 0.8;
+// The start's fit counts a row as a gross error beyond this many of its scales (Cauchy weight below 1/26).
+constexpr double kGrossResidual = 5;
 // A relative weight below this is a gross error (the workflow's output cleaning threshold).
 constexpr double kGrossWeight = 0.2;
 
@@ -36,6 +38,33 @@ double LeverageScale(const Eigen::VectorXd& column) {
   std::nth_element(lo, hi, v.end());
   const double q90 = *hi;
   return std::max(MadScale(column), (q90 - q10) / 2.5631031310892007);
+}
+
+// With the fit's Cauchy weights w = 1/(1 + r²), r the residuals in units of its scale: rows the fit treats
+// as outliers do not determine a direction, so one inlier alone must not either. False if some weighted
+// leverage w_i z_i'(Z'WZ)⁻¹z_i exceeds kMaxStartLeverage or Z'WZ is numerically singular.
+bool WeightedLeverageBounded(const Eigen::MatrixXd& Z, const Eigen::VectorXd& r) {
+  const Eigen::VectorXd w = (1 / (1 + r.array().square())).matrix();
+  const Eigen::LDLT<Eigen::MatrixXd> weighted(Z.transpose() * w.asDiagonal() * Z);
+  if (weighted.info() != Eigen::Success || !(weighted.vectorD().minCoeff() > 1e-12 * weighted.vectorD().maxCoeff()))
+    return false;
+  const Eigen::MatrixXd Hw = weighted.solve(Z.transpose());
+  for (Eigen::Index i = 0; i < Z.rows(); ++i)
+    if (w(i) * Z.row(i).dot(Hw.col(i)) > kMaxStartLeverage) return false;
+  return true;
+}
+
+// (Σ zz')⁻¹ over the rows the fit keeps (residual within kGrossResidual of its scale; every row at scale 0):
+// their least-squares information, which f's Fisher information only exceeds (Cramér–Rao). NaN if singular.
+Eigen::MatrixXd KeptRowsCovariance(const Eigen::MatrixXd& Z, const Eigen::VectorXd& residuals, double scale) {
+  const Eigen::Index rho = Z.cols();
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(rho, rho);
+  for (Eigen::Index i = 0; i < Z.rows(); ++i)
+    if (!(scale > 0) || std::abs(residuals(i)) <= kGrossResidual * scale)
+      information.selfadjointView<Eigen::Lower>().rankUpdate(Z.row(i).transpose());
+  const Eigen::LLT<Eigen::MatrixXd> llt(information.selfadjointView<Eigen::Lower>());
+  if (llt.info() != Eigen::Success) return Eigen::MatrixXd::Constant(rho, rho, std::nan(""));
+  return llt.solve(Eigen::MatrixXd::Identity(rho, rho));
 }
 
 LcRegressionOptions CheckedLcOptions(int rho, LcRegressionOptions o) {
@@ -76,6 +105,7 @@ LcRegression::LcRegression(int num_parameters, LcRegressionOptions options)
 
 void LcRegression::Reset() {
   kept_count_ = 0;
+  provisional_ = false;
   count_ = 0;
   scale_steps_ = 0;
   sigma_ = options_.scale;
@@ -97,6 +127,11 @@ StepReport LcRegression::Update(double y, const Eigen::Ref<const Eigen::VectorXd
   if (started_) {
     StepReport report = Step(y, z);
     if (report.updated()) ++count_, report.nu = static_cast<double>(count_), report.weight /= report.nu;
+    if (provisional_) {  // the window grows on to 5W samples, then the start is made again from all of them
+      kept_(0, kept_count_) = y;
+      kept_.col(kept_count_).tail(rho_) = z;
+      if (++kept_count_ == kept_.cols()) Confirm();
+    }
     return report;
   }
   // Start-up: keep the sample (the oldest is dropped once 5W are kept and none of their windows started).
@@ -115,12 +150,30 @@ StepReport LcRegression::Update(double y, const Eigen::Ref<const Eigen::VectorXd
   return report;
 }
 
+void LcRegression::Confirm() noexcept {
+  // The start again, from the 5W samples kept since the start-up began (the provisional window included):
+  // the same robust fit and checks on five times the rows in every direction, its θ with the information of
+  // the rows it keeps as the state (Start's `summarise`). If these samples fail the checks, the provisional
+  // start stands.
+  const Eigen::VectorXd centre = centre_, spread = spread_;
+  const double sigma = sigma_, log_q = log_q_;
+  const long count = count_, scale_steps = scale_steps_;
+  provisional_ = false;
+  const bool ok = Start(/*summarise=*/true);
+  if (!ok) {
+    centre_ = centre, spread_ = spread, have_window_ = true;
+    sigma_ = sigma, log_q_ = log_q, count_ = count, scale_steps_ = scale_steps;
+  }
+  provisional_ = false;
+  kept_count_ = 0;
+}
+
 bool LcRegression::FinishStartup() noexcept {
   if (started_ || kept_count_ < rho_ + 1) return false;
   return Start();
 }
 
-bool LcRegression::Start() noexcept {
+bool LcRegression::Start(bool summarise) noexcept {
   try {
     const long n = std::min<long>(kept_count_, 5L * window_);
     const Eigen::VectorXd Yall = kept_.block(0, kept_count_ - n, 1, n).transpose();
@@ -151,7 +204,7 @@ bool LcRegression::Start() noexcept {
     for (Eigen::Index i = 0; i < Z.rows(); ++i)
       if (Z.row(i).dot(H.col(i)) > kMaxStartLeverage) return have_window_ = false;
     const BatchRegressionResult fit = CauchyMlRegression(Z, Y);
-    if (!fit.theta.allFinite()) return have_window_ = false;
+      if (!fit.theta.allFinite()) return have_window_ = false;
     // Rows on the fit's hyperplane (to rounding). A Cauchy scale of 0 with rows off it: the likelihood is
     // unbounded on a hyperplane through half of the window or more (e.g. the repeated rows of a constant
     // stretch, the data at rest), which leaves θ undetermined off those rows: wait for more samples.
@@ -160,19 +213,7 @@ bool LcRegression::Start() noexcept {
     for (Eigen::Index i = 0; i < Z.rows(); ++i)
       exact += std::abs(residuals(i)) <= 1e-9 * (std::abs(Y(i)) + Z.row(i).cwiseAbs().dot(fit.theta.cwiseAbs()));
     if (!(fit.scale > 0) && exact < Z.rows()) return have_window_ = false;
-    // The same with the fit's Cauchy weights w = 1/(1 + r²/γ²): rows the fit treats as outliers do not
-    // determine a direction, so one inlier alone must not either (weighted leverage above 0.8).
-    if (fit.scale > 0) {
-      const Eigen::ArrayXd r = (Y - Z * fit.theta).array() / fit.scale;
-      const Eigen::VectorXd w = (1 / (1 + r.square())).matrix();
-      const Eigen::MatrixXd ZtWZ = Z.transpose() * w.asDiagonal() * Z;
-      Eigen::LDLT<Eigen::MatrixXd> weighted(ZtWZ);
-      if (weighted.info() != Eigen::Success || !(weighted.vectorD().minCoeff() > 1e-12 * weighted.vectorD().maxCoeff()))
-        return have_window_ = false;
-      const Eigen::MatrixXd Hw = weighted.solve(Z.transpose());
-      for (Eigen::Index i = 0; i < Z.rows(); ++i)
-        if (w(i) * Z.row(i).dot(Hw.col(i)) > kMaxStartLeverage) return have_window_ = false;
-    }
+    if (fit.scale > 0 && !WeightedLeverageBounded(Z, residuals / fit.scale)) return have_window_ = false;
     if (options_.scale == 0) {
       // More than half of the rows fitted exactly (a quantised or constant stretch of output) leave the
       // noise scale undetermined: wait for more samples.
@@ -183,18 +224,29 @@ bool LcRegression::Start() noexcept {
       sigma_ = mad / options_.noise.median_abs();
       log_q_ = std::log(mad);
     }
-    // P̃(0) = P(0)/σ² = sd_f²·(Z'Z/n)⁻¹: one average sample's least-squares information.
     const double sd = options_.noise.standard_deviation();
+    if (summarise) {
+      // The fit summarises the window: P̃ = sd_f²·(Σ zz')⁻¹ over the rows it keeps, no replay.
+      const Eigen::MatrixXd P0 = sd * sd * KeptRowsCovariance(Z, residuals, fit.scale);
+      if (!P0.allFinite() || filter_.Assign(fit.theta, P0).status != StepStatus::kUpdated) return false;
+      scale_steps_ = n;  // σ is the window's: the Robbins–Monro gain continues as after n steps
+      kept_count_ = 0;
+      return true;
+    }
+    // P̃(0) = P(0)/σ² = sd_f²·(Z'Z/n)⁻¹: one average sample's least-squares information.
     const Eigen::MatrixXd P0 = sd * sd * ldlt.solve(Eigen::MatrixXd::Identity(rho_, rho_));
     if (!P0.allFinite() || filter_.Assign(fit.theta, P0).status != StepStatus::kUpdated) return false;
     started_ = true;
     // Replay the kept samples (the oldest first) through the filter.
     count_ = 0;
+    scale_steps_ = 0;
     for (long i = kept_count_ - n; i < kept_count_; ++i) {
       const StepReport r = Step(kept_(0, i), kept_.col(i).tail(rho_));
       if (r.updated()) ++count_;
     }
-    kept_count_ = 0;
+    // A start from fewer than 5W samples is provisional (Confirm); the window keeps growing.
+    provisional_ = n < kept_.cols();
+    if (!provisional_) kept_count_ = 0;
     return true;
   } catch (...) {
     return false;

@@ -24,6 +24,13 @@
 //            undetermined), or whose Cauchy fit has scale 0 with rows off it (its likelihood unbounded on a hyperplane
 //            through repeated rows, e.g. data at rest), waits for the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
 //            (mean and covariance, with a scale) skips the start.
+//            A start from fewer than 5W samples is provisional: its estimate serves (and judges outliers) while
+//            the window grows on to 5W samples, and then the start is made again from all of them — the same fit
+//            and checks, its θ with the least-squares information of the rows it keeps (residual within five of
+//            its scales) as the state, without a replay (Confirm). A few agreeing gross errors can decide a
+//            direction that W samples hardly excite (a step input's difference), and a replay from one
+//            sample's information can wander on a short, collinear window; five times the rows and the fit's
+//            own information do neither. Once per record; no allocation after it.
 //   Leverage: a grossly mispredicted sample (relative weight below 0.2) with a regressor coordinate beyond
 //            five robust scales of the start window is an error in the regressor (an ARX output outlier
 //            carried into later regressors), which the model does not describe, and is not used (weight 0).
@@ -97,8 +104,11 @@ class LcRegression {
 
  private:
   StepReport Step(double y, const Eigen::Ref<const Eigen::VectorXd>& z) noexcept;
-  // Starts from the kept samples; false if they cannot determine θ.
-  bool Start() noexcept;
+  // Starts from the kept samples; false if they cannot determine θ. `summarise`: the fit's θ with the
+  // information of the rows it keeps is the state, without a replay (Confirm).
+  bool Start(bool summarise = false) noexcept;
+  // The provisional start's window has grown to 5W samples: starts again from all of them.
+  void Confirm() noexcept;
   // Some coordinate of z beyond kLeverage robust scales of the start window (or off a constant column).
   bool Outlying(const Eigen::Ref<const Eigen::VectorXd>& z) const noexcept;
 
@@ -114,6 +124,7 @@ class LcRegression {
   Eigen::MatrixXd kept_;  // (ρ+1) x 5W: y, z of the start-up samples
   long kept_count_ = 0;
   bool started_ = false;
+  bool provisional_ = false;  // started from fewer than 5W samples: kept_ grows on to 5W (Confirm)
   long count_ = 0;
   double sigma_ = 0;
   double log_q_ = 0;  // log of the median-|ê| estimate

@@ -12,6 +12,7 @@
 
 #include "common/error.h"
 #include "ident/registry/estimator_registry.h"
+#include "ident/regression/batch_regression.h"
 #include "ident/regression/rls.h"
 #include "tests/support/alloc_counter.h"
 
@@ -82,6 +83,42 @@ TEST(LcRegression, StartsOnATwoLevelInputWithOutliers) {
     EXPECT_FALSE(est.in_startup()) << noise;
     EXPECT_LE((est.parameters() - theta).norm(), 0.1) << noise << ": " << est.parameters().transpose();
   }
+}
+
+// The start from W samples is provisional; at 5W samples the start is made again from all of them, and the
+// state is then exactly the batch Cauchy ML fit of those 5W samples (ident/regression/batch_regression.h)
+// with covariance σ²·sd_f²·(Σ zz')⁻¹ over the rows the fit keeps (residual within 5 of its scales).
+TEST(LcRegression, ConfirmsTheStartFromFiveWindowsOfSamples) {
+  const Eigen::Vector4d theta(1, 2, 3, 4);
+  StaticData d = Simulate(theta, 130, "laplace", 0.1, 23);
+  for (int i = 0; i < 130; i += 13) d.y(i) += 30;  // 10 gross errors among them
+  LcRegressionOptions o;
+  o.noise = models::LogConcaveNoise::Parse("laplace");
+  LcRegression est(4, o);  // W = 20
+  for (int i = 0; i < 99; ++i) est.Update(d.y(i), d.Z.row(i).transpose());
+  ASSERT_FALSE(est.in_startup());
+  const Eigen::VectorXd provisional = est.parameters();
+  est.Update(d.y(99), d.Z.row(99).transpose());  // the 100th sample: 5W
+  const BatchRegressionResult fit = CauchyMlRegression(d.Z.topRows(100), d.y.head(100));
+  EXPECT_NE(provisional, fit.theta);
+  EXPECT_EQ(est.parameters(), fit.theta);
+  Eigen::Matrix4d information = Eigen::Matrix4d::Zero();
+  const Eigen::VectorXd r = d.y.head(100) - d.Z.topRows(100) * fit.theta;
+  int kept = 0;
+  for (int i = 0; i < 100; ++i) {
+    const bool keep = std::abs(r(i)) <= 5 * fit.scale;
+    if (i % 13 == 0) {
+      EXPECT_FALSE(keep) << "gross error at " << i;
+    }
+    if (keep) information += d.Z.row(i).transpose() * d.Z.row(i), ++kept;
+  }
+  EXPECT_GE(kept, 85);  // the gross errors out, and no more than a few of Laplace's far tail
+  const double sd = o.noise.standard_deviation();
+  const Eigen::Matrix4d expected = est.scale() * est.scale() * sd * sd * information.inverse();
+  EXPECT_LT((est.covariance() - expected).norm(), 1e-12 * expected.norm());
+  // Later samples update the filter as usual.
+  for (int i = 100; i < 130; ++i) est.Update(d.y(i), d.Z.row(i).transpose());
+  EXPECT_LT((est.parameters() - theta).norm(), 0.05);
 }
 
 // RLS is the Kalman filter of y = z'θ + e with Gaussian e: the same prior information gives the same
