@@ -111,7 +111,8 @@ void PseudoLinearRegressor::BoxJenkinsGradient() {
   const int nb = structure_.arx().num_parameters(), nc = structure_.nc(), nd = structure_.nd(), nf = structure_.nf();
   const int c = structure_.c_offset(), d = structure_.d_offset(), f = structure_.f_offset();
   const double* const theta = theta_.data();
-  // C(q)F(q) = 1 + Σ_k cf_k q^−k, cf_k = c_k + f_k + Σ_{i=1}^{k−1} c_i f_{k−i} (the products added in the order i = 1, 2, …).
+  // C(q)F(q) = 1 + Σ_k cf_k q^−k with cf_k = c_k + f_k + Σ_i c_i f_{k−i}, the products added in the order
+  // i = 1, 2, … (row i of the product adds c_i·f).
   double* const cf = cf_.data();
   for (int k = 1; k <= nc + nf; ++k)
     cf[k - 1] = (k <= nc ? theta[c + k - 1] : 0.0) + (k <= nf ? theta[f + k - 1] : 0.0);

@@ -204,7 +204,7 @@ bool LcRegression::Start(bool summarise) noexcept {
     for (Eigen::Index i = 0; i < Z.rows(); ++i)
       if (Z.row(i).dot(H.col(i)) > kMaxStartLeverage) return have_window_ = false;
     const BatchRegressionResult fit = CauchyMlRegression(Z, Y);
-      if (!fit.theta.allFinite()) return have_window_ = false;
+    if (!fit.theta.allFinite()) return have_window_ = false;
     // Rows on the fit's hyperplane (to rounding). A Cauchy scale of 0 with rows off it: the likelihood is
     // unbounded on a hyperplane through half of the window or more (e.g. the repeated rows of a constant
     // stretch, the data at rest), which leaves θ undetermined off those rows: wait for more samples.
