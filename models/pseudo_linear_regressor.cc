@@ -128,8 +128,7 @@ void PseudoLinearRegressor::BoxJenkinsGradient() {
   double* const psi = psi_.data();
   FilterRange(cf, nc + nf, theta + d, nd, 0, nb, phi_.data(), pre, psi);
   FilterRange(cf, nc + nf, theta + d, nd, f, rho, phi_.data(), pre, psi);
-  FilterRange(theta + c, nc, nullptr, 0, c, f, phi_.data(), pre, nullptr);
-  for (int i = c; i < f; ++i) psi[i] = pre[i];
+  FilterRange(theta + c, nc, nullptr, 0, c, f, phi_.data(), pre, psi);  // ψ = p in C and D
 }
 
 double PseudoLinearRegressor::LinearisedOutput(double y) const {

@@ -159,12 +159,10 @@ void LcRegression::Confirm() noexcept {
   const double sigma = sigma_, log_q = log_q_;
   const long count = count_, scale_steps = scale_steps_;
   provisional_ = false;
-  const bool ok = Start(/*summarise=*/true);
-  if (!ok) {
+  if (!Start(/*summarise=*/true)) {
     centre_ = centre, spread_ = spread, have_window_ = true;
     sigma_ = sigma, log_q_ = log_q, count_ = count, scale_steps_ = scale_steps;
   }
-  provisional_ = false;
   kept_count_ = 0;
 }
 
@@ -230,7 +228,6 @@ bool LcRegression::Start(bool summarise) noexcept {
       const Eigen::MatrixXd P0 = sd * sd * KeptRowsCovariance(Z, residuals, fit.scale);
       if (!P0.allFinite() || filter_.Assign(fit.theta, P0).status != StepStatus::kUpdated) return false;
       scale_steps_ = n;  // σ is the window's: the Robbins–Monro gain continues as after n steps
-      kept_count_ = 0;
       return true;
     }
     // P̃(0) = P(0)/σ² = sd_f²·(Z'Z/n)⁻¹: one average sample's least-squares information.

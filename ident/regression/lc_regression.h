@@ -20,10 +20,11 @@
 //            θ0 and the scale σ = MAD(residuals)/median|u| (the MAD consistency of f), the prior is
 //            N(θ0, σ_e²(Z'Z/W)⁻¹) — the information of one average sample, σ_e the noise standard deviation —
 //            and the window is replayed. A window whose Z'Z is singular, where one row alone decides a
-//            direction (leverage above 0.8, also with the fit's Cauchy weights), or where more than half of the rows are fitted exactly (the scale
-//            undetermined), or whose Cauchy fit has scale 0 with rows off it (its likelihood unbounded on a hyperplane
-//            through repeated rows, e.g. data at rest), waits for the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ fixed; an explicit prior
-//            (mean and covariance, with a scale) skips the start.
+//            direction (leverage above 0.8, also with the fit's Cauchy weights), where more than half of the
+//            rows are fitted exactly (the scale undetermined), or whose Cauchy fit has scale 0 with rows off it
+//            (its likelihood unbounded on a hyperplane through repeated rows, e.g. data at rest) waits for
+//            the next W samples (up to 5W kept). An explicit scale (LcRegressionOptions::scale) keeps σ
+//            fixed; an explicit prior (mean and covariance, with a scale) skips the start.
 //            A start from fewer than 5W samples is provisional: its estimate serves (and judges outliers) while
 //            the window grows on to 5W samples, and then the start is made again from all of them — the same fit
 //            and checks, its θ with the least-squares information of the rows it keeps (residual within five of
