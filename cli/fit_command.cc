@@ -124,8 +124,13 @@ void PrintResiduals(const workflow::ResidualAnalysis& a) {
 void PrintReport(const workflow::FitResult& r, const std::string& data, const FitCommandOptions& o,
                  const std::vector<std::pair<std::string, double>>& means = {},
                  const std::vector<workflow::Experiment>& experiments = {}) {
-  fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind,
-             r.passes > 1 ? fmt::format(", {} passes", r.passes) : "", o.detrend);
+  // --passes asks for at most that many: an estimator declines further passes that cannot change its
+  // estimate (RLS on ARX, the batch estimators) or that it does not make (lc:*); the header says so.
+  std::string passes = r.passes > 1 ? fmt::format(", {} passes", r.passes) : "";
+  if (o.passes > r.passes)
+    passes = fmt::format(", {} pass{} of the {} asked: {} makes no further passes", r.passes, r.passes > 1 ? "es" : "",
+                         o.passes, r.estimator);
+  fmt::print("{}: {} fitted by {} ({}{}, {} detrending)\n", data, r.structure, r.estimator, r.kind, passes, o.detrend);
   const bool separate = !r.validation_data.empty();
   if (o.split == 1 && !separate)
     fmt::print("estimation and validation on all {} rows ({} updates", r.samples_estimation, r.updates);

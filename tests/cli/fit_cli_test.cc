@@ -57,6 +57,19 @@ TEST(FitCommand, HumanReportShowsParametersAndFits) {
   EXPECT_NE(r.out.find("simulation 85.57 %"), std::string::npos) << r.out;
 }
 
+TEST(FitCommand, HeaderSaysWhenFewerPassesWereMadeThanAsked) {
+  const std::string stars = "stars_cyg --output log_light --regressors log_Te --passes 3 --estimator ";
+  for (const std::string e : {"lc:laplace", "rls", "huber"}) {
+    const CliResult r = RunCli("fit " + stars + e);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("1 pass of the 3 asked: " + e + " makes no further passes"), std::string::npos) << r.out;
+    EXPECT_EQ(FitJson(stars + e)["passes"], 1) << e;
+  }
+  const CliResult cauchy = RunCli("fit " + stars + "cauchy");
+  ASSERT_EQ(cauchy.exit_code, 0) << cauchy.err;
+  EXPECT_NE(cauchy.out.find("(recursive, 3 passes, mean detrending)"), std::string::npos) << cauchy.out;
+}
+
 TEST(FitCommand, TraceHasOneRowPerUpdateEndingAtTheFinalEstimate) {
   const std::string trace = TempDir() + "/trace.csv";
   const nlohmann::json j = FitJson("dryer" + kDryerArx + " --trace " + trace);
