@@ -1,6 +1,7 @@
 #include "ident/smoothing/internal/dual_polish.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -23,9 +24,33 @@ bool KeepRound(double next, double* rho_max, Eigen::MatrixXd& v, Eigen::MatrixXd
   return false;
 }
 
-// PolishMapSmootherDual (dual_polish.h) for a state dimension fixed at compile time: the same rounds on n x n blocks held by value,
-// N's block Cholesky (C_t C_t' = D_t - G_t G_t', G_t = E_t C_{t-1}^-T, as ident/linalg/block_tridiagonal.h)
-// formed step by step from the weights, and no allocation inside the rounds.
+// P = S^-1 of a symmetric positive definite n x n block, in place of S; false if S is not numerically positive
+// definite. n <= 2 in closed form (one reciprocal), else by Cholesky.
+template <int kN>
+bool InvertSpdBlock(Eigen::Matrix<double, kN, kN>& S) {
+  if constexpr (kN == 1) {
+    if (!(S(0, 0) > 0) || !std::isfinite(S(0, 0))) return false;
+    S(0, 0) = 1.0 / S(0, 0);
+  } else if constexpr (kN == 2) {
+    const double a = S(0, 0), b = S(1, 0), d = S(1, 1), det = a * d - b * b;
+    if (!(a > 0) || !(det > 0) || !std::isfinite(det)) return false;
+    const double idet = 1.0 / det;
+    S(0, 0) = d * idet;
+    S(0, 1) = S(1, 0) = -b * idet;
+    S(1, 1) = a * idet;
+  } else {
+    const Eigen::LLT<Eigen::Matrix<double, kN, kN>> llt(S);
+    if (llt.info() != Eigen::Success) return false;
+    S = llt.solve(Eigen::Matrix<double, kN, kN>::Identity());
+  }
+  return S.allFinite();
+}
+
+// PolishMapSmootherDual (dual_polish.h) for a state dimension fixed at compile time: the same rounds on n x n
+// blocks held by value, in few passes over the steps. N's block LDL' is kept as P_t = S_t^-1 alone
+// (S_t = D_t - E_t P_{t-1} E_t', E_t = -W_t F_{t-1} formed again where it is used). A round is a forward
+// substitution and one backward pass that finishes xi_t and, one step behind it, the round's new v, u and
+// residual; the new v and u go to a second pair of buffers, swapped in only if max |rho| falls.
 template <int kN>
 double PolishDualFixed(const MapSmootherProblem& p, const MapSmootherDualIterate& dual, Eigen::MatrixXd* v_out,
                        Eigen::MatrixXd* u_out) {
@@ -35,36 +60,33 @@ double PolishDualFixed(const MapSmootherProblem& p, const MapSmootherDualIterate
   Eigen::MatrixXd& v = *v_out;
   Eigen::MatrixXd& u = *u_out;
   const auto F = [&](int t) { return Eigen::Map<const MatN>(p.Ft(t).data()); };
-  const auto W = [&](int t) { return Eigen::Map<const MatN>(dual.process_weight.col(t).data()); };
-  const auto col = [](Eigen::MatrixXd& m, int t) { return Eigen::Map<VecN>(m.col(t).data()); };
-  // H_t'b (b: nz entries) and H_t x; H_t is nz x n, column-major.
-  const auto add_ht = [&](int t, const double* b, double alpha, VecN& out) {
+  const auto W = [&](int t) {
+    return Eigen::Map<const MatN>(dual.process_weight.col(ProcessWeightColumn(dual.process_weight, t)).data());
+  };
+  const auto E = [&](int t) -> MatN { return -W(t) * F(t - 1); };  // t >= 1
+  // rho_t = v_t - F_t'v_{t+1} - H_t'u_t of (v, u) (H_t is nz x n, column-major).
+  const auto residual = [&](const Eigen::MatrixXd& vv, const Eigen::MatrixXd& uu, int t) {
+    VecN r = Eigen::Map<const VecN>(vv.col(t).data());
+    if (t < T) r.noalias() -= F(t).transpose() * Eigen::Map<const VecN>(vv.col(t + 1).data());
     const double* H = p.Ht(t).data();
+    const double* ut = uu.col(t).data();
     for (int i = 0; i < kN; ++i) {
       double s = 0;
-      for (int j = 0; j < nz; ++j) s += H[j + i * nz] * b[j];
-      out(i) += alpha * s;
+      for (int j = 0; j < nz; ++j) s += H[j + i * nz] * ut[j];
+      r(i) -= s;
     }
+    return r;
   };
   Eigen::Matrix<double, kN, Eigen::Dynamic> rho(kN, N);
-  const auto residual = [&] {  // rho_t = v_t - F_t'v_{t+1} - H_t'u_t
-    double largest = 0;
-    for (int t = 0; t <= T; ++t) {
-      VecN r = col(v, t);
-      if (t < T) r.noalias() -= F(t).transpose() * col(v, t + 1);
-      add_ht(t, u.col(t).data(), -1.0, r);
-      rho.col(t) = r;
-      largest = std::max(largest, r.cwiseAbs().maxCoeff());
-    }
-    return largest;
-  };
-  double rho_max = residual();
+  double rho_max = 0;
+  for (int t = 0; t <= T; ++t) {
+    rho.col(t) = residual(v, u, t);
+    rho_max = std::max(rho_max, rho.col(t).cwiseAbs().maxCoeff());
+  }
   if (!(rho_max > 0) || !dual.process_weight.allFinite() || !dual.measurement_weight.allFinite()) return rho_max;
-  // N = sum J'WJ: D_t = W_t + F_t'W_{t+1}F_t + H_t'Wg_t H_t, E_t = -W_t F_{t-1}; its block LDL' with
-  // P_t = S_t^-1, S_t = D_t - E_t P_{t-1} E_t', kept as P_t, M_t = P_t E_t and N_t = P_t E_{t+1}', so that
-  // the substitutions' recurrences take one matrix-vector product per step: g_t = P_t b_t - M_t g_{t-1},
-  // x_t = g_t - N_t x_{t+1}.
-  std::vector<MatN, Eigen::aligned_allocator<MatN>> P(N), M(N), Nx(N);
+  // N = sum J'WJ: D_t = W_t + F_t'W_{t+1}F_t + H_t'Wg_t H_t, and P_t = S_t^-1; the substitutions are
+  // g_t = P_t (b_t - E_t g_{t-1}) and xi_t = g_t - P_t E_{t+1}' xi_{t+1}.
+  std::vector<MatN, Eigen::aligned_allocator<MatN>> P(N);
   for (int t = 0; t <= T; ++t) {
     MatN S = W(t);
     if (t < T) S.noalias() += F(t).transpose() * W(t + 1) * F(t);
@@ -77,48 +99,55 @@ double PolishDualFixed(const MapSmootherProblem& p, const MapSmootherDualIterate
           for (int j = 0; j < nz; ++j) sum += H[i + a * nz] * Wg[i + j * nz] * H[j + b * nz];
         S(a, b) += sum;
       }
-    MatN E = MatN::Zero();
     if (t > 0) {
-      E.noalias() = -W(t) * F(t - 1);
-      S.noalias() -= E * P[t - 1] * E.transpose();
-      Nx[t - 1].noalias() = P[t - 1] * E.transpose();
+      const MatN Et = E(t);
+      S.noalias() -= Et * P[t - 1] * Et.transpose();
     }
-    const Eigen::LLT<MatN> llt(S);
-    if (llt.info() != Eigen::Success) return rho_max;
-    P[t] = llt.solve(MatN::Identity());
-    if (!P[t].allFinite()) return rho_max;
-    M[t].noalias() = P[t] * E;
+    if (!InvertSpdBlock<kN>(S)) return rho_max;
+    P[t] = S;
   }
-  Nx[T].setZero();
-  Eigen::Matrix<double, kN, Eigen::Dynamic> xi(kN, N);
-  Eigen::MatrixXd v_prev(v.rows(), v.cols()), u_prev(u.rows(), u.cols());
-  for (int round = 0; round < 2; ++round) {
-    v_prev = v;
-    u_prev = u;
-    VecN g = VecN::Zero();
-    for (int t = 0; t <= T; ++t) {  // b = -rho
-      g = -(P[t] * rho.col(t)) - M[t] * g;
-      xi.col(t) = g;
-    }
-    VecN x = VecN::Zero();
-    for (int t = T; t >= 0; --t) {
-      x = xi.col(t) - Nx[t] * x;
-      xi.col(t) = x;
-    }
-    for (int t = 0; t <= T; ++t) {  // v_t += W_t (A xi)_t, (A xi)_t = xi_t - F_{t-1} xi_{t-1};  u_t -= Wg_t H_t xi_t
-      VecN a = xi.col(t);
-      if (t > 0) a.noalias() -= F(t - 1) * xi.col(t - 1);
-      col(v, t).noalias() += W(t) * a;
-      const double* H = p.Ht(t).data();
-      const double* Wg = dual.measurement_weight.col(t).data();
-      double* ut = u.col(t).data();
+  Eigen::Matrix<double, kN, Eigen::Dynamic> g(kN, N);
+  Eigen::MatrixXd v_new(kN, N), u_new(nz, N);
+  // The round's new v_t = v_t + W_t (xi_t - F_{t-1} xi_{t-1}) and u_t = u_t - Wg_t H_t xi_t (xi_prev =
+  // xi_{t-1}, nullptr at t = 0), then rho_t from them (v_new_{t+1} already set); returns max |rho_t|.
+  const auto finish_step = [&](int t, const VecN& xi, const VecN* xi_prev) {
+    VecN a = xi;
+    if (xi_prev) a.noalias() -= F(t - 1) * *xi_prev;
+    Eigen::Map<VecN>(v_new.col(t).data()).noalias() = Eigen::Map<const VecN>(v.col(t).data()) + W(t) * a;
+    const double* H = p.Ht(t).data();
+    const double* Wg = dual.measurement_weight.col(t).data();
+    for (int j = 0; j < nz; ++j) {
+      double du = 0;
       for (int i = 0; i < nz; ++i) {
         double hx = 0;
-        for (int k = 0; k < kN; ++k) hx += H[i + k * nz] * xi(k, t);
-        for (int j = 0; j < nz; ++j) ut[j] -= Wg[j + i * nz] * hx;
+        for (int k = 0; k < kN; ++k) hx += H[i + k * nz] * xi(k);
+        du += Wg[j + i * nz] * hx;
       }
+      u_new(j, t) = u(j, t) - du;
     }
-    if (!KeepRound(residual(), &rho_max, v, u, v_prev, u_prev)) break;
+    rho.col(t) = residual(v_new, u_new, t);
+    return rho.col(t).cwiseAbs().maxCoeff();
+  };
+  for (int round = 0; round < 2; ++round) {
+    VecN gp = VecN::Zero();
+    for (int t = 0; t <= T; ++t) {  // b = -rho
+      VecN b = -rho.col(t);
+      if (t > 0) b.noalias() -= E(t) * gp;
+      gp = P[t] * b;
+      g.col(t) = gp;
+    }
+    double next = 0;
+    VecN xi_next = g.col(T);  // xi_{t+1}
+    for (int t = T - 1; t >= 0; --t) {
+      const VecN xi = g.col(t) - P[t] * (E(t + 1).transpose() * xi_next);
+      next = std::max(next, finish_step(t + 1, xi_next, &xi));
+      xi_next = xi;
+    }
+    next = std::max(next, finish_step(0, xi_next, nullptr));
+    if (!(next < rho_max)) break;  // the round is not kept: v and u unchanged
+    rho_max = next;
+    v.swap(v_new);
+    u.swap(u_new);
   }
   return rho_max;
 }
@@ -147,7 +176,7 @@ double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dua
   Eigen::MatrixXd D = Eigen::MatrixXd::Zero(n, n * N), E = Eigen::MatrixXd::Zero(n, n * N);
   std::vector<double> WF(static_cast<std::size_t>(n) * n), WH(static_cast<std::size_t>(nz) * n);
   for (int t = 0; t <= T; ++t) {
-    const double* W = dual.process_weight.col(t).data();
+    const double* W = dual.process_weight.col(ProcessWeightColumn(dual.process_weight, t)).data();
     const double* Wg = dual.measurement_weight.col(t).data();
     double* Dt = D.data() + static_cast<Eigen::Index>(t) * n * n;
     for (int i = 0; i < n * n; ++i) Dt[i] += W[i];
@@ -169,7 +198,8 @@ double PolishDual(const MapSmootherProblem& p, const MapSmootherDualIterate& dua
     for (int t = 0; t <= T; ++t) {
       for (int i = 0; i < n; ++i) a[i] = xi(i, t);  // (A xi)_t = xi_t - F_{t-1} xi_{t-1}
       if (t > 0) AddMatVec(p.Ft(t - 1).data(), n, n, xi.col(t - 1).data(), a, -1.0);
-      AddMatVec(dual.process_weight.col(t).data(), n, n, a, v.col(t).data(), 1.0);
+      AddMatVec(dual.process_weight.col(ProcessWeightColumn(dual.process_weight, t)).data(), n, n, a, v.col(t).data(),
+                1.0);
       for (int j = 0; j < nz; ++j) gstep[j] = 0;
       AddMatVec(p.Ht(t).data(), nz, n, xi.col(t).data(), gstep.data(), 1.0);  // H xi
       AddMatVec(dual.measurement_weight.col(t).data(), nz, nz, gstep.data(), u.col(t).data(), -1.0);

@@ -92,7 +92,8 @@ class FastSolver {
     std::vector<double> history;               // KKT residual per iteration (stall test)
     history.reserve(static_cast<std::size_t>(o_.max_iterations) + 1);
     for (;; ++iter) {
-      const Residuals r = StepAndResiduals(alpha);
+      bool factored = false;  // the Newton matrix of the new iterate, factored in the same pass
+      const Residuals r = StepResidualsAndFactor(alpha, &factored);
       mu = r.complementarity / num_constraints;
       if (iter == 0) mu_scale = std::max(1.0, mu);
       double r4_floor = 0;
@@ -101,7 +102,7 @@ class FastSolver {
       history.push_back(kkt);
       if (o_.on_iteration) o_.on_iteration(iter, kkt);
       if (Stops(iter, kkt, r, r4_floor, z_scale, history, &res)) break;
-      if (!FactorAndForward()) {  // as the general path: accept a breakdown at the precision limit
+      if (!factored) {  // as the general path: accept a breakdown at the precision limit
         res.status =
             kkt <= 1e3 * o_.tolerance * mu_scale ? MapSmootherStatus::kConverged : MapSmootherStatus::kNumericalFailure;
         break;
@@ -175,7 +176,9 @@ class FastSolver {
     res->u.resize(1, T_ + 1);
     MapSmootherDualIterate dual;
     dual.process_dual.resize(kN, T_ + 1);
-    dual.process_weight.resize(kN * kN, T_ + 1);
+    // Time-invariant: one weight column per process penalty (ProcessWeightColumn).
+    const int weight_columns = invariant_ ? std::min(static_cast<int>(p_.process.size()), T_ + 1) : T_ + 1;
+    dual.process_weight.resize(kN * kN, weight_columns);
     dual.measurement_weight.resize(1, T_ + 1);
     for (int t = 0; t <= T_; ++t) {
       const StepConstants<kN>& c = Constants(t);
@@ -192,7 +195,8 @@ class FastSolver {
         for (int j = 0; j < kN; ++j) v += c.W[i + j * kN] * w[j];
         dual.process_dual(i, t) = sigma_ * v;
       }
-      for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, t) = c.W[i];
+      if (t < weight_columns || !invariant_)
+        for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, ProcessWeightColumn(dual.process_weight, t)) = c.W[i];
       dual.measurement_weight(0, t) = 1.0 / (c.m + s.qlo / s.slo + s.qhi / s.shi);
     }
     FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, res);
@@ -218,10 +222,17 @@ class FastSolver {
   // forwarded from the store buffer and stalls the recurrence.
 
   // Applies the pending step x, u, s, q += alpha d (alpha = 0: none), then R3 = r - m u - (q_hi - q_lo) and
-  // R4 = sum J'(p + B'u) (process: c0 + W r on x_t - F x_{t-1}; measurement: -H'u), in one forward pass.
-  Residuals StepAndResiduals(double alpha) {
+  // R4 = sum J'(p + B'u) (process: c0 + W r on x_t - F x_{t-1}; measurement: -H'u), and, one step behind
+  // (R4_{t-1} is complete at step t), the factorisation and forward substitution of the new iterate
+  // (FactorStep), in one forward pass: the factorisation's recurrence is a chain of dependent operations,
+  // and the residuals' independent work fills its gaps. *factored: false if a Schur complement is not
+  // numerically positive definite (the factorisation stops there; the residuals are complete).
+  Residuals StepResidualsAndFactor(double alpha, bool* factored) {
     Residuals out;
     double xp[kN] = {}, R4p[kN] = {};  // x_{t-1}, and R4_{t-1} until F_{t-1}' v_t completes it
+    double r3p = 0;                    // R3_{t-1}
+    double Pp[kN * kN] = {}, vp[kN] = {};  // the factorisation's P_{t-1} and v_{t-1}
+    bool ok = true;
     for (int t = 0; t <= T_; ++t) {
       const StepConstants<kN>& c = Constants(t);
       StepState<kN>& s = steps_[t];
@@ -253,14 +264,15 @@ class FastSolver {
         R4[i] = v[i] - c.H[i] * u;
         hx += c.H[i] * x[i];
       }
-      if (t > 0) {  // R4_{t-1} -= F_{t-1}' v: now complete
-        StepState<kN>& prev = steps_[t - 1];
+      if (t > 0) {  // R4_{t-1} -= F_{t-1}' v: now complete, and step t - 1 can be factored
+        double R4c[kN];
         for (int j = 0; j < kN; ++j) {
           double fv = 0;
           for (int i = 0; i < kN; ++i) fv += c.F[i + j * kN] * v[i];
-          prev.R4[j] = R4p[j] - fv;
-          out.r4max = std::max(out.r4max, std::abs(prev.R4[j]));
+          R4c[j] = R4p[j] - fv;
+          out.r4max = std::max(out.r4max, std::abs(R4c[j]));
         }
+        if (ok) ok = FactorStep(t - 1, R4c, r3p, Pp, vp);
       }
       for (int i = 0; i < kN; ++i) {
         R4p[i] = R4[i];
@@ -270,16 +282,15 @@ class FastSolver {
       out.v_scale = std::max(out.v_scale, au);
       out.umax = std::max(out.umax, au);
       const double r3 = z_[t] - hx - c.m * u - (qhi - qlo);
-      s.r3 = r3;
+      r3p = r3;
       out.r3max = std::max(out.r3max, std::abs(r3));
       out.objective_scale += std::abs(u * (z_[t] - hx));
       out.complementarity += slo * qlo + shi * qhi;
       out.qmax = std::max({out.qmax, qlo, qhi});
     }
-    for (int i = 0; i < kN; ++i) {
-      steps_[T_].R4[i] = R4p[i];
-      out.r4max = std::max(out.r4max, std::abs(R4p[i]));
-    }
+    for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(R4p[i]));
+    if (ok) ok = FactorStep(T_, R4p, r3p, Pp, vp);
+    *factored = ok;
     return out;
   }
 
@@ -288,16 +299,14 @@ class FastSolver {
   // where P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1); the predictor's R2 = s .* q.
   // P_t = S_t^-1 (S_t = D_t - E_t P_{t-1} E_t') is not stored. Stores rt3 and v_t, also in v (which may be v_prev).
   [[gnu::always_inline]] inline void ForwardRightHandSide(const StepConstants<kN>& c, StepState<kN>& s,
-                                                          const double* P, const double* M, const double* gf,
-                                                          double islo, double ishi, const double* v_prev,
-                                                          double* v) {
+                                                          const double* R4, double r3, const double* P, const double* M,
+                                                          const double* gf, double islo, double ishi,
+                                                          const double* v_prev, double* v) {
     const double u = s.u, slo = s.slo, shi = s.shi, qlo = s.qlo, qhi = s.qhi;
-    double R4[kN];
-    for (int i = 0; i < kN; ++i) R4[i] = s.R4[i];
     const double r1hi = u + shi - c.hi, r1lo = -u + slo + c.lo;
     const double r2lo = slo * qlo, r2hi = shi * qhi;
     const double e = (-r2hi + qhi * r1hi) * ishi - (-r2lo + qlo * r1lo) * islo;
-    const double rt3 = s.r3 - e;
+    const double rt3 = r3 - e;
     double vt[kN];
     for (int i = 0; i < kN; ++i) {
       double pb = P[i] * R4[0];  // the sums start at their first term: no + 0.0 (which does not fold)
@@ -314,44 +323,42 @@ class FastSolver {
     s.rt3 = rt3;
   }
 
-  // Block LDL' of the Newton matrix (D_t = Db_t + K^-1 H'H, E_t) fused with the predictor's forward
-  // substitution: A = L diag(S_t) L' with L_t = E_t P_{t-1}; the solves use v_t = P_t y_t, so that L is not
-  // stored and the large K^-1 of coordinates at a kink never multiplies a vector. False if a Schur complement S_t is
-  // not numerically positive definite.
-  bool FactorAndForward() {
-    double Pp[kN * kN] = {}, vp[kN] = {};  // P_{t-1}, v_{t-1}
-    for (int t = 0; t <= T_; ++t) {
-      const StepConstants<kN>& c = Constants(t);
-      StepState<kN>& s = steps_[t];
-      Reciprocals(s);
-      const double islo = s.islo, ishi = s.ishi;
-      const double ikd = c.m + s.qlo * islo + s.qhi * ishi;  // K = M + D, D = q/s (barrier curvature)
-      const double kd = 1.0 / ikd;
-      s.kd = kd;
-      // P_t = S_t^-1 with the measurement's rank-one term entering with the factor K (StepInverse).
-      double P[kN * kN], gf[kN];
-      if (!StepInverse<kN>(c, t > 0 ? Pp : nullptr, ikd, kd, P, gf)) return false;
-      // M_t = P_t E_t and N_t = P_t E_{t+1}': the substitutions' recurrences then take one product level.
-      static constexpr double kZero[kN * kN] = {};
-      const double* En = t < T_ ? Constants(t + 1).E : kZero;  // E_{T+1} = 0
-      double M[kN * kN];
-      for (int j = 0; j < kN; ++j)
-        for (int i = 0; i < kN; ++i) {
-          double m = P[i] * c.E[j * kN], n = P[i] * En[j];
-          for (int k = 1; k < kN; ++k) {
-            m += P[i + k * kN] * c.E[k + j * kN];
-            n += P[i + k * kN] * En[j + k * kN];
-          }
-          M[i + j * kN] = m;
-          s.N[i + j * kN] = n;
+  // Step t of the block LDL' of the Newton matrix (D_t = Db_t + K^-1 H'H, E_t) fused with the predictor's
+  // forward substitution: A = L diag(S_t) L' with L_t = E_t P_{t-1}; the solves use v_t = P_t y_t, so that L is
+  // not stored and the large K^-1 of coordinates at a kink never multiplies a vector. R4 = R4_t, r3 = R3_t; Pp and vp
+  // carry P_{t-1} and v_{t-1} in and P_t and v_t out. False if the Schur complement S_t is not numerically
+  // positive definite.
+  [[gnu::always_inline]] inline bool FactorStep(int t, const double* R4, double r3, double* Pp, double* vp) {
+    const StepConstants<kN>& c = Constants(t);
+    StepState<kN>& s = steps_[t];
+    Reciprocals(s);
+    const double islo = s.islo, ishi = s.ishi;
+    const double ikd = c.m + s.qlo * islo + s.qhi * ishi;  // K = M + D, D = q/s (barrier curvature)
+    const double kd = 1.0 / ikd;
+    s.kd = kd;
+    // P_t = S_t^-1 with the measurement's rank-one term entering with the factor K (StepInverse).
+    double P[kN * kN], gf[kN];
+    if (!StepInverse<kN>(c, t > 0 ? Pp : nullptr, ikd, kd, P, gf)) return false;
+    // M_t = P_t E_t and N_t = P_t E_{t+1}': the substitutions' recurrences then take one product level.
+    static constexpr double kZero[kN * kN] = {};
+    const double* En = t < T_ ? Constants(t + 1).E : kZero;  // E_{T+1} = 0
+    double M[kN * kN];
+    for (int j = 0; j < kN; ++j)
+      for (int i = 0; i < kN; ++i) {
+        double m = P[i] * c.E[j * kN], n = P[i] * En[j];
+        for (int k = 1; k < kN; ++k) {
+          m += P[i + k * kN] * c.E[k + j * kN];
+          n += P[i + k * kN] * En[j + k * kN];
         }
-      for (int i = 0; i < kN * kN; ++i) {
-        s.M[i] = M[i];
-        Pp[i] = P[i];
+        M[i + j * kN] = m;
+        s.N[i + j * kN] = n;
       }
-      for (int i = 0; i < kN; ++i) s.gf[i] = gf[i];
-      ForwardRightHandSide(c, s, P, M, gf, islo, ishi, t > 0 ? vp : nullptr, vp);
+    for (int i = 0; i < kN * kN; ++i) {
+      s.M[i] = M[i];
+      Pp[i] = P[i];
     }
+    for (int i = 0; i < kN; ++i) s.gf[i] = gf[i];
+    ForwardRightHandSide(c, s, R4, r3, P, M, gf, islo, ishi, t > 0 ? vp : nullptr, vp);
     return true;
   }
 

@@ -35,8 +35,7 @@ struct StepState {
   double du, dslo, dshi, dqlo, dqhi;  // Newton direction
   double islo, ishi, iqlo, iqhi;      // reciprocals (once per iteration: no divisions in the other passes)
   double kd;                          // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
-  double r3, rt3;                     // R3 and R3 - e of the current direction
-  double R4[kN];                      // gradient residual
+  double rt3;                         // R3 - e of the current direction (R3 and R4 live only in the forward pass)
   double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
   double dx[kN];                      // state direction
   double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)

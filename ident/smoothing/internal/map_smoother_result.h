@@ -56,9 +56,16 @@ double MapSmootherDataUnit(const MapSmootherProblem& problem);
 // W = B'K^-1 B of every term (the derivative of a term's dual value with respect to its residual).
 struct MapSmootherDualIterate {
   Eigen::MatrixXd process_dual;        // n x (T+1)
-  Eigen::MatrixXd process_weight;      // n*n x (T+1), column t = W of f_t (column-major n x n)
+  Eigen::MatrixXd process_weight;      // n*n x (T+1), column t = W of f_t (column-major n x n); or one per
+                                       // penalty of {f} or {f_0, f} (ProcessWeightColumn)
   Eigen::MatrixXd measurement_weight;  // nz*nz x (T+1), column t = W of g_t
 };
+
+// The column of MapSmootherDualIterate::process_weight that holds W of f_t: t, or with one or two columns
+// (one per penalty of {f} or {f_0, f}, as MapSmootherProblem::process) that of f_t.
+inline int ProcessWeightColumn(const Eigen::MatrixXd& process_weight, int t) {
+  return process_weight.cols() == 1 ? 0 : process_weight.cols() == 2 ? (t == 0 ? 0 : 1) : t;
+}
 
 // From res->x (states) and res->u (dual controls p + B'u of each measurement term, before projection),
 // both in the data's unit, computes w, the dual point, both objectives, the certified gap, x_from_dual and
