@@ -9,6 +9,10 @@
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <ostream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -31,10 +35,40 @@ struct SmoothOptions {
   bool json = false;
 };
 
-std::vector<std::vector<double>> Rows(const Eigen::MatrixXd& m) {  // one row per time (column of m)
-  std::vector<std::vector<double>> rows(m.cols());
-  for (int t = 0; t < m.cols(); ++t) rows[t].assign(m.col(t).data(), m.col(t).data() + m.rows());
-  return rows;
+// `"key": [[m(0,0), m(1,0), ...], ...]` (one inner array per time, a column of m) as nlohmann's dump(2)
+// prints it at the top level of an object, written number by number: at T = 10^6 a JSON document built in
+// memory would take several times the smoother's own memory.
+void WriteJsonRows(std::ostream& out, const char* key, const Eigen::MatrixXd& m) {
+  out << "  \"" << key << "\": [";
+  for (Eigen::Index t = 0; t < m.cols(); ++t) {
+    out << (t ? ",\n    [" : "\n    [");
+    for (Eigen::Index i = 0; i < m.rows(); ++i) out << (i ? ",\n      " : "\n      ") << nlohmann::json(m(i, t)).dump();
+    out << (m.rows() ? "\n    ]" : "]");
+  }
+  out << (m.cols() ? "\n  ]" : "]");
+}
+
+// The object's members in order, as nlohmann's dump(2) prints them; the members named in `rows` (null
+// placeholders in j) are written by WriteJsonRows from the matching matrix.
+void WriteJsonObject(std::ostream& out, const nlohmann::ordered_json& j,
+                     const std::vector<std::pair<const char*, const Eigen::MatrixXd*>>& rows) {
+  out << "{";
+  bool first = true;
+  for (const auto& [key, value] : j.items()) {
+    out << (first ? "\n" : ",\n");
+    first = false;
+    const auto row = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return key == r.first; });
+    if (row != rows.end()) {
+      WriteJsonRows(out, row->first, *row->second);
+      continue;
+    }
+    // A member's own dump(2), indented one level: its continuation lines gain two spaces.
+    std::string text = value.dump(2);
+    for (std::size_t at = text.find('\n'); at != std::string::npos; at = text.find('\n', at + 3))
+      text.insert(at + 1, "  ");
+    out << "  " << nlohmann::json(key).dump() << ": " << text;
+  }
+  out << (first ? "}" : "\n}");
 }
 
 void RunSmooth(const SmoothOptions& o) {
@@ -57,9 +91,9 @@ void RunSmooth(const SmoothOptions& o) {
     j["gap"] = r.gap;
     j["relative_gap"] = r.relative_gap;
     j["iterations"] = r.iterations;
-    j["x"] = Rows(r.x);
-    j["u"] = Rows(r.u);
-    j["y"] = Rows(r.y);
+    j["x"] = nullptr;  // written row by row (WriteJsonObject)
+    j["u"] = nullptr;
+    j["y"] = nullptr;
     j["max_abs_x_from_dual_difference"] = r.max_abs_x_difference;
     j["reconstruction_unique"] = r.reconstruction_unique;
     j["nonunique_reconstruction_steps"] = r.nonunique_steps;  // t where d f_t*(y_t) is not a single point
@@ -72,7 +106,8 @@ void RunSmooth(const SmoothOptions& o) {
     j["gap_error_bound"] = r.gap_error_bound;
     j["relative_gap_bound"] = std::isfinite(r.relative_gap_bound) ? nlohmann::ordered_json(r.relative_gap_bound)
                                                                   : nlohmann::ordered_json(nullptr);
-    std::cout << j.dump(2) << "\n";
+    WriteJsonObject(std::cout, j, {{"x", &r.x}, {"u", &r.u}, {"y", &r.y}});
+    std::cout << "\n";
     return;
   }
   fmt::print("{}: MAP smoothing of {} time steps (n = {}, nz = {}) with {}\n", o.data, p.T() + 1, p.state_dim(),

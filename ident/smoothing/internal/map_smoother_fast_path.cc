@@ -170,8 +170,9 @@ class FastSolver {
 
   // The states and multipliers back in the data's unit, and the dual values and Newton weights of the
   // iterate for the certificate's dual polish: the process duals c0 + W r and their W, the measurement's
-  // K^-1 = 1 / (m + q_lo/s_lo + q_hi/s_hi); then the common finish.
-  void Finish(double z_scale, double mu, MapSmootherResult* res) const {
+  // K^-1 = 1 / (m + q_lo/s_lo + q_hi/s_hi); then the common finish, with the step records released first
+  // (they are most of the memory, and the finish allocates its own arrays).
+  void Finish(double z_scale, double mu, MapSmootherResult* res) {
     res->x = sigma_ * Eigen::Map<const Eigen::MatrixXd>(x_, kN, T_ + 1);
     res->u.resize(1, T_ + 1);
     MapSmootherDualIterate dual;
@@ -199,6 +200,9 @@ class FastSolver {
         for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, ProcessWeightColumn(dual.process_weight, t)) = c.W[i];
       dual.measurement_weight(0, t) = 1.0 / (c.m + s.qlo / s.slo + s.qhi / s.shi);
     }
+    steps_ = nullptr;
+    x_ = nullptr;
+    arena_.reset();
     FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, res);
   }
 
