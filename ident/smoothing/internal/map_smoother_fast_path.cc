@@ -228,9 +228,9 @@ class FastSolver {
   // Applies the pending step x, u, s, q += alpha d (alpha = 0: none), then R3 = r - m u - (q_hi - q_lo) and
   // R4 = sum J'(p + B'u) (process: c0 + W r on x_t - F x_{t-1}; measurement: -H'u), and, one step behind
   // (R4_{t-1} is complete at step t), the factorisation and forward substitution of the new iterate
-  // (FactorStep), in one forward pass: the factorisation's recurrence is a chain of dependent operations,
-  // and the residuals' independent work fills its gaps. *factored: false if a Schur complement is not
-  // numerically positive definite (the factorisation stops there; the residuals are complete).
+  // (FactorStep), in one forward pass: at large T the passes stream the step records from memory, and this
+  // saves one. *factored: false if a Schur complement is not numerically positive definite (the
+  // factorisation stops there; the residuals are complete).
   Residuals StepResidualsAndFactor(double alpha, bool* factored) {
     Residuals out;
     double xp[kN] = {}, R4p[kN] = {};  // x_{t-1}, and R4_{t-1} until F_{t-1}' v_t completes it
