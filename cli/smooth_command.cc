@@ -54,7 +54,9 @@ void WriteJsonObject(std::ostream& out, const nlohmann::ordered_json& j,
                      const std::vector<std::pair<const char*, const Eigen::MatrixXd*>>& rows) {
   out << "{";
   bool first = true;
-  for (const auto& [key, value] : j.items()) {
+  for (const auto& item : j.items()) {
+    const std::string& key = item.key();
+    const nlohmann::ordered_json& value = item.value();
     out << (first ? "\n" : ",\n");
     first = false;
     const auto row = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return key == r.first; });
