@@ -4,8 +4,6 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/Cholesky>
-
 #include "ident/linalg/block_tridiagonal.h"
 #include "ident/smoothing/internal/small_kernels.h"
 
@@ -22,28 +20,6 @@ bool KeepRound(double next, double* rho_max, Eigen::MatrixXd& v, Eigen::MatrixXd
   v = v_prev;
   u = u_prev;
   return false;
-}
-
-// P = S^-1 of a symmetric positive definite n x n block, in place of S; false if S is not numerically positive
-// definite. n <= 2 in closed form (one reciprocal), else by Cholesky.
-template <int kN>
-bool InvertSpdBlock(Eigen::Matrix<double, kN, kN>& S) {
-  if constexpr (kN == 1) {
-    if (!(S(0, 0) > 0) || !std::isfinite(S(0, 0))) return false;
-    S(0, 0) = 1.0 / S(0, 0);
-  } else if constexpr (kN == 2) {
-    const double a = S(0, 0), b = S(1, 0), d = S(1, 1), det = a * d - b * b;
-    if (!(a > 0) || !(det > 0) || !std::isfinite(det)) return false;
-    const double idet = 1.0 / det;
-    S(0, 0) = d * idet;
-    S(0, 1) = S(1, 0) = -b * idet;
-    S(1, 1) = a * idet;
-  } else {
-    const Eigen::LLT<Eigen::Matrix<double, kN, kN>> llt(S);
-    if (llt.info() != Eigen::Success) return false;
-    S = llt.solve(Eigen::Matrix<double, kN, kN>::Identity());
-  }
-  return S.allFinite();
 }
 
 // PolishMapSmootherDual (dual_polish.h) for a state dimension fixed at compile time: the same rounds on n x n
@@ -103,7 +79,7 @@ double PolishDualFixed(const MapSmootherProblem& p, const MapSmootherDualIterate
       const MatN Et = E(t);
       S.noalias() -= Et * P[t - 1] * Et.transpose();
     }
-    if (!InvertSpdBlock<kN>(S)) return rho_max;
+    if (!InvertSpd<kN>(S.data()) || !S.allFinite()) return rho_max;
     P[t] = S;
   }
   Eigen::Matrix<double, kN, Eigen::Dynamic> g(kN, N);

@@ -1,7 +1,9 @@
 // Matrix-vector kernels for the small blocks of the MAP smoother's interior point (internal to
 // ident/smoothing/): y += αAx and y += αA'x on column-major arrays, as plain loops that unroll when the
-// sizes are fixed at compile time.
+// sizes are fixed at compile time, and the in-place inverse of a small symmetric positive definite block.
 #pragma once
+
+#include <cmath>
 
 namespace ident::internal {
 
@@ -60,6 +62,41 @@ inline void AddMeasurementBlock(const double* W, const double* H, int n, int nz,
       for (int c = 0; c < nz; ++c) s += H[c + a * nz] * WH[c + b * nz];
       Dt[a + b * n] += s;
     }
+}
+
+// In-place inverse of a symmetric positive definite kN x kN matrix (column-major); false if a pivot is not
+// positive. n = 1, 2 in closed form (one reciprocal), Gauss-Jordan without pivoting beyond.
+template <int kN>
+[[gnu::always_inline]] inline bool InvertSpd(double* A) {
+  if constexpr (kN == 1) {
+    if (!(A[0] > 0) || !std::isfinite(A[0])) return false;
+    A[0] = 1.0 / A[0];
+    return true;
+  } else if constexpr (kN == 2) {
+    const double a = A[0], b = A[1], d = A[3];
+    const double det = a * d - b * b;
+    if (!(a > 0) || !(det > 0) || !std::isfinite(det)) return false;
+    const double idet = 1.0 / det;
+    A[0] = d * idet;
+    A[1] = A[2] = -b * idet;
+    A[3] = a * idet;
+    return true;
+  } else {
+    for (int k = 0; k < kN; ++k) {
+      const double pivot = A[k + k * kN];
+      if (!(pivot > 0) || !std::isfinite(pivot)) return false;
+      const double ip = 1.0 / pivot;
+      A[k + k * kN] = 1.0;
+      for (int j = 0; j < kN; ++j) A[k + j * kN] *= ip;
+      for (int i = 0; i < kN; ++i) {
+        if (i == k) continue;
+        const double f = A[i + k * kN];
+        A[i + k * kN] = 0.0;
+        for (int j = 0; j < kN; ++j) A[i + j * kN] -= f * A[k + j * kN];
+      }
+    }
+    return true;
+  }
 }
 
 }  // namespace ident::internal
