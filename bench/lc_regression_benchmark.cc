@@ -1,4 +1,4 @@
-// ns per update of the log-concave Gaussian filter run as a regression estimator (ident/regression/lc_regression.h:
+// ns per update of the log-concave Gaussian filter run as a regression estimator (ident/observers/lc_regression.h:
 // lc:laplace, lc:huber, lc:logistic, lc:gengauss:1.5) against the Kárný–Hangos Cauchy estimator
 // (ident/regression/student_regression.h) and the LD-form RLS, all dynamic-size, exponential forgetting 0.99,
 // on a pre-generated regression stream with Cauchy noise, 5 % outliers and ρ ∈ {2, 4, 8, 16} parameters, after an
@@ -13,7 +13,7 @@
 
 #include "bench/support/ratio_reporter.h"
 #include "bench/support/regression_stream.h"
-#include "ident/regression/lc_regression.h"
+#include "ident/observers/lc_regression.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/student_regression.h"
 

@@ -8,8 +8,8 @@
 #include <fmt/ranges.h>
 
 #include "common/error.h"
+#include "ident/observers/lc_regression.h"
 #include "ident/regression/batch_regression.h"
-#include "ident/regression/lc_regression.h"
 #include "ident/regression/rls.h"
 #include "ident/regression/safe_student_regression.h"
 
@@ -93,7 +93,7 @@ std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, in
   return std::make_unique<RegressionEstimatorModel<BatchRegressionEstimator>>(name, rho, options);
 }
 
-// The log-concave Gaussian filter as a regression estimator (ident/regression/lc_regression.h): "lc:<noise>".
+// The log-concave Gaussian filter as a regression estimator (ident/observers/lc_regression.h): "lc:<noise>".
 std::unique_ptr<AnyRegressionEstimator> MakeLc(const EstimatorSettings& s, int rho) {
   IDENT_REQUIRE(!s.noise.empty(),
                 "estimator 'lc' needs a noise law: lc:laplace, lc:huber[:k], lc:logistic, lc:gengauss:p or lc:gaussian");

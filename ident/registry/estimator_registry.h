@@ -10,7 +10,7 @@
 //   "huber"                   batch Huber M-estimation (IRLS, MAD scale; ident/regression/batch_regression.h)
 //   "cauchy-ml"               batch Cauchy maximum likelihood in Θ and scale, global optimum from many starts
 //   "lc:<noise>"              the log-concave Gaussian filter for y = z'θ + e, e of a log-concave density
-//                             (ident/regression/lc_regression.h): lc:laplace, lc:huber[:k] (k = 1.345),
+//                             (ident/observers/lc_regression.h): lc:laplace, lc:huber[:k] (k = 1.345),
 //                             lc:logistic, lc:gengauss:p (1 ≤ p ≤ 2), lc:gaussian (= RLS)
 //   State observers (ObserverProblem, observer_registry.h; items (u(k−1), y(k))):
 //   "kalman", "lc_gaussian", "lc_truncated", "grid"

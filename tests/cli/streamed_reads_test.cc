@@ -80,7 +80,7 @@ workflow::FitResult InMemory(const std::string& path, const workflow::FitRequest
 // Opens: the row count, the header, the means pass over the estimation part, the mean squares pass for
 // RLS's data-scaled prior (RLS only), the estimation and scoring pass, and with split = 1 a scoring pass.
 TEST(StreamedReads, OpensTheFileOncePerPassAndEqualsTheInMemoryFit) {
-  const std::string path = testing::WriteFile("streamed_reads.csv", SimulatedRecord(20'000));
+  const std::string path = testing::WriteFile("streamed_reads.csv", SimulatedRecord(5'000));
   struct Case {
     const char* estimator;
     double split;
@@ -142,8 +142,8 @@ std::string WithoutRows(const std::string& text, const std::vector<std::pair<int
 // --missing fills each gap's rows before the row that ends it, to the same estimate as the in-memory fit of
 // the filled table.
 TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
-  const std::string path = testing::WriteFile(
-      "streamed_gaps.csv", WithoutRows(SimulatedRecord(20'000), {{5'000, 5'010}, {12'000, 12'003}}));
+  const std::string path =
+      testing::WriteFile("streamed_gaps.csv", WithoutRows(SimulatedRecord(5'000), {{1'200, 1'210}, {3'000, 3'003}}));
   const workflow::FitRequest request = Arx221("cauchy", 0.5);
   for (bool fill : {false, true}) {
     SCOPED_TRACE(fill ? "filled" : "reported");
@@ -173,7 +173,7 @@ TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
     EXPECT_EQ(streamed.time->column, "t");
     ASSERT_EQ(streamed.time->gaps.size(), 2u);
     const long missing[] = {10, 3};
-    const int rows[] = {5'001, 11'991};  // the data row that ends each gap
+    const int rows[] = {1'201, 2'991};  // the data row that ends each gap
     for (int g = 0; g < 2; ++g) {
       const workflow::TimeGap& s = streamed.time->gaps[static_cast<std::size_t>(g)];
       const workflow::TimeGap& m = memory_time->gaps[static_cast<std::size_t>(g)];
@@ -194,13 +194,13 @@ TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
     for (int i = 0; i < 4; ++i) EXPECT_NEAR(streamed.theta(i), memory.theta(i), 1e-12 * std::abs(memory.theta(i)));
     EXPECT_NEAR(streamed.validation.one_step, memory.validation.one_step, 1e-9);
   }
-  // Filled, the record is 13 rows longer: its estimation part has 6 more (⌊0.5·19 987⌋ against ⌊0.5·20 000⌋).
+  // Filled, the record is 13 rows longer.
   const io::CsvOptions missing{.missing_as_nan = true};
   std::unique_ptr<workflow::DataSource> source = request.model.MakeSource({"t", "u", "y"}, path);
   std::optional<workflow::TimeCheck> time = workflow::ScanCsvTime(path, missing, source->used_columns());
   ASSERT_TRUE(time.has_value());
-  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, &*time).rows, 20'000);
-  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, nullptr).rows, 19'987);
+  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, &*time).rows, 5'000);
+  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, nullptr).rows, 4'987);
 }
 
 // A time that does not increase stops the streamed fit with the in-memory check's message.

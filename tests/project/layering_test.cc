@@ -4,9 +4,9 @@
 //   models/, approx/    common/ and themselves
 //   ident/linalg/       common/
 //   ident/<concept>/    common/, models/, approx/, ident/linalg/ as listed below, and itself
-// No folder of ident/ includes another except linalg/, regression/, which runs the log-concave Gaussian filter of
-// observers/ as a regression estimator, registry/, which builds the estimators of regression/ and observers/ by
-// name, and workflow/, which builds on registry/, regression/, smoothing/ and io/.
+// No folder of ident/ includes another except linalg/, observers/, which runs its log-concave Gaussian filter as a
+// regression estimator started by a batch fit of regression/, registry/, which builds the estimators of
+// regression/ and observers/ by name, and workflow/, which builds on registry/, regression/, smoothing/ and io/.
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -37,8 +37,8 @@ const std::map<std::string, std::set<std::string>>& Allowed() {
       {"models", {"common", "models"}},
       {"approx", {"common", "approx"}},
       {"ident/linalg", {"common", "ident/linalg"}},
-      {"ident/regression", {"common", "models", "approx", "ident/linalg", "ident/observers", "ident/regression"}},
-      {"ident/observers", {"common", "models", "approx", "ident/linalg", "ident/observers"}},
+      {"ident/regression", {"common", "approx", "ident/linalg", "ident/regression"}},
+      {"ident/observers", {"common", "models", "approx", "ident/linalg", "ident/regression", "ident/observers"}},
       {"ident/registry",
        {"common", "models", "approx", "ident/linalg", "ident/observers", "ident/regression", "ident/registry"}},
       {"ident/smoothing", {"common", "models", "ident/linalg", "ident/smoothing"}},

@@ -1,14 +1,14 @@
-// ident/regression/lc_regression.h: the log-concave Gaussian filter as a regression estimator, against
+// ident/observers/lc_regression.h: the log-concave Gaussian filter as a regression estimator, against
 // recursive least squares (Gaussian noise, to 1e-12), an exact grid posterior (ρ = 1, 2), the batch MAP
 // estimate by Newton/IRLS (ρ = 4), and on outliers of growing size.
-#include "ident/regression/lc_regression.h"
+#include "ident/observers/lc_regression.h"
 
 #include <cmath>
 #include <random>
 #include <vector>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "common/error.h"
 #include "ident/registry/estimator_registry.h"
@@ -37,15 +37,19 @@ StaticData Simulate(const Eigen::VectorXd& theta, int n, const std::string& fami
     for (int j = 0; j < rho; ++j) d.Z(i, j) = (intercept && j == 0) ? 1.0 : normal(rng);
     const double p = uniform(rng);
     double u = 0;
-    if (family == "laplace") u = p < 0.5 ? std::log(2 * p) : -std::log(2 * (1 - p));
-    else if (family == "logistic") u = std::log(p / (1 - p));
-    else u = normal(rng);
+    if (family == "laplace")
+      u = p < 0.5 ? std::log(2 * p) : -std::log(2 * (1 - p));
+    else if (family == "logistic")
+      u = std::log(p / (1 - p));
+    else
+      u = normal(rng);
     d.y(i) = d.Z.row(i).dot(theta) + sigma * u;
   }
   return d;
 }
 
-LcRegressionOptions Known(const std::string& noise, double sigma, const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0) {
+LcRegressionOptions Known(const std::string& noise, double sigma, const Eigen::VectorXd& m0,
+                          const Eigen::MatrixXd& P0) {
   LcRegressionOptions o;
   o.noise = models::LogConcaveNoise::Parse(noise);
   o.scale = sigma;

@@ -65,11 +65,11 @@ namespace ident {
 
 struct LcRegressionOptions {
   models::LogConcaveNoise noise{models::LogConcaveNoise::Family::kLaplace};
-  double scale = 0;         // σ of u; 0 = estimated (start-up window, then Robbins–Monro)
-  int startup_window = 0;   // W; 0 = max(20, 4ρ)
-  double forgetting = 1;    // λ in (0, 1]
-  bool leverage_guard = true;  // leave out grossly mispredicted samples with outlying regressors (below)
-  std::optional<Eigen::VectorXd> prior_mean;        // explicit prior N(m0, P0): both, and a scale
+  double scale = 0;                           // σ of u; 0 = estimated (start-up window, then Robbins–Monro)
+  int startup_window = 0;                     // W; 0 = max(20, 4ρ)
+  double forgetting = 1;                      // λ in (0, 1]
+  bool leverage_guard = true;                 // leave out grossly mispredicted samples with outlying regressors (below)
+  std::optional<Eigen::VectorXd> prior_mean;  // explicit prior N(m0, P0): both, and a scale
   std::optional<Eigen::MatrixXd> prior_covariance;
 };
 
@@ -119,10 +119,10 @@ class LcRegression {
   double noise_sd_;  // standard deviation of u under f
   LcGaussianFilter filter_;
   Eigen::VectorXd zero_;
-  Eigen::VectorXd pz_;     // P z (workspace)
+  Eigen::VectorXd pz_;               // P z (workspace)
   Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the start window
   bool have_window_ = false;         // centre_, spread_ are set (a start from data, not an explicit prior)
-  Eigen::MatrixXd kept_;  // (ρ+1) x 5W: y, z of the start-up samples
+  Eigen::MatrixXd kept_;             // (ρ+1) x 5W: y, z of the start-up samples
   long kept_count_ = 0;
   bool started_ = false;
   bool provisional_ = false;  // started from fewer than 5W samples: kept_ grows on to 5W (Confirm)

@@ -1,4 +1,4 @@
-#include "ident/regression/lc_regression.h"
+#include "ident/observers/lc_regression.h"
 
 #include <algorithm>
 #include <cmath>
@@ -69,10 +69,11 @@ Eigen::MatrixXd KeptRowsCovariance(const Eigen::MatrixXd& Z, const Eigen::Vector
 
 LcRegressionOptions CheckedLcOptions(int rho, LcRegressionOptions o) {
   IDENT_REQUIRE(rho >= 1, "lc regression: num_parameters = {}; need >= 1", rho);
-  IDENT_REQUIRE(o.scale == 0 || (std::isfinite(o.scale) && o.scale > 0), "lc regression: scale = {}; need > 0 (or 0: estimated)",
-                o.scale);
+  IDENT_REQUIRE(o.scale == 0 || (std::isfinite(o.scale) && o.scale > 0),
+                "lc regression: scale = {}; need > 0 (or 0: estimated)", o.scale);
   IDENT_REQUIRE(o.startup_window == 0 || o.startup_window >= rho + 1,
-                "lc regression: startup window = {}; need 0 (automatic) or at least ρ + 1 = {}", o.startup_window, rho + 1);
+                "lc regression: startup window = {}; need 0 (automatic) or at least ρ + 1 = {}", o.startup_window,
+                rho + 1);
   IDENT_REQUIRE(std::isfinite(o.forgetting) && o.forgetting > 0 && o.forgetting <= 1,
                 "lc regression: forgetting = {}; need 0 < λ <= 1", o.forgetting);
   IDENT_REQUIRE(o.prior_mean.has_value() == o.prior_covariance.has_value(),
