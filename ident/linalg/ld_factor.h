@@ -122,12 +122,11 @@ class LdFactor {
   // dominates small updates); if that overflows (u, 1/d' infinite: extreme scales) the c-form is used.
   // Stores the new d and b_j in a workspace; the factor is unchanged. O(n).
   template <class Derived>
-  Plan PlanUpdate(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
+  const Plan& PlanUpdate(double s, double c, const Eigen::MatrixBase<Derived>& g) noexcept {
     Plan p = PlanPrefixSum(s, c, g);
     if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) [[unlikely]]
       p = PlanChained(s, c, g);
-    plan_ = p;
-    return p;
+    return Keep(p);
   }
 
   // The same plan when the caller already has, from the back substitution g = L'^{-1} a, the
@@ -139,8 +138,9 @@ class LdFactor {
   // Kárný–Hangos weight c = β(t) is known only after ξ, ξ_z are: this keeps the divisions 1/d_j and
   // the running sum off the path from β to the update). Falls back to the c-form if that overflows.
   template <class DerivedG, class DerivedR, class DerivedQ>
-  Plan PlanUpdateFromSums(double s, double c, const Eigen::MatrixBase<DerivedG>& g,
-                          const Eigen::MatrixBase<DerivedR>& inv_d, const Eigen::MatrixBase<DerivedQ>& q_sum) noexcept {
+  const Plan& PlanUpdateFromSums(double s, double c, const Eigen::MatrixBase<DerivedG>& g,
+                                 const Eigen::MatrixBase<DerivedR>& inv_d,
+                                 const Eigen::MatrixBase<DerivedQ>& q_sum) noexcept {
     const Eigen::Index n = d_.size();
     Plan p;
     p.min_d = std::numeric_limits<double>::infinity();
@@ -157,8 +157,7 @@ class LdFactor {
     }
     if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) [[unlikely]]
       p = PlanChained(s, c, g);
-    plan_ = p;
-    return p;
+    return Keep(p);
   }
 
   // Phase 2: applies the last PlanUpdate(). `a` (size n, the a of the plan's g = L'^{-1} a) is
@@ -228,7 +227,8 @@ class LdFactor {
   // overflows (then the c-form plan and its sweep are used, as PlanUpdate does). The same numbers as
   // the two phases, bit for bit.
   template <class DerivedG, class DerivedA>
-  Plan PlanFused(double s, double c, Eigen::MatrixBase<DerivedG>& g_in, const Eigen::MatrixBase<DerivedA>& a) noexcept {
+  const Plan& PlanFused(double s, double c, Eigen::MatrixBase<DerivedG>& g_in,
+                        const Eigen::MatrixBase<DerivedA>& a) noexcept {
     const Eigen::Index n = d_.size();
     if (!(l_bound_ == l_bound_)) l_bound_ = MaxAbsOffDiagonal();  // of the old L
     l_bound_before_ = l_bound_;
@@ -261,8 +261,7 @@ class LdFactor {
     }
     if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) [[unlikely]]
       p = FusedChained(s, c, g_in, a);
-    plan_ = p;
-    return p;
+    return Keep(p);
   }
 
   // Takes the d of the last PlanFused() (its L is in place). `a_max` as for CommitUpdate.
@@ -340,6 +339,18 @@ class LdFactor {
   static constexpr double kStale = std::numeric_limits<double>::quiet_NaN();
   // Covers the rounding of the ~2n operations behind each L entry (relative 2^-52 each) many times over.
   static constexpr double kRoundingSlack = 1 + 0x1p-20;
+
+  // Keeps `p` as the last plan and returns it. Field by field: a plan built in registers and copied whole
+  // would go through memory with narrow stores and wide loads, which cannot be store-forwarded and stall
+  // the step.
+  const Plan& Keep(const Plan& p) noexcept {
+    plan_.min_d = p.min_d;
+    plan_.max_d = p.max_d;
+    plan_.d_sum = p.d_sum;
+    plan_.max_b = p.max_b;
+    plan_.g_abs_sum = p.g_abs_sum;
+    return plan_;
+  }
 
   // One step j, for g_j ≠ 0, of the plan's recurrence (PlanPrefixSum): u_j = u_{j+1} + g_j²/d'_j,
   // dn_j = d'_j u_j / u_{j+1}, b_j = g_j / (d'_j u_j), with u_{j+1} and its reciprocal carried from step j+1.

@@ -137,7 +137,7 @@ class ExtendedInformation {
   // WithXi = true: after Prepare<true>(), from the reciprocals and sums it kept (same plan, fewer
   // divisions after β is known; LdFactor::PlanUpdateFromSums).
   template <bool WithXi = false>
-  typename LdFactor<Dim>::Plan PlanApply(double beta) noexcept {
+  const typename LdFactor<Dim>::Plan& PlanApply(double beta) noexcept {
     if constexpr (WithXi)
       return V_.PlanUpdateFromSums(1 - beta, beta, g_, inv_d_, q_sum_);
     else
@@ -160,10 +160,10 @@ class ExtendedInformation {
   // numbers of Prepare<false>() and PlanApply<false>(β), one O(ρ²) pass fewer). Then CommitFused(), or
   // RollbackFused() for the state bit-identical to before (L is updated in place, its old rows kept).
   template <class Derived>
-  typename LdFactor<Dim>::Plan PrepareAndPlan(double y, const Eigen::MatrixBase<Derived>& z, double beta,
-                                              double& prediction_error) noexcept {
+  const typename LdFactor<Dim>::Plan& PrepareAndPlan(double y, const Eigen::MatrixBase<Derived>& z, double beta,
+                                                     double& prediction_error) noexcept {
     LoadSample(y, z);
-    const auto plan = V_.PlanFused(1 - beta, beta, g_, h_);
+    const auto& plan = V_.PlanFused(1 - beta, beta, g_, h_);
     prediction_error = g_(0);
     return plan;
   }

@@ -124,7 +124,7 @@ class StepDriver {
         return {{StepStatus::kNumericalFailure, beta, nu, e}};
       }
       double e;
-      const auto plan = stats.PrepareAndPlan(x.y, x.z, beta, e);
+      const auto& plan = stats.PrepareAndPlan(x.y, x.z, beta, e);
       // L is already the new one (its old rows kept): a refused step rolls it back.
       bool healthy = true;
       switch (guard_.Judge(stats, plan, nu, x.h_norm, d_min)) {
@@ -159,7 +159,7 @@ class StepDriver {
       o.report.status = StepStatus::kNumericalFailure;
       return o;
     }
-    const auto plan = stats.template PlanApply<WithXi>(beta);
+    const auto& plan = stats.template PlanApply<WithXi>(beta);
     switch (guard_.Judge(stats, plan, nu, x.h_norm, d_min)) {
       case StepGuard<Dim>::Verdict::kHealthy:
         stats.CommitApply(nu, x.h_norm);
