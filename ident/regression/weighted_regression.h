@@ -89,7 +89,8 @@ class BasicWeightedRegression {
         stats_, {options_.forgetting.factor, options_.forgetting.stabilised, kWindupFloor}, prior_.nu0, prior_factor_,
         y, z, rule_);
     if (s.report.updated()) samples_ = s.lambda * samples_ + 1;
-    return s.report;
+    // Built from the fields, not copied whole: see StepDriver::Run.
+    return {s.report.status, s.report.weight, s.report.nu, s.report.prediction_error};
   }
 
   // Below this, d is taken to be winding up under forgetting (see Update); 2^-900 ≈ 1.2e-271.

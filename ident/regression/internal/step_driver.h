@@ -61,22 +61,25 @@ class StepDriver {
   template <bool WithXi = true, bool BetaFirst = false, class Derived, class Weight>
   DrivenStep Run(ExtendedInformation<Dim>& stats, const StepSettings& s, double nu_a, const LdFactor<Dim>& Va, double y,
                  const Eigen::MatrixBase<Derived>& z, Weight&& weight) noexcept {
+    // The report is carried field by field and built once, by the one return below: a report assembled in
+    // memory on one path and copied whole on another is reloaded wider than it was stored, which stalls
+    // until the step retires.
+    constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+    StepStatus status = StepStatus::kRejectedInvalid;
+    double beta = nan, nu = nan, e = nan, lambda = s.lambda;
     // |h|² = y² + |z|² is finite iff every entry is and nothing overflows (squares cannot cancel).
     const double h_norm2 = y * y + z.squaredNorm();
-    if (z.size() != stats.num_parameters() || !std::isfinite(h_norm2))
-      return {{StepStatus::kRejectedInvalid}, s.lambda};
-    const Sample<Derived> sample{y, z, std::sqrt(h_norm2)};
-    const bool windup = s.lambda < 1 && s.windup_floor > 0;
-    // The report is carried field by field and built once: a report assembled in memory on one path and
-    // copied whole on another is reloaded wider than it was stored, which stalls until the step retires.
-    const Outcome o = Attempt<WithXi, BetaFirst>(stats, s.stabilised, s.lambda,
-                                                 windup ? s.windup_floor : StepGuard<Dim>::kNormalMin, nu_a, Va, sample,
-                                                 weight);
-    StepStatus status = o.report.status;
-    double beta = o.report.weight, nu = o.report.nu, e = o.report.prediction_error, lambda = s.lambda;
-    if (windup && o.unhealthy) [[unlikely]] {
-      const StepReport r = Retry<WithXi, BetaFirst>(stats, s.stabilised, nu_a, Va, sample, weight);
-      status = r.status, beta = r.weight, nu = r.nu, e = r.prediction_error, lambda = 1.0;
+    if (z.size() == stats.num_parameters() && std::isfinite(h_norm2)) [[likely]] {
+      const Sample<Derived> sample{y, z, std::sqrt(h_norm2)};
+      const bool windup = s.lambda < 1 && s.windup_floor > 0;
+      const Outcome o =
+          Attempt<WithXi, BetaFirst>(stats, s.stabilised, s.lambda,
+                                     windup ? s.windup_floor : StepGuard<Dim>::kNormalMin, nu_a, Va, sample, weight);
+      status = o.report.status, beta = o.report.weight, nu = o.report.nu, e = o.report.prediction_error;
+      if (windup && o.unhealthy) [[unlikely]] {
+        const StepReport r = Retry<WithXi, BetaFirst>(stats, s.stabilised, nu_a, Va, sample, weight);
+        status = r.status, beta = r.weight, nu = r.nu, e = r.prediction_error, lambda = 1.0;
+      }
     }
     return {{status, beta, nu, e}, lambda};
   }
