@@ -257,23 +257,25 @@ class LdFactor {
       } else {
         for (Eigen::Index i = 0; i < j; ++i) row_saved[i] = row[i];
       }
-      Record(p, j, dn, b, gj);
+      // d in place too, the old d kept for RollbackFused(): the next step reads d_j straight from this store.
+      d_next_(j) = d_(j);
+      d_(j) = dn;
+      Accumulate(p, dn, b, gj);
     }
     if (!(std::isfinite(p.d_sum) && std::isfinite(p.max_b))) [[unlikely]]
       p = FusedChained(s, c, g_in, a);
     return Keep(p);
   }
 
-  // Takes the d of the last PlanFused() (its L is in place). `a_max` as for CommitUpdate.
+  // Keeps the last PlanFused() (its L and d are in place). `a_max` as for CommitUpdate.
   void CommitFused(double a_max) noexcept {
-    d_.swap(d_next_);
     if (l_bound_ == l_bound_) l_bound_ = GrownBound(l_bound_, a_max);
   }
-  // Back to the factor before the last PlanFused(), bit for bit (`committed`: CommitFused() was called).
-  void RollbackFused(bool committed) noexcept {
+  // Back to the factor before the last PlanFused(), bit for bit, committed or not.
+  void RollbackFused() noexcept {
     const Eigen::Index n = d_.size();
     for (Eigen::Index j = 1; j < n; ++j) L_.row(j).head(j) = L_saved_.row(j).head(j);
-    if (committed) d_.swap(d_next_);
+    d_.swap(d_next_);
     l_bound_ = l_bound_before_;
   }
 
@@ -368,6 +370,9 @@ class LdFactor {
   void Record(Plan& p, Eigen::Index j, double dn, double b, double gj) noexcept {
     d_next_(j) = dn;
     b_(j) = b;
+    Accumulate(p, dn, b, gj);
+  }
+  static void Accumulate(Plan& p, double dn, double b, double gj) noexcept {
     p.min_d = std::min(p.min_d, dn);
     p.max_d = std::max(p.max_d, dn);
     p.d_sum += dn;
@@ -428,7 +433,9 @@ class LdFactor {
   template <class DerivedG, class DerivedA>
   [[gnu::noinline, gnu::cold]] Plan FusedChained(double s, double c, const Eigen::MatrixBase<DerivedG>& g,
                                                  const Eigen::MatrixBase<DerivedA>& a) noexcept {
+    d_.swap(d_next_);  // the old d back (PlanFused wrote the new one in place); PlanChained reads it
     const Plan p = PlanChained(s, c, g);
+    d_.swap(d_next_);  // its new d in place, the old kept, as PlanFused leaves them
     const Eigen::Index n = d_.size();
     for (Eigen::Index j = 1; j < n; ++j) L_.row(j).head(j) = L_saved_.row(j).head(j);
     a_work_ = a;

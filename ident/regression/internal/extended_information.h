@@ -173,9 +173,9 @@ class ExtendedInformation {
     nu_ = nu_new;
     theta_valid_ = false;
   }
-  // Undoes the last PrepareAndPlan() (and CommitFused(), if `committed`); ν ← nu.
-  void RollbackFused(double nu, bool committed) noexcept {
-    V_.RollbackFused(committed);
+  // Undoes the last PrepareAndPlan() (and CommitFused(), if it was called); ν ← nu.
+  void RollbackFused(double nu) noexcept {
+    V_.RollbackFused();
     nu_ = nu;
     theta_valid_ = false;
   }

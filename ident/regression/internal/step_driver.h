@@ -141,14 +141,14 @@ class StepDriver {
             if (stabilised)
               guard_.Restore(stats, nu_before);
             else
-              stats.RollbackFused(nu_before, /*committed=*/true);
+              stats.RollbackFused(nu_before);
           }
           break;
         case StepGuard<Dim>::Verdict::kUnhealthy:
           if (stabilised)
             guard_.Restore(stats, nu_before);
           else
-            stats.RollbackFused(nu_before, /*committed=*/false);
+            stats.RollbackFused(nu_before);
           healthy = false;
           break;
       }
