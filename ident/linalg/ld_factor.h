@@ -220,9 +220,9 @@ class LdFactor {
   // PlanUpdate(s, c, g = L'⁻¹a) and CommitUpdate(a) in one sweep, for a c known before g: the back
   // substitution, the prefix-sum plan and the rank-one update of L share the row loop (row j's plan needs
   // only g_j, final once rows > j are done). ~2n² flops where the two phases take ~3n² (the back
-  // substitution is done once). L is updated in place and its old rows kept, d is left as it is: the
+  // substitution is done once). L and d are updated in place, the old rows of L and the old d kept: the
   // caller judges the plan, then CommitFused() or RollbackFused() (the factor bit-identical to before).
-  // Until then L is the new one; OffDiagonalBound() still bounds the old L (GrownBound() the new one).
+  // Until then L and d are the new ones; OffDiagonalBound() still bounds the old L (GrownBound() the new one).
   // On entry `g` holds a; on return g = L'⁻¹a. `a` (not aliasing g) is read only if the prefix sum
   // overflows (then the c-form plan and its sweep are used, as PlanUpdate does). The same numbers as
   // the two phases, bit for bit.
@@ -466,7 +466,7 @@ class LdFactor {
 
   Matrix L_;
   Matrix L_saved_;  // strict lower triangle: PlanFused's old rows of L, SolveTransposedKeep's partial sums
-  Vector d_, d_next_;
+  Vector d_, d_next_;                // d_next_: a plan's new d, or PlanFused's old d
   Vector b_;                         // PlanUpdate -> CommitUpdate workspace
   Vector a_work_;                    // PlanFused's fallback: a copy of a
   Eigen::Index sweep_end_ = 0;       // rows below this keep their L (the sweep's c reached 0)

@@ -158,7 +158,7 @@ class ExtendedInformation {
   // Steps 3 and 5 in one sweep, for a β known before the innovation (RLS: β = 1/ν): h = [y; z], the back
   // substitution (ê = g_0, returned in `prediction_error`), the plan and the new L (LdFactor::PlanFused: the
   // numbers of Prepare<false>() and PlanApply<false>(β), one O(ρ²) pass fewer). Then CommitFused(), or
-  // RollbackFused() for the state bit-identical to before (L is updated in place, its old rows kept).
+  // RollbackFused() for the state bit-identical to before (L and d are updated in place, the old ones kept).
   template <class Derived>
   const typename LdFactor<Dim>::Plan& PrepareAndPlan(double y, const Eigen::MatrixBase<Derived>& z, double beta,
                                                      double& prediction_error) noexcept {

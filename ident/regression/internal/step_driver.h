@@ -128,7 +128,7 @@ class StepDriver {
       }
       double e;
       const auto& plan = stats.PrepareAndPlan(x.y, x.z, beta, e);
-      // L is already the new one (its old rows kept): a refused step rolls it back.
+      // L and d are already the new ones (the old ones kept): a refused step rolls them back.
       bool healthy = true;
       switch (guard_.Judge(stats, plan, nu, x.h_norm, d_min)) {
         case StepGuard<Dim>::Verdict::kHealthy:
@@ -137,20 +137,16 @@ class StepDriver {
         case StepGuard<Dim>::Verdict::kUnknown:
           stats.CommitFused(nu, x.h_norm);
           healthy = guard_.Healthy(stats, d_min);
-          if (!healthy) {
-            if (stabilised)
-              guard_.Restore(stats, nu_before);
-            else
-              stats.RollbackFused(nu_before);
-          }
           break;
         case StepGuard<Dim>::Verdict::kUnhealthy:
-          if (stabilised)
-            guard_.Restore(stats, nu_before);
-          else
-            stats.RollbackFused(nu_before);
           healthy = false;
           break;
+      }
+      if (!healthy) {
+        if (stabilised)
+          guard_.Restore(stats, nu_before);
+        else
+          stats.RollbackFused(nu_before);
       }
       return {{healthy ? StepStatus::kUpdated : StepStatus::kNumericalFailure, beta, nu, e}, !healthy};
     }
