@@ -74,6 +74,7 @@ class ArxSource final : public DynamicSource<models::ArxRegressor> {
             const models::OutputCleaningOptions& cleaning)
       : DynamicSource(output, std::move(inputs), models::ArxRegressor(arx, cleaning)) {}
   std::unique_ptr<DataSource> Clone() const override { return std::make_unique<ArxSource>(*this); }
+  bool affine_in_rows() const override { return true; }
   bool MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) const override {
     return regressor().MeasuredRegressor(z_measured);
   }
@@ -121,6 +122,7 @@ class StaticSource final : public DataSource {
                   columns_.size(), regression_.regressors.size());
   }
   std::unique_ptr<DataSource> Clone() const override { return std::make_unique<StaticSource>(*this); }
+  bool affine_in_rows() const override { return true; }
   int num_parameters() const override { return regression_.num_parameters(); }
   std::string structure() const override {
     return fmt::format("static({}){}", fmt::join(regression_.regressors, ","),

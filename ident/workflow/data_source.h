@@ -43,6 +43,10 @@ class DataSource {
   virtual void Restart() { Reset(); }
   virtual bool Regressor(const Eigen::Ref<const Eigen::VectorXd>& row, Eigen::Ref<Eigen::VectorXd> z) = 0;
   virtual void PushOutput(double y) = 0;
+  // True when Regressor() is affine in the rows, with no state beyond the last first_regression_index()
+  // rows and the outputs pushed: shifting every row by a constant c shifts z by z(c) − z(0), the regressors
+  // of constant rows c and 0 (ARX: lagged values; static: the columns and an intercept).
+  virtual bool affine_in_rows() const { return false; }
   // During estimation: stores y, or (ARX with cleaning on) its cleaned value when the estimator
   // flagged the sample (models/output_cleaner.h); `judged` says whether the estimator gives verdicts at
   // all (AnyRegressionEstimator::judges_outliers). Returns the stored value.

@@ -15,8 +15,10 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.h"
+#include "ident/io/csv_read_ahead.h"
 #include "ident/workflow/fit_record.h"
 #include "ident/workflow/internal/fit_steps.h"
+#include "ident/workflow/internal/shifted_mean_squares.h"
 
 namespace ident::workflow {
 
@@ -74,7 +76,8 @@ namespace {
 
 // The rows of a CSV file as a streamed fit reads them. With `filled` (time gaps to fill, --missing) each
 // gap's missing rows come before the row that ends it, as FillTimeGaps inserts them into a table: NaN in
-// every column but the time column, whose values step on from the gap's start by its step.
+// every column but the time column, whose values step on from the gap's start by its step. The file is
+// parsed ahead on a second thread while the caller works on the rows before.
 class RecordRows {
  public:
   RecordRows(const std::string& path, const io::CsvOptions& csv, const TimeCheck* filled)
@@ -116,7 +119,7 @@ class RecordRows {
   }
 
  private:
-  io::CsvReader reader_;
+  io::CsvReadAhead reader_;
   const TimeCheck* filled_;
   int time_column_ = -1;
   std::size_t gap_ = 0;  // the next gap to fill
@@ -152,9 +155,11 @@ CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataS
 
 // Detrending offsets of a CSV file: the estimation-part means of the used columns (NaN = missing skipped),
 // zero with Detrend::kNone. With FitOptions::robust_offset on a dynamic structure the output's estimation
-// values are kept for SpikeRobustMean (memory O(N), as the robust estimators' own sample history).
+// values are kept for SpikeRobustMean (memory O(N), as the robust estimators' own sample history). With
+// `squares` (Detrend::kMean only) the same rows go to it too.
 Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                               const FitOptions& options, Segment estimation, const TimeCheck* filled) {
+                               const FitOptions& options, Segment estimation, const TimeCheck* filled,
+                               internal::ShiftedMeanSquares* squares = nullptr) {
   RecordRows reader(path, csv, filled);
   Eigen::VectorXd offset = Eigen::VectorXd::Zero(reader.num_columns()), row(reader.num_columns());
   if (options.detrend == Detrend::kMean) {
@@ -165,6 +170,7 @@ Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& cs
     for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
       for (int c : used) means[c].Add(row(c));
       if (robust >= 0) output.push_back(row(robust));
+      if (squares != nullptr) squares->Add(row);
     }
     for (int c : used) offset(c) = means[c].Get(path, reader.names()[c]);
     if (robust >= 0)
@@ -182,7 +188,7 @@ auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) 
   try {
     return f();
   } catch (const InvalidArgument&) {
-    io::CsvReader reader(path, csv);
+    io::CsvReadAhead reader(path, csv);
     Eigen::VectorXd row(reader.num_columns());
     while (reader.Next(row)) {}
     throw;
@@ -347,7 +353,7 @@ CsvLayout CheckCsvLayout(const std::string& path, const io::CsvOptions& csv, con
 std::optional<TimeCheck> ScanCsvTime(const std::string& path, const io::CsvOptions& csv,
                                      const std::vector<int>& used_columns) {
   return DataErrorsFirst(path, csv, [&]() -> std::optional<TimeCheck> {
-    io::CsvReader reader(path, csv);
+    io::CsvReadAhead reader(path, csv);
     const int column = TimeColumnIndex(reader.names(), used_columns);
     if (column < 0) return std::nullopt;
     TimeCheck check;
@@ -365,8 +371,16 @@ std::optional<TimeCheck> ScanCsvTime(const std::string& path, const io::CsvOptio
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
                      const CsvLayout& layout, const TimeCheck* filled) {
   return DataErrorsFirst(path, csv, [&] {
-    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, plan.options, layout.estimation, filled);
-    if (plan.scaled_prior) plan.UseScaledPrior(StreamMeanSquares(path, csv, source, layout, offset, filled));
+    // The data-scaled prior's mean squares: in the means pass when the regressor allows, else a pass of
+    // their own.
+    std::optional<internal::ShiftedMeanSquares> squares;
+    if (plan.scaled_prior && plan.options.detrend == Detrend::kMean && source.affine_in_rows())
+      squares.emplace(source, layout.columns);
+    const Eigen::VectorXd offset =
+        DetrendOffsets(path, csv, source, plan.options, layout.estimation, filled, squares ? &*squares : nullptr);
+    if (plan.scaled_prior)
+      plan.UseScaledPrior(squares ? squares->Get(offset)
+                                  : StreamMeanSquares(path, csv, source, layout, offset, filled));
     return StreamCsvFile(path, csv, source, *plan.estimator, plan.options, layout, offset, filled);
   });
 }

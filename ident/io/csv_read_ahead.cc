@@ -1,0 +1,99 @@
+// The read-ahead CSV reader (ident/io/csv_read_ahead.h): a ring of blocks, each filled by the reading thread
+// and emptied by the caller, handed over by an atomic flag per block.
+#include "ident/io/csv_read_ahead.h"
+
+#include <algorithm>
+
+#include "common/error.h"
+
+namespace ident::io {
+
+namespace {
+
+// Values per block at most: wide files get blocks of fewer rows.
+constexpr int kBlockValues = 1 << 16;
+
+}  // namespace
+
+CsvReadAhead::CsvReadAhead(const std::string& path, const CsvOptions& options) {
+  auto reader = std::make_unique<CsvReader>(path, options);
+  path_ = reader->path();
+  names_ = reader->names();
+  generated_names_ = reader->generated_names();
+  const int n = num_columns();
+  block_rows_ = std::clamp(kBlockValues / n, 1, kBlockRows);
+  for (Block& block : blocks_) {
+    block.values.resize(static_cast<std::size_t>(block_rows_) * static_cast<std::size_t>(n));
+    block.lines.resize(static_cast<std::size_t>(block_rows_));
+  }
+  thread_ = std::thread(&CsvReadAhead::Read, this, std::move(reader));
+}
+
+CsvReadAhead::~CsvReadAhead() {
+  stop_.store(true);
+  for (Block& block : blocks_) {  // wakes the reading thread if it waits for a block
+    block.full.store(false);
+    block.full.notify_one();
+  }
+  thread_.join();
+}
+
+void CsvReadAhead::Read(std::unique_ptr<CsvReader> reader) {
+  const int n = num_columns(), block_rows = block_rows_;
+  for (int b = 0;; b = (b + 1) % kBlocks) {
+    Block& block = blocks_[static_cast<std::size_t>(b)];
+    block.full.wait(true, std::memory_order_acquire);  // until the caller has emptied it
+    if (stop_.load()) return;
+    int rows = 0;
+    double* const values = block.values.data();
+    long* const lines = block.lines.data();
+    try {
+      for (; rows < block_rows; ++rows) {
+        if (!reader->Next(Eigen::Map<Eigen::VectorXd>(values + static_cast<std::ptrdiff_t>(rows) * n, n))) {
+          block.last = true;
+          break;
+        }
+        lines[rows] = reader->line();
+      }
+    } catch (...) {
+      block.error = std::current_exception();
+      block.last = true;
+    }
+    block.rows = rows;
+    const bool last = block.last;
+    block.full.store(true, std::memory_order_release);
+    block.full.notify_one();
+    if (last) return;
+  }
+}
+
+bool CsvReadAhead::Next(Eigen::Ref<Eigen::VectorXd> row) {
+  IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(), num_columns());
+  while (!ended_) {
+    Block& block = blocks_[static_cast<std::size_t>(block_)];
+    if (!holding_) {
+      block.full.wait(false, std::memory_order_acquire);  // until the reading thread has filled it
+      holding_ = true;
+      row_ = 0;
+    }
+    if (row_ < block.rows) {
+      const int n = num_columns();
+      row = Eigen::Map<const Eigen::VectorXd>(block.values.data() + static_cast<std::ptrdiff_t>(row_) * n, n);
+      line_ = block.lines[static_cast<std::size_t>(row_)];
+      ++row_;
+      return true;
+    }
+    if (block.last) {
+      ended_ = true;
+      if (block.error) std::rethrow_exception(block.error);
+      return false;
+    }
+    holding_ = false;
+    block.full.store(false, std::memory_order_release);
+    block.full.notify_one();
+    block_ = (block_ + 1) % kBlocks;
+  }
+  return false;
+}
+
+}  // namespace ident::io

@@ -1,0 +1,84 @@
+// Reading a CSV file's rows while they are used: a CsvReader run on a second thread, a few blocks of rows
+// ahead of the caller.
+//
+// The rows, their line numbers and the reader's errors arrive in file order, as CsvReader::Next gives
+// them: a DataError at some row is thrown by the Next() that would have returned that row, after every
+// row before it. Parsing (most of what reading a long record costs) overlaps with the caller's work on the
+// rows before; memory stays constant (kBlocks blocks of at most kBlockRows rows). Destroying the reader early
+// stops the thread. CsvOptions::on_read, if set, is called on the reading thread.
+//
+// Example:
+//   ident::io::CsvReadAhead reader("long.csv");
+//   Eigen::VectorXd row(reader.num_columns());
+//   while (reader.Next(row)) { ... }   // row and reader.line() as CsvReader's
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <exception>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ident/io/csv.h"
+
+namespace ident::io {
+
+class CsvReadAhead {
+ public:
+  static constexpr int kBlocks = 4;
+  static constexpr int kBlockRows = 2048;
+
+  // Opens the file and reads its header on the calling thread (throws DataError as CsvReader does), then
+  // starts reading rows.
+  explicit CsvReadAhead(const std::string& path, const CsvOptions& options = {});
+  ~CsvReadAhead();
+  CsvReadAhead(const CsvReadAhead&) = delete;
+  CsvReadAhead& operator=(const CsvReadAhead&) = delete;
+
+  const std::string& path() const { return path_; }
+  const std::vector<std::string>& names() const { return names_; }
+  int num_columns() const { return static_cast<int>(names_.size()); }
+  bool generated_names() const { return generated_names_; }
+  // As CsvReader::Next: the next row into `row` (size num_columns()), false at the end; throws the
+  // reader's DataError at the row where it arose.
+  bool Next(Eigen::Ref<Eigen::VectorXd> row);
+  // 1-based line number of the row last returned by Next().
+  long line() const { return line_; }
+
+ private:
+  // Rows [0, rows) of a block; then, if `last`, the end of the file or `error`. A cache line of its own:
+  // the two threads work on different blocks.
+  struct alignas(64) Block {
+    std::vector<double> values;  // rows × columns, row by row
+    std::vector<long> lines;
+    int rows = 0;
+    bool last = false;
+    std::exception_ptr error;
+    std::atomic<bool> full{false};  // written by the reading thread, emptied by the caller
+  };
+
+  void Read(std::unique_ptr<CsvReader> reader);  // the reading thread
+  bool NextBlock();                              // waits for the caller's next block; false past the last
+
+  // Set before the reading thread starts, read by both.
+  std::string path_;
+  std::vector<std::string> names_;
+  bool generated_names_ = false;
+  int block_rows_ = kBlockRows;  // rows per block: fewer for wide files (at most 65 536 values a block)
+  // The caller's: its block, the next row in it, whether it has waited for the block to be filled. A cache
+  // line of its own, written at every row.
+  alignas(64) int block_ = 0;
+  int row_ = 0;
+  bool holding_ = false;
+  bool ended_ = false;
+  long line_ = 0;
+  std::array<Block, kBlocks> blocks_;
+  alignas(64) std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace ident::io
