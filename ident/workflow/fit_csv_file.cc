@@ -31,47 +31,6 @@ using internal::Scoring;
 using internal::Split;
 using internal::Summarise;
 
-long CountCsvDataRows(const std::string& path) {
-  std::ifstream in(path, std::ios::in | std::ios::binary);
-  if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
-  io::internal::CountCsvFileOpened();
-  // A line ends at LF or CR (CRLF: an empty line between them, not counted) and counts if it has a
-  // character other than ' ' and '\t' and the first such is not '#' (the reader skips the others: blank
-  // lines and comments). Past a line's first such character, memchr finds its end.
-  std::vector<char> block(1 << 20);
-  long lines = 0;
-  enum { kBlank, kContent, kComment } state = kBlank;  // of the current line so far
-  while (in) {
-    in.read(block.data(), static_cast<std::streamsize>(block.size()));
-    const char* p = block.data();
-    const char* const end = p + in.gcount();
-    const char* next_cr = nullptr;  // the first CR at or after p (end: none); null: not searched yet
-    while (p < end) {
-      if (state == kBlank) {
-        const char c = *p;
-        if (c == ' ' || c == '\t' || c == '\n' || c == '\r') {
-          ++p;
-          continue;
-        }
-        state = c == '#' ? kComment : kContent;
-      }
-      if (next_cr == nullptr || next_cr < p) {
-        next_cr = static_cast<const char*>(std::memchr(p, '\r', static_cast<std::size_t>(end - p)));
-        if (next_cr == nullptr) next_cr = end;
-      }
-      const char* lf = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(next_cr - p)));
-      const char* const line_end = lf ? lf : next_cr;
-      if (line_end == end) break;  // the line goes on in the next block
-      lines += state == kContent;
-      state = kBlank;
-      p = line_end + 1;
-    }
-  }
-  if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
-  lines += state == kContent;
-  return lines > 0 ? lines - 1 : 0;  // minus the header
-}
-
 namespace {
 
 // The rows of a CSV file as a streamed fit reads them. With `filled` (time gaps to fill, --missing) each

@@ -109,6 +109,39 @@ TEST(StreamedReads, OpensTheFileOncePerPassAndEqualsTheInMemoryFit) {
   }
 }
 
+// The lines that are neither blank nor comments, less the header, found the plain way: every LF or CR ends a
+// line (CRLF: an empty line between).
+long PlainDataRows(const std::string& text) {
+  long lines = 0;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t stop = std::min(text.find_first_of("\r\n", start), text.size());
+    const std::size_t first = text.find_first_not_of(" \t", start);
+    lines += first < stop && text[first] != '#';
+    start = stop + 1;
+  }
+  return std::max(lines - 1, 0L);
+}
+
+// The row count of a streamed fit (CountCsvDataRows), which counts a 1 MiB block's lines at once when they
+// are all plain data lines, against the plain count: files of 3 MiB whose blocks hold now and then a
+// comment, a blank or space-only line, a CR or CRLF line end, or a leading space.
+TEST(StreamedReads, RowCountEqualsALineByLineCount) {
+  std::mt19937_64 rng(11);
+  const std::string kOdd[] = {"# a comment\n", "\n", "  \t\n", "\r", "\r\n", " ", "\t#x\n", "\n\n"};
+  for (int file = 0; file < 12; ++file) {
+    std::string text = "t,u,y\n";
+    std::uniform_int_distribution<int> odd(0, 7), every(0, file < 4 ? 200'000 : 2'000);
+    while (text.size() < (3u << 20)) {
+      if (every(rng) == 0) text += kOdd[odd(rng)];
+      text += fmt::format("{},{:.17g},{}\n", text.size(), 1.0 / static_cast<double>(text.size()), file);
+    }
+    if (file % 3 == 1) text.pop_back();  // no line end after the last row
+    const std::string path = testing::WriteFile("row_count.csv", text);
+    EXPECT_EQ(workflow::CountCsvDataRows(path), PlainDataRows(text)) << "file " << file;
+  }
+}
+
 // The data-scaled prior's mean squares gathered in the means pass about a provisional centre
 // (internal::ShiftedMeanSquares) against internal::MeanSquares over the rows detrended by their means: ARX and
 // a static regression with an intercept, with missing samples, an offset of 1e3, the first rows far from
