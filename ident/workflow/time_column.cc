@@ -34,9 +34,11 @@ std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::st
   if (!(t > previous_))
     throw DataError(fmt::format("{}: time column '{}' does not increase: {} after {}", where(), column, t, previous_));
   const double step = t - previous_;
-  // The median of the window is at least its smallest step: a step up to kTimeGapFactor times that is
-  // regular without the median (the common case: the median is sorted out only when it decides).
+  // The median of the window is at least its smallest step, and min_ at most that: a step up to
+  // kTimeGapFactor times min_ is regular without the median (the common case). Past it, min_ is brought
+  // up to the window's smallest step, and the median is sorted out only when that does not decide.
   double median = 0;
+  if (count_ > 0 && step > kTimeGapFactor * min_) min_ = WindowMin();
   if (count_ > 0 && step > kTimeGapFactor * min_ && step > kTimeGapFactor * (median = median_step())) {
     const double samples = std::round(step / median);
     if (!(samples - 1 <= static_cast<double>(taken_)))
@@ -55,21 +57,18 @@ std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::st
     return gap;
   }
   // A regular step: into the window of the last kSteps (a ring; the oldest leaves it).
-  double& slot = steps_[static_cast<std::size_t>(count_ % kSteps)];
-  const double oldest = slot;
-  const bool full = count_ >= kSteps;
-  slot = step;
+  steps_[static_cast<std::size_t>(count_ % kSteps)] = step;
   ++count_;
   if (count_ == 2 * kSteps) count_ = kSteps;  // keeps the index cycling without overflow
-  if (!full || step <= min_) {
-    min_ = std::min(min_, step);
-  } else if (oldest == min_) {  // the smallest left the window: the next smallest
-    min_ = steps_[0];
-    for (int k = 1; k < kSteps; ++k) min_ = std::min(min_, steps_[static_cast<std::size_t>(k)]);
-  }
+  min_ = std::min(min_, step);                // still at most the window's smallest when an older smallest has left
   previous_ = t;
   ++taken_;
   return std::nullopt;
+}
+
+double ArrivingTimeCheck::WindowMin() const {
+  const int held = std::min(count_, kSteps);
+  return *std::min_element(steps_.begin(), steps_.begin() + held);
 }
 
 double ArrivingTimeCheck::median_step() const {

@@ -74,7 +74,10 @@ class ArrivingTimeCheck {
   int count_ = 0;  // steps held (up to kSteps); the next goes to steps_[count_ % kSteps] once full
   long taken_ = 0;
   double previous_ = 0;
-  double min_ = std::numeric_limits<double>::infinity();  // the smallest step held (none: +inf)
+  // At most the smallest step held (none: +inf): lowered by each step, brought up to it by WindowMin()
+  // only when a step exceeds kTimeGapFactor times it.
+  double min_ = std::numeric_limits<double>::infinity();
+  double WindowMin() const;  // the smallest step held (count_ > 0)
   bool started_ = false;
 };
 
