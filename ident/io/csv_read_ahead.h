@@ -62,7 +62,6 @@ class CsvReadAhead {
   };
 
   void Read(std::unique_ptr<CsvReader> reader);  // the reading thread
-  bool NextBlock();                              // waits for the caller's next block; false past the last
 
   // Set before the reading thread starts, read by both.
   std::string path_;
