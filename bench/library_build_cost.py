@@ -68,10 +68,11 @@ def main():
     for row in rows:
         row["cpu_ratio_to_first"] = round(row["cpu_seconds"] / rows[0]["cpu_seconds"], 3)
     figures = {"jobs": args.jobs, "repetitions": args.repetitions, "options_off": off, "builds": rows}
-    print(json.dumps(figures, indent=1))
+    text = json.dumps(figures, indent=1)
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(figures, f, indent=1)
+            f.write(text + "\n")
+    print(text)
 
 
 if __name__ == "__main__":
