@@ -1,5 +1,6 @@
 #include "ident/workflow/internal/shifted_mean_squares.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -12,13 +13,14 @@ namespace ident::workflow::internal {
 ShiftedMeanSquares::ShiftedMeanSquares(DataSource& source, int columns)
     : source_(source),
       columns_(columns),
+      centre_rows_(std::clamp(kCentreValues / std::max(columns, 1), 1L, static_cast<long>(kCentreRows))),
       centre_(Eigen::VectorXd::Zero(columns)),
       shifted_(columns),
       z_(source.num_parameters()),
       sum_(Eigen::VectorXd::Zero(source.num_parameters() + 1)),
       sum_squares_(Eigen::VectorXd::Zero(source.num_parameters() + 1)) {
   IDENT_REQUIRE(source.affine_in_rows(), "{}: the regressor is not affine in the rows", source.structure());
-  held_.reserve(static_cast<std::size_t>(kCentreRows) * static_cast<std::size_t>(columns));
+  held_.reserve(static_cast<std::size_t>(centre_rows_ * columns));
   source_.Reset();
 }
 
@@ -29,7 +31,7 @@ void ShiftedMeanSquares::Add(const Eigen::Ref<const Eigen::VectorXd>& row) {
     return;
   }
   held_.insert(held_.end(), row.data(), row.data() + columns_);
-  if (std::ssize(held_) == static_cast<long>(kCentreRows) * columns_) Centre();
+  if (std::ssize(held_) == centre_rows_ * columns_) Centre();
 }
 
 void ShiftedMeanSquares::Centre() {

@@ -2,7 +2,8 @@
 // detrended by their means) gathered in the same pass as those means, for a source whose regressor is
 // affine in the rows (DataSource::affine_in_rows()). Internal to ident/workflow/.
 //
-// The rows are taken about a provisional centre a, the mean of the first kCentreRows rows. Once the means m
+// The rows are taken about a provisional centre a, the mean of the first kCentreRows rows (fewer for a file
+// of more than 64 columns: at most 65 536 values are held). Once the means m
 // are known, the regressor of the rows less m is the regressor of the rows less a plus the constant
 // d = z(a − m) − z(0) (z of constant rows), and y moves by d_y = a_y − m_y, so per entry
 //   Σ (z_a + d)² = Σ z_a² + 2 d Σ z_a + n d².
@@ -20,6 +21,7 @@ namespace ident::workflow::internal {
 class ShiftedMeanSquares {
  public:
   static constexpr int kCentreRows = 1024;
+  static constexpr long kCentreValues = 1 << 16;
 
   // Resets `source`, which must be affine in the rows; `columns`: the rows' size.
   ShiftedMeanSquares(DataSource& source, int columns);
@@ -36,6 +38,7 @@ class ShiftedMeanSquares {
 
   DataSource& source_;
   int columns_;
+  long centre_rows_;          // rows held for the centre
   std::vector<double> held_;  // the first rows, until the centre is known
   Eigen::VectorXd centre_, shifted_, z_, sum_, sum_squares_;
   bool centred_ = false;
