@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <fmt/format.h>
@@ -219,18 +220,29 @@ void ReconstructFromDual(const MapSmootherProblem& p, double mu, MapSmootherResu
   res->max_abs_x_difference = (res->x_from_dual - res->x).cwiseAbs().maxCoeff();
 }
 
-// Everything of the result after the iteration, from res->x and res->u (see
-// ident/smoothing/internal/map_smoother_fast_path.h): residuals, the polished and projected dual point
-// (u, y(u)), the certificate, and the reconstruction of x from the dual.
-template <int kN>
-void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const MapSmootherDualIterate* dual,
-                  MapSmootherResult* res) {
-  Eigen::MatrixXd r;
-  PrimalResiduals<kN>(p, res, &r);
-  if (dual != nullptr) {
-    Eigen::MatrixXd v = dual->process_dual;
-    PolishMapSmootherDual(p, *dual, &v, &res->u);
+// A dual point and its certificate, the fields of MapSmootherResult that CertifyDual sets.
+struct CertifiedDual {
+  Eigen::MatrixXd u, y;
+  double primal = 0, dual = 0, gap = 0, relative_gap = 0, gap_error_bound = 0, relative_gap_bound = 0;
+  double dual_infeasibility = 0;
+
+  void Swap(MapSmootherResult* res) {
+    u.swap(res->u);
+    y.swap(res->y);
+    std::swap(primal, res->primal);
+    std::swap(dual, res->dual);
+    std::swap(gap, res->gap);
+    std::swap(relative_gap, res->relative_gap);
+    std::swap(gap_error_bound, res->gap_error_bound);
+    std::swap(relative_gap_bound, res->relative_gap_bound);
+    std::swap(dual_infeasibility, res->dual_infeasibility);
   }
+};
+
+// The certificate of the dual point (res->u, y(res->u)): u projected into dom g*, y(u) in double-double, shrunk or
+// projected into dom f*, then the objectives and the certified gap. r: the measurement residuals z - Hx.
+template <int kN>
+void CertifyDual(const MapSmootherProblem& p, double z_scale, const Eigen::MatrixXd& r, MapSmootherResult* res) {
   for (int t = 0; t <= p.T(); ++t)
     ProjectIntoConjugateDomain(p.gt(t), res->u.col(t).data(), p.measurement_dim(), res);
   Eigen::MatrixXd y_lo;
@@ -238,6 +250,29 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, const 
   ShrinkDualIntoDomain<kN>(p, res, &y_lo);
   const bool certified = ProjectDualStates<kN>(p, res, &y_lo, &error_bound);
   EvaluateCertificate<kN>(p, z_scale, r, y_lo, error_bound, certified, res);
+}
+
+// Everything of the result after the iteration, from res->x and res->u (see
+// ident/smoothing/internal/map_smoother_fast_path.h): residuals, the dual point (u, y(u)) and its certificate,
+// and the reconstruction of x from the dual. The iterate's own dual point is certified first; only if its
+// certified relative gap exceeds `tolerance` (the residual R4 amplified by y(u)'s recursion) is it polished
+// and certified again, and the tighter certificate is kept: both are true bounds.
+template <int kN>
+void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, double tolerance,
+                  const MapSmootherDualIterate* dual, MapSmootherResult* res) {
+  Eigen::MatrixXd r;
+  PrimalResiduals<kN>(p, res, &r);
+  const Eigen::MatrixXd u_iterate = dual != nullptr ? res->u : Eigen::MatrixXd();
+  CertifyDual<kN>(p, z_scale, r, res);
+  if (dual != nullptr && !(res->relative_gap_bound <= tolerance)) {
+    CertifiedDual unpolished;
+    unpolished.Swap(res);
+    res->u = u_iterate;
+    Eigen::MatrixXd v = dual->process_dual;
+    PolishMapSmootherDual(p, *dual, &v, &res->u);
+    CertifyDual<kN>(p, z_scale, r, res);
+    if (!(res->relative_gap_bound <= unpolished.relative_gap_bound)) unpolished.Swap(res);
+  }
   ReconstructFromDual<kN>(p, mu, res);
 }
 
@@ -362,19 +397,19 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptio
   }
   switch (p.state_dim()) {
     case 1:
-      FinishResult<1>(p, z_scale, mu, dual, res);
+      FinishResult<1>(p, z_scale, mu, options.tolerance, dual, res);
       break;
     case 2:
-      FinishResult<2>(p, z_scale, mu, dual, res);
+      FinishResult<2>(p, z_scale, mu, options.tolerance, dual, res);
       break;
     case 3:
-      FinishResult<3>(p, z_scale, mu, dual, res);
+      FinishResult<3>(p, z_scale, mu, options.tolerance, dual, res);
       break;
     case 4:
-      FinishResult<4>(p, z_scale, mu, dual, res);
+      FinishResult<4>(p, z_scale, mu, options.tolerance, dual, res);
       break;
     default:
-      FinishResult<0>(p, z_scale, mu, dual, res);
+      FinishResult<0>(p, z_scale, mu, options.tolerance, dual, res);
   }
   SetStatusAndMessage(options, res);
 }
