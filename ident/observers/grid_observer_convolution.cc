@@ -5,23 +5,19 @@
 #include <limits>
 #include <numbers>
 
+#include "ident/linalg/internal/simd_clones.h"
 #include "ident/observers/grid_observer.h"
 
 namespace ident {
 namespace {
 
 // out[j] += Σ_g w[g] · in[j − g] for j in [lo, hi) and g < G: a direct convolution's taps on one source line (in
-// points at the source line shifted by the first tap's offset). Built for AVX2/FMA too where GCC can dispatch.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__)
-#define IDENT_GRID_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define IDENT_GRID_CLONES
-#endif
-IDENT_GRID_CLONES void AddTaps3(double* __restrict out, const double* __restrict in, const double* w, int lo, int hi) {
+// points at the source line shifted by the first tap's offset).
+IDENT_SIMD_CLONES void AddTaps3(double* __restrict out, const double* __restrict in, const double* w, int lo, int hi) {
   const double w0 = w[0], w1 = w[1], w2 = w[2];
   for (int j = lo; j < hi; ++j) out[j] += w0 * in[j] + w1 * in[j - 1] + w2 * in[j - 2];
 }
-IDENT_GRID_CLONES void AddTap(double* __restrict out, const double* __restrict in, double w, int lo, int hi) {
+IDENT_SIMD_CLONES void AddTap(double* __restrict out, const double* __restrict in, double w, int lo, int hi) {
   for (int j = lo; j < hi; ++j) out[j] += w * in[j];
 }
 

@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "ident/linalg/internal/simd_clones.h"
 #include "ident/linalg/work_arena.h"
 #include "ident/smoothing/internal/map_smoother_fast_path_steps.h"
 #include "ident/smoothing/internal/map_smoother_result.h"
@@ -231,7 +232,7 @@ class FastSolver {
   // (FactorStep), in one forward pass: at large T the passes stream the step records from memory, and this
   // saves one. *factored: false if a Schur complement is not numerically positive definite (the
   // factorisation stops there; the residuals are complete).
-  Residuals StepResidualsAndFactor(double alpha, bool* factored) {
+  IDENT_SIMD_CLONES Residuals StepResidualsAndFactor(double alpha, bool* factored) {
     Residuals out;
     double xp[kN] = {}, R4p[kN] = {};  // x_{t-1}, and R4_{t-1} until F_{t-1}' v_t completes it
     double r3p = 0;                    // R3_{t-1}
@@ -369,7 +370,7 @@ class FastSolver {
   // The corrector's right-hand side differs from the predictor's only in R2, by -target + ds_aff .* dq_aff:
   // rt3 changes by d_t = (target - ds_lo dq_lo) / s_lo - (target - ds_hi dq_hi) / s_hi and, the forward
   // substitution being linear, v_t by dv_t = d_t gf_t - M_t dv_{t-1} (no products with P_t and R4_t).
-  void CorrectorForward(double target) {
+  IDENT_SIMD_CLONES void CorrectorForward(double target) {
     double dvp[kN] = {};
     for (int t = 0; t <= T_; ++t) {
       StepState<kN>& s = steps_[t];
@@ -390,7 +391,7 @@ class FastSolver {
 
   // dx_t = v_t - P_t E_{t+1}' dx_{t+1} = v_t - N_t dx_{t+1} (backward substitution), then du = K^-1 (rt3 - H dx),
   // ds, dq (general path's Direction), the largest step keeping s, q > 0 and the complementarity sums.
-  Backward BackwardAndRecover(double target, bool corrector) {
+  IDENT_SIMD_CLONES Backward BackwardAndRecover(double target, bool corrector) {
     Backward out;
     double max_ratio = 0;  // max -d/v over components: the step limit is 1 / max_ratio
     double dxn[kN] = {};   // dx_{t+1}
