@@ -302,7 +302,7 @@ class FastSolver {
   // rt3 = R3 - e,  e = S_hi^-1 (-R2_hi + Q_hi R1_hi) - S_lo^-1 (-R2_lo + Q_lo R1_lo)  (general path's
   // RightHandSide), then v_t = P_t (b_t - E_t v_{t-1}) = P_t b_t - M_t v_{t-1} with b_t = -R4_t + H' K^-1 rt3,
   // where P_t H' K^-1 rt3 = rt3 gf exactly (no product with the large K^-1); the predictor's R2 = s .* q.
-  // P_t = S_t^-1 (S_t = D_t - E_t P_{t-1} E_t') is not stored. Stores rt3 and v_t, also in v (which may be v_prev).
+  // P_t = S_t^-1, S_t = D_t - E_t P_{t-1} E_t'. Stores rt3 and v_t, also in v (which may be v_prev).
   [[gnu::always_inline]] inline void ForwardRightHandSide(const StepConstants<kN>& c, StepState<kN>& s,
                                                           const double* R4, double r3, const double* P, const double* M,
                                                           const double* gf, double islo, double ishi,
@@ -344,24 +344,16 @@ class FastSolver {
     // P_t = S_t^-1 with the measurement's rank-one term entering with the factor K (StepInverse).
     double P[kN * kN], gf[kN];
     if (!StepInverse<kN>(c, t > 0 ? Pp : nullptr, ikd, kd, P, gf)) return false;
-    // M_t = P_t E_t and N_t = P_t E_{t+1}': the substitutions' recurrences then take one product level.
-    static constexpr double kZero[kN * kN] = {};
-    const double* En = t < T_ ? Constants(t + 1).E : kZero;  // E_{T+1} = 0
+    // M_t = P_t E_t: the forward recurrence then takes one product level. P_t is stored (not M_t and
+    // P_t E_{t+1}', twice its size): at large T the passes stream the step records from memory.
     double M[kN * kN];
     for (int j = 0; j < kN; ++j)
       for (int i = 0; i < kN; ++i) {
-        double m = P[i] * c.E[j * kN], n = P[i] * En[j];
-        for (int k = 1; k < kN; ++k) {
-          m += P[i + k * kN] * c.E[k + j * kN];
-          n += P[i + k * kN] * En[j + k * kN];
-        }
+        double m = P[i] * c.E[j * kN];
+        for (int k = 1; k < kN; ++k) m += P[i + k * kN] * c.E[k + j * kN];
         M[i + j * kN] = m;
-        s.N[i + j * kN] = n;
       }
-    for (int i = 0; i < kN * kN; ++i) {
-      s.M[i] = M[i];
-      Pp[i] = P[i];
-    }
+    for (int i = 0; i < kN * kN; ++i) s.P[i] = Pp[i] = P[i];
     for (int i = 0; i < kN; ++i) s.gf[i] = gf[i];
     ForwardRightHandSide(c, s, R4, r3, P, M, gf, islo, ishi, t > 0 ? vp : nullptr, vp);
     return true;
@@ -369,16 +361,23 @@ class FastSolver {
 
   // The corrector's right-hand side differs from the predictor's only in R2, by -target + ds_aff .* dq_aff:
   // rt3 changes by d_t = (target - ds_lo dq_lo) / s_lo - (target - ds_hi dq_hi) / s_hi and, the forward
-  // substitution being linear, v_t by dv_t = d_t gf_t - M_t dv_{t-1} (no products with P_t and R4_t).
+  // substitution being linear, v_t by dv_t = d_t gf_t - P_t E_t dv_{t-1} (no products with R4_t).
   IDENT_SIMD_CLONES void CorrectorForward(double target) {
     double dvp[kN] = {};
     for (int t = 0; t <= T_; ++t) {
+      const StepConstants<kN>& c = Constants(t);
       StepState<kN>& s = steps_[t];
       const double d = (target - s.dslo * s.dqlo) * s.islo - (target - s.dshi * s.dqhi) * s.ishi;
+      double ev[kN];  // E_t dv_{t-1}
+      for (int i = 0; i < kN; ++i) {
+        double e = c.E[i] * dvp[0];
+        for (int k = 1; k < kN; ++k) e += c.E[i + k * kN] * dvp[k];
+        ev[i] = e;
+      }
       double dv[kN];
       for (int i = 0; i < kN; ++i) {
-        double mv = s.M[i] * dvp[0];
-        for (int k = 1; k < kN; ++k) mv += s.M[i + k * kN] * dvp[k];
+        double mv = s.P[i] * ev[0];
+        for (int k = 1; k < kN; ++k) mv += s.P[i + k * kN] * ev[k];
         dv[i] = d * s.gf[i] - mv;
       }
       for (int i = 0; i < kN; ++i) {
@@ -389,7 +388,7 @@ class FastSolver {
     }
   }
 
-  // dx_t = v_t - P_t E_{t+1}' dx_{t+1} = v_t - N_t dx_{t+1} (backward substitution), then du = K^-1 (rt3 - H dx),
+  // dx_t = v_t - P_t E_{t+1}' dx_{t+1} (backward substitution), then du = K^-1 (rt3 - H dx),
   // ds, dq (general path's Direction), the largest step keeping s, q > 0 and the complementarity sums.
   IDENT_SIMD_CLONES Backward BackwardAndRecover(double target, bool corrector) {
     Backward out;
@@ -400,12 +399,20 @@ class FastSolver {
       StepState<kN>& s = steps_[t];
       double dx[kN];
       for (int i = 0; i < kN; ++i) dx[i] = s.v[i];
-      if (t < T_)
+      if (t < T_) {
+        const double* En = Constants(t + 1).E;
+        double ex[kN];  // E_{t+1}' dx_{t+1}
         for (int i = 0; i < kN; ++i) {
-          double nd = s.N[i] * dxn[0];
-          for (int k = 1; k < kN; ++k) nd += s.N[i + k * kN] * dxn[k];
+          double e = En[i * kN] * dxn[0];
+          for (int k = 1; k < kN; ++k) e += En[k + i * kN] * dxn[k];
+          ex[i] = e;
+        }
+        for (int i = 0; i < kN; ++i) {
+          double nd = s.P[i] * ex[0];
+          for (int k = 1; k < kN; ++k) nd += s.P[i + k * kN] * ex[k];
           dx[i] -= nd;
         }
+      }
       double hdx = 0;
       for (int i = 0; i < kN; ++i) {
         s.dx[i] = dxn[i] = dx[i];

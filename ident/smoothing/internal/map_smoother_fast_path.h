@@ -10,8 +10,8 @@
 //      predictor right-hand side: P_t = S_t^-1 with S_t = Db_t - E_t P_{t-1} E_t' + K_t^-1 H_t'H_t, the
 //      measurement's rank-one term entering with the factor K_t (n = 2: the adjugate in closed form, one
 //      division per block; else Sherman-Morrison; no square roots, no cancellation when K_t^-1 ~ 1/mu at a
-//      kink), v_t = P_t b_t - M_t v_{t-1} with M_t = P_t E_t stored;
-//   3. the backward substitution dx_t = v_t - N_t dx_{t+1}, N_t = P_t E_{t+1}', fused with the recovery of
+//      kink), v_t = P_t b_t - M_t v_{t-1} with M_t = P_t E_t, P_t stored;
+//   3. the backward substitution dx_t = v_t - P_t E_{t+1}' dx_{t+1}, fused with the recovery of
 //      du, ds, dq, the step length and the three sums that give the complementarity after the affine step;
 //   4., 5. the same forward/backward passes for the corrector.
 // Same start, same directions (in exact arithmetic), same stopping rule as the general path.

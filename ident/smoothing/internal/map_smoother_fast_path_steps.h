@@ -40,8 +40,7 @@ struct StepState {
   double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
   double dx[kN];                      // state direction
   double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)
-  double M[kN * kN];                  // P_t E_t: v_t = P_t b_t - M_t v_{t-1}
-  double N[kN * kN];                  // P_t E_{t+1}': dx_t = v_t - N_t dx_{t+1}
+  double P[kN * kN];                  // P_t = S_t^-1: v_t = P_t (b_t - E_t v_{t-1}), dx_t = v_t - P_t E_{t+1}' dx_{t+1}
 };
 
 // 1/s_lo, 1/s_hi, 1/q_lo, 1/q_hi by one division, 1/(s_lo s_hi q_lo q_hi), when that product is a normal
