@@ -20,13 +20,14 @@
 namespace ident::internal {
 namespace {
 
-using models::Penalty;
-using models::PlqForm;
 using fast_path::FillStepConstants;
 using fast_path::Reciprocals;
+using fast_path::SlackDirections;
 using fast_path::StepConstants;
 using fast_path::StepInverse;
 using fast_path::StepState;
+using models::Penalty;
+using models::PlqForm;
 
 bool HasFiniteBound(const PlqForm& f) { return f.lo.array().isFinite().any() || f.hi.array().isFinite().any(); }
 
@@ -246,10 +247,12 @@ class FastSolver {
       for (int i = 0; i < kN; ++i) x[i] = xt[i];
       double u = s.u, slo = s.slo, shi = s.shi, qlo = s.qlo, qhi = s.qhi;
       if (alpha > 0) {
+        double dslo, dshi;
+        SlackDirections(c, s, s.du, &dslo, &dshi);
         for (int i = 0; i < kN; ++i) xt[i] = x[i] += alpha * s.dx[i];
         s.u = u += alpha * s.du;
-        s.slo = slo += alpha * s.dslo;
-        s.shi = shi += alpha * s.dshi;
+        s.slo = slo += alpha * dslo;
+        s.shi = shi += alpha * dshi;
         s.qlo = qlo += alpha * s.dqlo;
         s.qhi = qhi += alpha * s.dqhi;
       }
@@ -367,7 +370,9 @@ class FastSolver {
     for (int t = 0; t <= T_; ++t) {
       const StepConstants<kN>& c = Constants(t);
       StepState<kN>& s = steps_[t];
-      const double d = (target - s.dslo * s.dqlo) * s.islo - (target - s.dshi * s.dqhi) * s.ishi;
+      double dslo, dshi;
+      SlackDirections(c, s, s.du, &dslo, &dshi);
+      const double d = (target - dslo * s.dqlo) * s.islo - (target - dshi * s.dqhi) * s.ishi;
       double ev[kN];  // E_t dv_{t-1}
       for (int i = 0; i < kN; ++i) {
         double e = c.E[i] * dvp[0];
@@ -423,15 +428,14 @@ class FastSolver {
       const double du = s.kd * (s.rt3 - hdx);
       const double r1hi = u + shi - c.hi, r1lo = -u + slo + c.lo;
       double r2lo = slo * qlo - target, r2hi = shi * qhi - target;
-      if (corrector) {
-        r2lo += s.dslo * s.dqlo;
-        r2hi += s.dshi * s.dqhi;
+      if (corrector) {  // the affine direction's ds .* dq
+        const double du_affine = s.du;
+        r2lo += (-r1lo + du_affine) * s.dqlo;
+        r2hi += (-r1hi - du_affine) * s.dqhi;
       }
-      const double dshi = -r1hi - du, dslo = -r1lo + du;
+      const double dshi = -r1hi - du, dslo = -r1lo + du;  // SlackDirections
       const double dqhi = (-r2hi - qhi * dshi) * ishi, dqlo = (-r2lo - qlo * dslo) * islo;
       s.du = du;
-      s.dshi = dshi;
-      s.dslo = dslo;
       s.dqhi = dqhi;
       s.dqlo = dqlo;
       max_ratio = std::max({max_ratio, -dslo * islo, -dshi * ishi, -dqlo * s.iqlo, -dqhi * s.iqhi});

@@ -33,7 +33,7 @@ struct StepConstants {
 template <int kN>
 struct StepState {
   double u, slo, shi, qlo, qhi;       // multiplier of g_t, slacks and multipliers of lo <= u <= hi
-  double du, dslo, dshi, dqlo, dqhi;  // Newton direction
+  double du, dqlo, dqhi;              // Newton direction (ds_lo, ds_hi follow from du: SlackDirections)
   double islo, ishi, iqlo, iqhi;      // reciprocals (once per iteration: no divisions in the other passes)
   double kd;                          // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
   double rt3;                         // R3 - e of the current direction (R3 and R4 live only in the forward pass)
@@ -60,6 +60,16 @@ template <int kN>
     s.iqlo = 1.0 / s.qlo;
     s.iqhi = 1.0 / s.qhi;
   }
+}
+
+// The slack directions of the direction du at the iterate of s: ds_lo = -R1_lo + du, ds_hi = -R1_hi - du with
+// R1_lo = -u + s_lo + lo and R1_hi = u + s_hi - hi (zero up to rounding: the iterate keeps C'u + s = c). Computed
+// where they are used rather than stored: at large T the passes stream the step records from memory.
+template <int kN>
+[[gnu::always_inline]] inline void SlackDirections(const StepConstants<kN>& c, const StepState<kN>& s, double du,
+                                                   double* dslo, double* dshi) {
+  *dshi = -(s.u + s.shi - c.hi) - du;
+  *dslo = -(-s.u + s.slo + c.lo) + du;
 }
 
 // The step constants of step t: W = W_t and c0 = c0_t of the process penalty f_t (in the unit σ), W_next =
