@@ -1,11 +1,8 @@
 // The streamed workflow of ident/workflow/fit.h: FitCsvFile and its passes over a CSV file in constant memory.
 #include "ident/workflow/fit.h"
 
-#include <cerrno>
-#include <cmath>
-#include <cstring>
-#include <fstream>
 #include <algorithm>
+#include <cmath>
 #include <iterator>
 #include <limits>
 #include <memory>
