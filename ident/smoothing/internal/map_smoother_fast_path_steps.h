@@ -1,6 +1,7 @@
 // The per-step records and small kernels of the MAP smoother's fast path (internal to
 // ident/smoothing/internal/map_smoother_fast_path.cc; see map_smoother_fast_path.h): the step constants and
-// iterate, the constants' assembly, reciprocals, the small SPD inverse and the inverse of the factorisation's Schur complement.
+// iterate, the constants' assembly, reciprocals, the slack directions, the small SPD inverse and the inverse of the
+// factorisation's Schur complement.
 #pragma once
 
 #include <cmath>
