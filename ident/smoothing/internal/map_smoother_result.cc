@@ -255,16 +255,16 @@ void CertifyDual(const MapSmootherProblem& p, double z_scale, const Eigen::Matri
 // Everything of the result after the iteration, from res->x and res->u (see
 // ident/smoothing/internal/map_smoother_fast_path.h): residuals, the dual point (u, y(u)) and its certificate,
 // and the reconstruction of x from the dual. The iterate's own dual point is certified first; only if its
-// certified relative gap exceeds `tolerance` (the residual R4 amplified by y(u)'s recursion) is it polished
+// certified relative gap exceeds `polish_above` (the residual R4 amplified by y(u)'s recursion) is it polished
 // and certified again, and the tighter certificate is kept: both are true bounds.
 template <int kN>
-void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, double tolerance,
+void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, double polish_above,
                   const MapSmootherDualIterate* dual, MapSmootherResult* res) {
   Eigen::MatrixXd r;
   PrimalResiduals<kN>(p, res, &r);
   const Eigen::MatrixXd u_iterate = dual != nullptr ? res->u : Eigen::MatrixXd();
   CertifyDual<kN>(p, z_scale, r, res);
-  if (dual != nullptr && !(res->relative_gap_bound <= tolerance)) {
+  if (dual != nullptr && !(res->relative_gap_bound <= polish_above)) {
     CertifiedDual unpolished;
     unpolished.Swap(res);
     res->u = u_iterate;
@@ -395,21 +395,23 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptio
     MarkNotFinite(res);
     return;
   }
+  // Polished above the solver's tolerance or the gap a converged result must certify, whichever is smaller.
+  const double polish_above = std::min(options.tolerance, options.gap_tolerance);
   switch (p.state_dim()) {
     case 1:
-      FinishResult<1>(p, z_scale, mu, options.tolerance, dual, res);
+      FinishResult<1>(p, z_scale, mu, polish_above, dual, res);
       break;
     case 2:
-      FinishResult<2>(p, z_scale, mu, options.tolerance, dual, res);
+      FinishResult<2>(p, z_scale, mu, polish_above, dual, res);
       break;
     case 3:
-      FinishResult<3>(p, z_scale, mu, options.tolerance, dual, res);
+      FinishResult<3>(p, z_scale, mu, polish_above, dual, res);
       break;
     case 4:
-      FinishResult<4>(p, z_scale, mu, options.tolerance, dual, res);
+      FinishResult<4>(p, z_scale, mu, polish_above, dual, res);
       break;
     default:
-      FinishResult<0>(p, z_scale, mu, options.tolerance, dual, res);
+      FinishResult<0>(p, z_scale, mu, polish_above, dual, res);
   }
   SetStatusAndMessage(options, res);
 }

@@ -75,8 +75,8 @@ inline int ProcessWeightColumn(const Eigen::MatrixXd& process_weight, int t) {
 //    amplifies that residual by the powers of F' (T^2 for a double integrator). Two projections onto the
 //    constraint in the Newton metric, N xi = -rho with N = sum J'WJ (the Newton matrix), v += W_f A xi,
 //    u -= W_g H xi, bring rho to round-off of the dual values, independent of the states' magnitude. It runs
-//    only when the iterate's own dual point certifies a relative gap above options.tolerance; the tighter of
-//    the two certificates is kept.
+//    only when the iterate's own dual point certifies a relative gap above options.tolerance or
+//    options.gap_tolerance; the tighter of the two certificates is kept.
 //  - Certificate: u projected into dom g*, y = y(u) by the recursion in double-double, and the gap as the
 //    compensated sum of the per-term Fenchel-Young gaps (each >= 0 in exact arithmetic), which equals
 //    P(x) - D(u) exactly when y is y(u); w = Ax and r = z - Hx by compensated dot products.
