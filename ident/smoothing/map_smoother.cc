@@ -43,6 +43,7 @@ std::string MapSmootherOptions::Validate() const {
   if (!(gap_tolerance > 0)) return fmt::format("gap_tolerance = {}; need > 0", gap_tolerance);
   if (!(step_fraction > 0 && step_fraction < 1))
     return fmt::format("step_fraction = {}; need 0 < step_fraction < 1", step_fraction);
+  if (threads < 0) return fmt::format("threads = {}; need >= 0", threads);
   return "";
 }
 

@@ -78,6 +78,10 @@ struct MapSmootherOptions {
   // bound-free (quadratic) process penalties, scalar measurements with l1 / Huber / quantile / scalar box penalties,
   // n <= 4. Same iteration and result up to rounding; false forces the general path (tests compare both).
   bool fast_path = true;
+  // Threads of the fast path: 1 (the calling thread), 2 or more (a second thread), 0 (a second thread from
+  // T = 1023 on). Its factorisation runs from both ends of the record at once; the results are the same for every
+  // value.
+  int threads = 0;
   // If set: called at every iteration (0, 1, …, the final one) with its relative KKT residual, the stopping
   // test's (compared with `tolerance`; MapSmootherResult::kkt_residual is the final call's), e.g. for progress.
   std::function<void(int iteration, double kkt_residual)> on_iteration;

@@ -2,7 +2,8 @@
 // interior-point path (MapSmootherOptions::fast_path = false: per-term PLQ dispatch, block Cholesky) on random problems
 // of the fast path's structure, n = 1..4, time-invariant and time-varying; which problems take it. The agreement of
 // both paths with an independent dense method is in map_smoother_test.cc
-// (L1AndHuberMatchAnExhaustiveActiveSetSolutionOfTheDenseDual runs both).
+// (L1AndHuberMatchAnExhaustiveActiveSetSolutionOfTheDenseDual runs both). The fast path's factorisation from both
+// ends, on one thread or two, is checked against itself and the general path on the shortest records.
 #include "ident/smoothing/internal/map_smoother_fast_path.h"
 
 #include <cmath>
@@ -129,6 +130,41 @@ TEST(MapSmootherFastPath, AgreesWithTheGeneralPathOnRandomProblems) {
         ++trials;
       }
   EXPECT_EQ(trials, 32);
+}
+
+// The factorisation runs from both ends and meets at m = T/2, on one thread or two: the same operations in the
+// same order either way, so the results are bit-identical; the shortest records (m = 0, an empty top or bottom
+// half) agree with the general path.
+TEST(MapSmootherFastPath, GivesTheSameResultOnOneThreadOrTwo) {
+  std::mt19937 rng(77);
+  MapSmootherOptions one, two, general;
+  one.threads = 1;
+  two.threads = 2;
+  general.fast_path = false;
+  for (int n = 1; n <= 4; ++n)
+    for (int T : {0, 1, 2, 3, 8, 41})
+      for (bool varying : {false, true}) {
+        const MapSmootherProblem p = RandomProblem(rng, n, T, varying, n + T);
+        const std::string label = "n = " + std::to_string(n) + ", T = " + std::to_string(T) +
+                                  (varying ? ", time-varying" : ", time-invariant");
+        const MapSmootherResult a = SolveMapSmoother(p, one), b = SolveMapSmoother(p, two);
+        ASSERT_EQ(a.status, MapSmootherStatus::kConverged) << label << ": " << a.message;
+        EXPECT_EQ(a.status, b.status) << label;
+        EXPECT_EQ(a.iterations, b.iterations) << label;
+        EXPECT_TRUE(a.x == b.x) << label;
+        EXPECT_TRUE(a.u == b.u) << label;
+        EXPECT_EQ(a.primal, b.primal) << label;
+        EXPECT_EQ(a.relative_gap_bound, b.relative_gap_bound) << label;
+        if (T <= 3) {
+          const MapSmootherResult slow = SolveMapSmoother(p, general);
+          ASSERT_EQ(slow.status, MapSmootherStatus::kConverged) << label << ": " << slow.message;
+          EXPECT_LT((a.x - slow.x).cwiseAbs().maxCoeff(), 1e-7 * (1 + slow.x.cwiseAbs().maxCoeff())) << label;
+          EXPECT_NEAR(a.primal, slow.primal, 1e-9 * (1 + std::abs(slow.primal))) << label;
+        }
+      }
+  MapSmootherOptions negative;
+  negative.threads = -1;
+  EXPECT_NE(negative.Validate().find("threads = -1"), std::string::npos) << negative.Validate();
 }
 
 // A longer benchmark-like problem (the model of bench/map_smoother_benchmark.cc at T = 3000).

@@ -1,0 +1,58 @@
+// Two tasks at once: one on the calling thread, the other on a worker thread that lives as long as the
+// ForkJoin (internal to ident/smoothing/; the MAP smoother's fast path splits each pass over the time steps into
+// a top half and a bottom half). Between tasks the worker spins for a short while, then sleeps; the caller waits
+// the same way. Without a worker the tasks run one after the other on the calling thread, so a solver that
+// splits its work the same way either way gives the same numbers on one thread or two.
+//
+// Example:
+//   ForkJoin fork(/*use_worker=*/true);
+//   fork.Run([&] { Top(); }, [&] { Bottom(); });   // both done on return
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+#include <type_traits>
+
+namespace ident::internal {
+
+class ForkJoin {
+ public:
+  explicit ForkJoin(bool use_worker);
+  ~ForkJoin();
+  ForkJoin(const ForkJoin&) = delete;
+  ForkJoin& operator=(const ForkJoin&) = delete;
+
+  bool parallel() const { return worker_.joinable(); }
+
+  // Runs a() here and b() on the worker (or a() then b()); returns when both have returned. Neither may throw.
+  template <class A, class B>
+  void Run(A&& a, B&& b) {
+    if (!parallel()) {
+      a();
+      b();
+      return;
+    }
+    task_ = &b;
+    call_ = [](void* f) { (*static_cast<std::remove_reference_t<B>*>(f))(); };
+    Post();
+    a();
+    Wait();
+  }
+
+ private:
+  void Post();
+  void Wait();
+  void Loop();
+
+  std::mutex mutex_;
+  std::condition_variable posted_cv_, done_cv_;
+  std::atomic<unsigned> posted_{0}, done_{0};
+  std::atomic<bool> stop_{false};
+  void* task_ = nullptr;
+  void (*call_)(void*) = nullptr;
+  std::thread worker_;  // last: started once the members above exist
+};
+
+}  // namespace ident::internal
