@@ -1,5 +1,6 @@
 // ident/smoothing/internal/fork_join.h: both tasks run, in order without a worker, and every Run returns only after
-// both have finished, over many rounds (a lost wake-up would hang or let a round's counts fall behind).
+// both have finished, over many rounds (a lost wake-up or a task claimed twice or never would hang or put a
+// round's counts off).
 #include "ident/smoothing/internal/fork_join.h"
 
 #include <chrono>
@@ -23,22 +24,48 @@ TEST(ForkJoin, WithoutAWorkerRunsTheTasksInOrderOnTheCallingThread) {
   EXPECT_EQ(b_thread, std::this_thread::get_id());
 }
 
+// Whichever thread claims the second task runs it: with a trivial first task the caller mostly takes both
+// (the worker is still waking up), with a longer one the spinning worker takes the second.
 TEST(ForkJoin, EveryRoundReturnsWithBothTasksDone) {
   ForkJoin fork(/*use_worker=*/true);
   if (std::thread::hardware_concurrency() >= 2) {
     EXPECT_TRUE(fork.parallel());
   }
   long a = 0, b = 0;  // plain: Run's return orders the worker's writes before the caller's reads
-  std::thread::id b_thread;
+  const auto busy = [](std::chrono::microseconds d) {
+    const auto until = std::chrono::steady_clock::now() + d;
+    while (std::chrono::steady_clock::now() < until) {}
+  };
   for (int round = 1; round <= 20000; ++round) {
-    fork.Run([&] { ++a; }, [&] { ++b, b_thread = std::this_thread::get_id(); });
+    const bool slow = round > 18000;  // the last rounds' first task takes 50 us
+    fork.Run(
+        [&] {
+          ++a;
+          if (slow) busy(std::chrono::microseconds(50));
+        },
+        [&] { ++b; });
     ASSERT_EQ(a, round);
     ASSERT_EQ(b, round);
     if (round % 5000 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // the worker sleeps
   }
-  if (fork.parallel()) {
-    EXPECT_NE(b_thread, std::this_thread::get_id());
+}
+
+TEST(ForkJoin, ASpinningWorkerTakesTheSecondTask) {
+  ForkJoin fork(/*use_worker=*/true);
+  if (!fork.parallel()) GTEST_SKIP() << "one hardware thread";
+  const std::thread::id caller = std::this_thread::get_id();
+  int on_worker = 0;
+  for (int round = 0; round < 200; ++round) {
+    std::thread::id b_thread;
+    fork.Run(
+        [] {
+          const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(200);
+          while (std::chrono::steady_clock::now() < until) {}
+        },
+        [&] { b_thread = std::this_thread::get_id(); });
+    on_worker += b_thread != caller;
   }
+  EXPECT_GT(on_worker, 0);
 }
 
 }  // namespace

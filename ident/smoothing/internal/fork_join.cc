@@ -6,7 +6,8 @@ namespace ident::internal {
 namespace {
 
 // How long a waiting thread spins before it sleeps: longer than the gaps between a solver's passes (its
-// scalar work between them), shorter than a time slice, so that a descheduled partner is not starved.
+// scalar work between them), shorter than a time slice. It yields between rounds of spinning: a partner that
+// the scheduler has put on the same CPU then runs instead of waiting for the spinner's time slice to end.
 constexpr std::chrono::microseconds kSpin{200};
 
 template <class Done>
@@ -19,6 +20,7 @@ bool SpinUntil(Done done) {
       __builtin_ia32_pause();
 #endif
     }
+    std::this_thread::yield();
     if (std::chrono::steady_clock::now() > until) return false;
   }
 }
@@ -39,17 +41,23 @@ ForkJoin::~ForkJoin() {
   worker_.join();
 }
 
-void ForkJoin::Post() {
+unsigned ForkJoin::Post() {
+  unsigned generation;
   {
     const std::lock_guard lock(mutex_);
-    posted_.fetch_add(1, std::memory_order_release);
+    generation = posted_.fetch_add(1, std::memory_order_release) + 1;
   }
   posted_cv_.notify_one();
+  return generation;
 }
 
-void ForkJoin::Wait() {
-  const unsigned target = posted_.load(std::memory_order_relaxed);
-  const auto finished = [&] { return done_.load(std::memory_order_acquire) == target; };
+bool ForkJoin::Claim(unsigned generation) {
+  unsigned previous = generation - 1;
+  return claimed_.compare_exchange_strong(previous, generation, std::memory_order_acq_rel);
+}
+
+void ForkJoin::Wait(unsigned generation) {
+  const auto finished = [&] { return done_.load(std::memory_order_acquire) == generation; };
   if (SpinUntil(finished)) return;
   std::unique_lock lock(mutex_);
   done_cv_.wait(lock, finished);
@@ -67,6 +75,7 @@ void ForkJoin::Loop() {
     }
     if (stop_.load(std::memory_order_acquire)) return;
     seen = posted_.load(std::memory_order_acquire);
+    if (!Claim(seen)) continue;  // the caller took it (or it is not the newest task: the caller took that one)
     call_(task_);
     {
       const std::lock_guard lock(mutex_);

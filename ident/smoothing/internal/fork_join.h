@@ -1,8 +1,10 @@
 // Two tasks at once: one on the calling thread, the other on a worker thread that lives as long as the
 // ForkJoin (internal to ident/smoothing/; the MAP smoother's fast path splits each pass over the time steps into
 // a top half and a bottom half). Between tasks the worker spins for a short while, then sleeps; the caller waits
-// the same way. Without a worker the tasks run one after the other on the calling thread, so a solver that
-// splits its work the same way either way gives the same numbers on one thread or two.
+// the same way. The second task goes to whichever thread claims it first: a caller done with its own task
+// before the worker has woken up runs it itself (a sleeping or descheduled worker can take milliseconds to
+// wake). Without a worker the tasks run one after the other on the calling thread; a solver that splits its
+// work the same way either way gives the same numbers on one thread or two.
 //
 // Example:
 //   ForkJoin fork(/*use_worker=*/true);
@@ -36,19 +38,23 @@ class ForkJoin {
     }
     task_ = &b;
     call_ = [](void* f) { (*static_cast<std::remove_reference_t<B>*>(f))(); };
-    Post();
+    const unsigned generation = Post();
     a();
-    Wait();
+    if (Claim(generation))
+      b();
+    else
+      Wait(generation);
   }
 
  private:
-  void Post();
-  void Wait();
+  unsigned Post();                  // the new task's generation
+  bool Claim(unsigned generation);  // true for the one thread that takes that task
+  void Wait(unsigned generation);   // until the worker has finished the task it claimed
   void Loop();
 
   std::mutex mutex_;
   std::condition_variable posted_cv_, done_cv_;
-  std::atomic<unsigned> posted_{0}, done_{0};
+  std::atomic<unsigned> posted_{0}, claimed_{0}, done_{0};  // generations: posted >= claimed >= done
   std::atomic<bool> stop_{false};
   void* task_ = nullptr;
   void (*call_)(void*) = nullptr;

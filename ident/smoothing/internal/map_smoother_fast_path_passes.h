@@ -155,7 +155,8 @@ IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::TopF
 }
 
 // Bottom half, t = T … m+1: step (x_{t-1} one step ahead, so that vd_t can be formed), residuals (R4_t is
-// complete at step t, vd_{t+1} being known) and the factorisation from the end. *vd_below: vd_{m+1}.
+// complete at step t, vd_{t+1} being known) and, one step behind as in the top half (a step's factorisation then
+// overlaps the next step's residuals), the factorisation from the end. *vd_below: vd_{m+1}.
 template <int kN>
 IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::BottomForward(double alpha,
                                                                                           double* vd_below,
@@ -163,8 +164,8 @@ IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::Bott
   Residuals out;
   const int m = Middle();
   if (m == T_) return out;
-  bool ok = true;
-  double vdn[kN] = {}, Qn[kN * kN] = {}, wn[kN] = {};
+  bool ok = true;                                                             // on this thread's stack, as `out`
+  double vdn[kN] = {}, R4n[kN] = {}, r3n = 0, Qn[kN * kN] = {}, wn[kN] = {};  // vd, R4, R3 of step t+1
   if (alpha > 0)
     for (int i = 0; i < kN; ++i) x_[T_ * kN + i] += alpha * steps_[T_].dx[i];
   for (int t = T_; t > m; --t) {
@@ -174,11 +175,19 @@ IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::Bott
     double vd[kN], R4[kN];
     const double* xt = x_ + t * kN;
     const double r3 = StepResidual(t, xt, xt - kN, vd, R4, &out);
-    if (t < T_) CompleteR4(t, vdn, R4, &out);
-    for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(R4[i]));
-    if (ok) ok = FactorStep(t, R4, r3, false, t < T_, Qn, wn);
-    for (int i = 0; i < kN; ++i) vdn[i] = vd[i];
+    if (t < T_) {
+      CompleteR4(t, vdn, R4, &out);
+      if (ok) ok = FactorStep(t + 1, R4n, r3n, false, t + 1 < T_, Qn, wn);
+    } else {
+      for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(R4[i]));
+    }
+    for (int i = 0; i < kN; ++i) {
+      vdn[i] = vd[i];
+      R4n[i] = R4[i];
+    }
+    r3n = r3;
   }
+  if (ok) ok = FactorStep(m + 1, R4n, r3n, false, m + 1 < T_, Qn, wn);
   for (int i = 0; i < kN; ++i) vd_below[i] = vdn[i];
   *factored = ok;
   return out;
