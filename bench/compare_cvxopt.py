@@ -9,9 +9,11 @@ z_t = x_{t,1} + v_t, f_0 = 1/2|x_0|^2, f_t = 1/2 w'(0.01 I)^-1 w, g = l1 or Hube
 same MAP problem as a sparse QP:
   l1:    min 1/2 x'Px + 1's           s.t.  -s <= z - Hx <= s
   Huber: min 1/2 x'Px + 1/2|a|^2 + 1's  s.t.  -s <= z - Hx - a <= s     (huber(r) = min_a a^2/2 + |r - a|)
-with P = A' Qbar^-1 A. Prints both objective values, their relative difference, the solve times (ident: the
-"solve_seconds" of `ident smooth --json`, without file I/O; cvxopt: the solvers.qp call) and the ratio,
-both as wall time and as CPU time (process_time / std::clock; steadier on a loaded machine). Each solver runs
+with P = A' Qbar^-1 A. Prints both objective values, their relative difference, the solve times and the ratio,
+both as wall time and as CPU time (process_time: all threads of the process). Both solvers run in this Python
+process: ident through its Python module (ident.smooth, from the build tree next to the ident program:
+model parsing, the solve and the conversion of the result), cvxopt's solvers.qp call; the "solve_seconds" of
+`ident smooth --json` (a new process for every run, without file I/O) is listed as well. Each solver runs
 `repeats` times, alternating, and the smallest time of each is kept (the shared machine's load varies by 2x
 between runs of the same solve). cvxopt runs only up to --cvxopt-max (its time grows faster than T).
 
@@ -64,6 +66,19 @@ def run_ident(ident, model, z, tmp):
     j = json.loads(out.stdout)
     j.pop("x"), j.pop("u"), j.pop("y")
     return j
+
+
+def load_module(ident):
+    """The ident Python module of the build tree that holds the ident program (build/bin/ident: build/python)."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(ident))), "python"))
+    import ident as module
+    return module
+
+
+def run_ident_in_process(module, model, z):
+    start, cpu_start = time.perf_counter(), time.process_time()
+    j = module.smooth(model, z)
+    return j, time.perf_counter() - start, time.process_time() - cpu_start
 
 
 def stable_model(penalty):
@@ -168,6 +183,7 @@ def main():
     p.add_argument("--json", help="write the figures to this file")
     a = p.parse_args()
     sizes = [int(s) for s in a.sizes.split(",")]
+    module = load_module(a.ident)
     figures = {"versus_cvxopt": [], "scale": []}
     print("%-6s %7s %20s %20s %10s %10s %10s %8s %10s %10s %8s" % (
         "noise", "T", "ident primal", "cvxopt primal", "rel diff", "ident [s]", "cvxopt [s]", "ratio",
@@ -176,16 +192,19 @@ def main():
         for T in sizes:
             z = make_data(T)
             for name, penalty in (("l1", {"penalty": "l1"}), ("huber", {"penalty": "huber", "kappa": 1})):
-                t_ours = c_ours = t_theirs = c_theirs = float("inf")
+                t_ours = c_ours = t_theirs = c_theirs = t_cli = c_cli = float("inf")
                 theirs, status = None, "not run"
                 for _ in range(a.repeats):
-                    j = run_ident(a.ident, stable_model(penalty), z, tmp)
-                    t_ours, c_ours = min(t_ours, j["solve_seconds"]), min(c_ours, j["solve_cpu_seconds"])
+                    j, t, c = run_ident_in_process(module, stable_model(penalty), z)
+                    t_ours, c_ours = min(t_ours, t), min(c_ours, c)
+                    cli = run_ident(a.ident, stable_model(penalty), z, tmp)
+                    t_cli, c_cli = min(t_cli, cli["solve_seconds"]), min(c_cli, cli["solve_cpu_seconds"])
                     if T <= a.cvxopt_max:
                         theirs, t, c, status = run_cvxopt(z, name == "huber")
                         t_theirs, c_theirs = min(t_theirs, t), min(c_theirs, c)
                 ours = j["primal"]
                 row = {"noise": name, "T": T, "ident_primal": ours, "ident_seconds": t_ours, "ident_cpu_seconds": c_ours,
+                       "ident_cli_solve_seconds": t_cli, "ident_cli_solve_cpu_seconds": c_cli,
                        "ident_iterations": j["iterations"], "ident_relative_gap_bound": j["relative_gap_bound"]}
                 if theirs is not None:
                     row.update({"cvxopt_primal": theirs, "relative_difference": abs(ours - theirs) / abs(theirs),
