@@ -1,6 +1,7 @@
 // MAP smoother (interior point, block-tridiagonal Newton steps): time and Newton iterations for
-// T = 10^2 .. 10^6 with l1 and Huber measurement noise, n = 2 (fast path), and T <= 10^4 on the general
-// path. Linear growth in T shows as a constant time per time step (items_per_second) and an O(N) fit.
+// T = 10^2 .. 10^6 with l1 and Huber measurement noise, n = 2 (fast path; also on one thread from T = 10^4), and
+// T <= 10^4 on the general path. Linear growth in T shows as a constant time per time step (items_per_second)
+// and an O(N) fit.
 //   Model: x_{t+1} = [[0.99, 0.1], [0, 0.95]] x_t + w,  w ~ N(0, 0.1^2 I);  z_t = x_{t,1} + v_t,
 //          v_t ~ Laplace(0, 0.5) with 5 % outliers of scale 10.  Penalties: f = quadratic (covariance
 //          0.01 I, x_0: I), g = l1 or Huber(kappa = 1).
@@ -37,11 +38,12 @@ ident::MapSmootherProblem MakeProblem(int T, bool huber, unsigned seed = 42) {
   return p;
 }
 
-void BM_MapSmoother(benchmark::State& state, bool huber, bool fast_path = true) {
+void BM_MapSmoother(benchmark::State& state, bool huber, bool fast_path = true, int threads = 0) {
   const int T = static_cast<int>(state.range(0));
   const ident::MapSmootherProblem p = MakeProblem(T, huber);
   ident::MapSmootherOptions options;
   options.fast_path = fast_path;  // false: the general path (per-term PLQ dispatch, block Cholesky)
+  options.threads = threads;      // 0: the fast path's halves on two threads from T = 1023 on; 1: one thread
   ident::MapSmootherResult r;
   for (auto _ : state) {
     r = ident::SolveMapSmoother(p, options);
@@ -67,6 +69,15 @@ BENCHMARK_CAPTURE(BM_MapSmoother, Huber, true)
     ->Range(100, 1000000)
     ->Unit(benchmark::kMillisecond)
     ->Complexity(benchmark::oN);
+// The fast path on one thread, for the second thread's speed-up measured in one run.
+BENCHMARK_CAPTURE(BM_MapSmoother, L1OneThread, false, true, 1)
+    ->RangeMultiplier(10)
+    ->Range(10000, 1000000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_MapSmoother, HuberOneThread, true, true, 1)
+    ->RangeMultiplier(10)
+    ->Range(10000, 1000000)
+    ->Unit(benchmark::kMillisecond);
 // The same problems on the general path, for the fast path's speed-up measured in one run.
 BENCHMARK_CAPTURE(BM_MapSmoother, L1General, false, false)
     ->RangeMultiplier(10)
