@@ -28,7 +28,8 @@ class ForkJoin {
 
   bool parallel() const { return worker_.joinable(); }
 
-  // Runs a() here and b() on the worker (or a() then b()); returns when both have returned. Neither may throw.
+  // Runs a() here and b() on the worker or here (or a() then b()); returns when both have returned. Neither may
+  // throw; one thread calls Run at a time.
   template <class A, class B>
   void Run(A&& a, B&& b) {
     if (!parallel()) {

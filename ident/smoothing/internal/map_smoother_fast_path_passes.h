@@ -223,20 +223,8 @@ template <int kN>
   const double r2lo = slo * qlo, r2hi = shi * qhi;
   const double e = (-r2hi + qhi * r1hi) * ishi - (-r2lo + qlo * r1lo) * islo;
   const double rt3 = r3 - e;
-  double w[kN];  // R4_t + E_t va + E_{t+1}' wb
-  for (int i = 0; i < kN; ++i) w[i] = R4[i];
-  if (va)
-    for (int k = 0; k < kN; ++k)
-      for (int i = 0; i < kN; ++i) w[i] += c.E[i + k * kN] * va[k];
-  if (wb)
-    for (int i = 0; i < kN; ++i)
-      for (int k = 0; k < kN; ++k) w[i] += c.En[k + i * kN] * wb[k];
   double v[kN];
-  for (int i = 0; i < kN; ++i) {
-    double pw = P[i] * w[0];  // the sums start at their first term: no + 0.0 (which does not fold)
-    for (int k = 1; k < kN; ++k) pw += P[i + k * kN] * w[k];
-    v[i] = rt3 * gf[i] - pw;
-  }
+  SubstitutionStep<kN>(c, P, gf, rt3, R4, va, wb, v);
   for (int i = 0; i < kN * kN; ++i) s.P[i] = P[i];
   for (int i = 0; i < kN; ++i) {
     s.gf[i] = gf[i];
@@ -281,19 +269,8 @@ template <int kN>
   double dslo, dshi;
   SlackDirections(c, s, s.du, &dslo, &dshi);
   const double d = (target - dslo * s.dqlo) * s.islo - (target - dshi * s.dqhi) * s.ishi;
-  double ew[kN] = {};  // E_t dv_{t-1} + E_{t+1}' dw_{t+1}
-  if (dva)
-    for (int k = 0; k < kN; ++k)
-      for (int i = 0; i < kN; ++i) ew[i] += c.E[i + k * kN] * dva[k];
-  if (dwb)
-    for (int i = 0; i < kN; ++i)
-      for (int k = 0; k < kN; ++k) ew[i] += c.En[k + i * kN] * dwb[k];
   double dv[kN];
-  for (int i = 0; i < kN; ++i) {
-    double pe = s.P[i] * ew[0];
-    for (int k = 1; k < kN; ++k) pe += s.P[i + k * kN] * ew[k];
-    dv[i] = d * s.gf[i] - pe;
-  }
+  SubstitutionStep<kN>(c, s.P, s.gf, d, nullptr, dva, dwb, dv);
   for (int i = 0; i < kN; ++i) s.v[i] += dv[i];
   s.rt3 += d;
   if (dv_out)

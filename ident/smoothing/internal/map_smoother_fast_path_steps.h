@@ -216,4 +216,25 @@ template <int kN>
   return true;
 }
 
+// One step of the forward substitutions: v = a gf - P (b + E_t va + E_{t+1}' wb), with va = v_{t-1} of the top half
+// and wb = w_{t+1} of the bottom half (each nullptr where that side does not eliminate into step t; b nullptr: 0).
+template <int kN>
+[[gnu::always_inline]] inline void SubstitutionStep(const StepConstants<kN>& c, const double* P, const double* gf,
+                                                    double a, const double* b, const double* va, const double* wb,
+                                                    double* v) {
+  double w[kN];
+  for (int i = 0; i < kN; ++i) w[i] = b ? b[i] : 0.0;
+  if (va)
+    for (int k = 0; k < kN; ++k)
+      for (int i = 0; i < kN; ++i) w[i] += c.E[i + k * kN] * va[k];
+  if (wb)
+    for (int i = 0; i < kN; ++i)
+      for (int k = 0; k < kN; ++k) w[i] += c.En[k + i * kN] * wb[k];
+  for (int i = 0; i < kN; ++i) {
+    double pw = P[i] * w[0];  // the sums start at their first term: no + 0.0 (which does not fold)
+    for (int k = 1; k < kN; ++k) pw += P[i + k * kN] * w[k];
+    v[i] = a * gf[i] - pw;
+  }
+}
+
 }  // namespace ident::internal::fast_path
