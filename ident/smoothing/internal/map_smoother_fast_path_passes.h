@@ -42,13 +42,7 @@ template <int kN>
   const StepConstants<kN>& c = Constants(t);
   const StepState<kN>& s = steps_[t];
   double r[kN];
-  for (int i = 0; i < kN; ++i) r[i] = x[i];
-  if (xp)
-    for (int j = 0; j < kN; ++j)
-      for (int i = 0; i < kN; ++i) r[i] -= c.F[i + j * kN] * xp[j];
-  for (int i = 0; i < kN; ++i) vd[i] = c.c0[i];
-  for (int j = 0; j < kN; ++j)
-    for (int i = 0; i < kN; ++i) vd[i] += c.W[i + j * kN] * r[j];
+  ProcessDual(c, x, xp, r, vd);
   const double u = s.u;
   double hx = 0;
   for (int i = 0; i < kN; ++i) {
@@ -98,8 +92,10 @@ inline typename FastSolver<kN>::Residuals FastSolver<kN>::StepResidualsAndFactor
   const double* xm = x_ + m * kN;
   double vd[kN], R4[kN];
   const double r3 = StepResidual(m, xm, m > 0 ? xm - kN : nullptr, vd, R4, &out);
-  if (m < T_) CompleteR4(m, vd_below, R4, &out);
-  for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(R4[i]));
+  if (m < T_)
+    CompleteR4(m, vd_below, R4, &out);
+  else
+    for (int i = 0; i < kN; ++i) out.r4max = std::max(out.r4max, std::abs(R4[i]));
   *factored = top_ok && bottom_ok && FactorStep(m, R4, r3, m > 0, m < T_, nullptr, nullptr);
   return out;
 }
@@ -139,15 +135,9 @@ IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::TopF
     for (int i = 0; i < kN; ++i) R4p[i] = R4[i];
     r3p = r3;
   }
-  const StepConstants<kN>& c = Constants(m);  // vd_m (x_m is stepped): R4_{m-1} complete
-  const double* xm = x_ + m * kN;
+  const double* xm = x_ + m * kN;  // vd_m (x_m is stepped): R4_{m-1} complete
   double vd[kN], r[kN];
-  for (int i = 0; i < kN; ++i) r[i] = xm[i];
-  for (int j = 0; j < kN; ++j)
-    for (int i = 0; i < kN; ++i) r[i] -= c.F[i + j * kN] * xm[j - kN];
-  for (int i = 0; i < kN; ++i) vd[i] = c.c0[i];
-  for (int j = 0; j < kN; ++j)
-    for (int i = 0; i < kN; ++i) vd[i] += c.W[i + j * kN] * r[j];
+  ProcessDual(Constants(m), xm, xm - kN, r, vd);
   CompleteR4(m - 1, vd, R4p, &out);
   if (ok) ok = FactorStep(m - 1, R4p, r3p, m > 1, false, Pp, vp);
   *factored = ok;

@@ -78,6 +78,20 @@ template <int kN>
   *dslo = -(-s.u + s.slo + c.lo) + du;
 }
 
+// The process residual r = x_t - F_{t-1} x_{t-1} (xp = x_{t-1}; nullptr at t = 0: r = x_0) and its dual value
+// vd = c0 + W r (p + B'u of the bound-free process penalty).
+template <int kN>
+[[gnu::always_inline]] inline void ProcessDual(const StepConstants<kN>& c, const double* x, const double* xp, double* r,
+                                               double* vd) {
+  for (int i = 0; i < kN; ++i) r[i] = x[i];
+  if (xp)
+    for (int j = 0; j < kN; ++j)
+      for (int i = 0; i < kN; ++i) r[i] -= c.F[i + j * kN] * xp[j];
+  for (int i = 0; i < kN; ++i) vd[i] = c.c0[i];
+  for (int j = 0; j < kN; ++j)
+    for (int i = 0; i < kN; ++i) vd[i] += c.W[i + j * kN] * r[j];
+}
+
 // The step constants of step t: W = W_t and c0 = c0_t of the process penalty f_t (in the unit σ), W_next =
 // W_{t+1} (nullptr at t = T), the measurement penalty's box and M divided by the data unit sigma.
 template <int kN>
