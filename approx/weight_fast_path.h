@@ -1,10 +1,10 @@
 // The common case of SolveWeight (approx/weighting_polynomial.h), inline, for the estimators' update:
-// the weighting cubic P is decreasing on the bracket [β0, β_hi] of spec §4, so its root there is the
-// unique maximum of log H0 and hence the maximin weight β(t) of spec §5, found by Householder
-// iterations of order 3 inside a shrinking bracket from the small-root start (no log H0, no square
-// root, no pieces). SolveWeight itself starts with this very function, so the estimators' inline call
-// and the library call return the same bits; every other case (h = 0, a start outside the bracket,
-// P not provably decreasing, huge coefficients) is left to SolveWeight's general path.
+// the weighting cubic P has one sign change on the bracket [β0, β_hi] of spec §4 (it decreases there, or rises
+// and then falls), so its root there is the unique maximum of log H0 and hence the maximin weight β(t) of spec §5, found by Householder
+// iterations of order 3 inside a shrinking bracket from the small-root start, or from the large-ν asymptote
+// when that start falls outside the bracket (no log H0, no square root, no pieces). SolveWeight itself starts
+// with this very function, so the estimators' inline call and the library call return the same bits; every
+// other case (h = 0, more than one sign change possible, huge coefficients) is left to SolveWeight's general path.
 //
 // Why inline: on the estimators' data the update is limited by how many instructions the out-of-order
 // core can hold while the back substitution, the weight and the update of d wait on one another, not
@@ -13,7 +13,9 @@
 //
 //   Monotonicity [spec §5]: P'(β) = μ1 + 2μ2β + 3μ3β² ≤ μ1 + 2 max(μ2, 0) β_hi + 3 max(μ3, 0) β_hi² on
 //   [0, β_hi] ⊇ [β0, β_hi]; if that bound is negative (with a margin for its rounding) P decreases on
-//   the bracket. Otherwise the exact test: P' ≤ 0 at both ends and no interior maximum of P' above 0.
+//   the bracket. Otherwise the exact test: P' ≤ 0 at both ends and no interior maximum of P' above 0 —
+//   or P' > 0 at β0 and < 0 at β_hi, where P rises, then falls (one root of P' inside), so that P(β0) > 0 > P(β_hi)
+//   still leaves one sign change of P, the only candidate of spec §5's pieces.
 //
 // Example:
 //   ident::approx::WeightConstants c;                      // kept by the estimator
@@ -35,6 +37,9 @@ namespace ident::approx {
 // β0 = 1/(ν − (ν−1)min(0, ξ)) and β_hi = (k+1)/(kν+δ−2), the bracket of spec §4.
 inline double Beta0Inline(const WeightingProblem& p) { return 1 / (p.nu - (p.nu - 1) * std::min(0.0, p.xi)); }
 inline double BetaHiInline(const WeightingProblem& p) { return (p.k + 1) / (p.k * p.nu + p.delta - 2); }
+// The root's large-ν asymptote (k+1)/(ν(k + u)), u = ξ_z − ξ = ê²/D_y [spec §7a]: the start when the
+// small-root guess falls outside the bracket.
+inline double AsymptoticGuessInline(const WeightingProblem& p) { return (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi))); }
 
 // The parts of μ1, μ2, μ3 and of β_hi that depend only on (ν, ρ, k, δ), formed exactly as in
 // spec §4's coefficients (the same operations in the same order, so the same bits). Under forgetting
@@ -171,23 +176,36 @@ SolveWeightCommon(const WeightingProblem& p, const WeightConstants& c, WeightSol
   const double biggest =
       std::max(std::max(std::abs(mu[0]), std::abs(mu[1])), std::max(std::abs(mu[2]), std::abs(mu[3])));
   if (!(biggest < 1e60)) return false;
-  const double guess = SmallRootGuess(mu);
-  if (!(guess > a && guess < b)) return false;
+  double guess = SmallRootGuess(mu);
+  if (!(guess > a && guess < b)) guess = AsymptoticGuessInline(p);  // e.g. a novel regressor (ξ_z ≪ 0)
   // P decreasing on [a, b] (header comment); the bound's rounding is below 1e−14·|μ1| when it is negative.
   const double A = 3 * mu[3], B = 2 * mu[2], C = mu[1];
-  bool decreasing = C + std::max(B, 0.0) * b + std::max(A, 0.0) * (b * b) < 1e-14 * C;
-  if (!decreasing) {
+  bool one_crossing = C + std::max(B, 0.0) * b + std::max(A, 0.0) * (b * b) < 1e-14 * C;
+  if (!one_crossing) {
     const double dpa = (A * a + B) * a + C, dpb = (A * b + B) * b + C;
     const bool interior_max = B + 2 * A * a > 0 && B + 2 * A * b < 0 && B * B - 4 * A * C > 0;
-    decreasing = dpa <= 0 && dpb <= 0 && !interior_max;
+    // Rising, then falling: P' > 0 at a and < 0 at b (beyond the rounding of its terms) has exactly one root
+    // inside, so P(a) > 0 > P(b) leaves one sign change of P, on the falling piece — spec §5's only candidate.
+    const double margin_a = 1e-13 * (std::abs(A * a * a) + std::abs(B * a) + std::abs(C));
+    const double margin_b = 1e-13 * (std::abs(A * b * b) + std::abs(B * b) + std::abs(C));
+    one_crossing = (dpa <= 0 && dpb <= 0 && !interior_max) || (dpa > margin_a && dpb < -margin_b);
   }
-  if (!(decreasing && EvalP(mu, a) > 0 && EvalP(mu, b) < 0)) return false;
+  if (!(one_crossing && EvalP(mu, a) > 0 && EvalP(mu, b) < 0)) return false;
   s.beta = HouseholderRoot(mu, a, b, guess, s.iterations);
   s.num_maxima = 1;
   return true;
 }
 
 }  // namespace internal
+
+// WeightElasticity (approx/weighting_polynomial.h) from the constants of p.nu, inline: WeightElasticity itself
+// calls it, so both return the same bits. ∂μ1/∂ξ = mu1_xi, ∂μ2/∂ξ = mu2_xi + kξ_z, ∂μ3/∂ξ = mu3·ξ_z [spec §4].
+inline double WeightElasticityInline(const WeightingProblem& p, const WeightConstants& c, double beta) {
+  const std::array<double, 4> mu = internal::Coefficients(p, c);
+  const double dp_dbeta = (3 * mu[3] * beta + 2 * mu[2]) * beta + mu[1];
+  const double dp_dxi = ((c.mu3 * p.xi_z * beta + (c.mu2_xi + c.k * p.xi_z)) * beta + c.mu1_xi) * beta;
+  return 2 * (p.xi_z - p.xi) * dp_dxi / dp_dbeta;
+}
 
 // SolveWeight with its common case inline (same results, bit for bit); `c` as for SolveWeightCommon.
 // Forced inline as well, so that the solution stays in registers (not returned through memory).

@@ -41,7 +41,7 @@ double BracketedRoot(const std::array<double, 4>& mu, double a, double b, double
 
 // First iterate of the reference: the large-ν limit νβ ≈ b0 = (k+1)/(k + ê²/D_y), ê²/D_y = ξ_z − ξ
 // [spec §7a].
-double AsymptoticGuess(const WeightingProblem& p) { return (p.k + 1) / (p.nu * (p.k + (p.xi_z - p.xi))); }
+double AsymptoticGuess(const WeightingProblem& p) { return AsymptoticGuessInline(p); }
 
 }  // namespace
 
@@ -58,14 +58,7 @@ double BetaHi(const WeightingProblem& p) { return BetaHiInline(p); }
 std::array<double, 4> WeightingCoefficients(const WeightingProblem& p) { return Coefficients(p); }
 
 double WeightElasticity(const WeightingProblem& p, double beta) {
-  const std::array<double, 4> mu = Coefficients(p);
-  const double dp_dbeta = (3 * mu[3] * beta + 2 * mu[2]) * beta + mu[1];
-  // ∂μ1/∂ξ = ν−δ−ρ+1−k, ∂μ2/∂ξ = (k−1)ν+2δ+ρ−3 + kξ_z, ∂μ3/∂ξ = (2−kν−δ)ξ_z [spec §4].
-  const double nu = p.nu, k = p.k, d = p.delta, rho = p.rho;
-  const double dp_dxi = (((2 - k * nu - d) * p.xi_z * beta + (k - 1) * nu + 2 * d + rho - 3 + k * p.xi_z) * beta +
-                         (nu - d - rho + 1 - k)) *
-                        beta;
-  return 2 * (p.xi_z - p.xi) * dp_dxi / dp_dbeta;
+  return WeightElasticityInline(p, WeightConstants(p), beta);
 }
 
 double LogH0(const WeightingProblem& p, double beta) {

@@ -140,9 +140,9 @@ struct SandwichFactor {
 
   void Add(double k, double u, double e, double lambda) noexcept {
     if (!(std::isfinite(u) && std::isfinite(e) && u >= 0)) return;
-    const double w = (k + 1) / (k + u);
+    const double r = 1 / (k + u), w = (k + 1) * r;  // one division: the step's own divisions queue for the divider
     psi2 = lambda * psi2 + w * w * e * e;
-    const double d = (k + 1) * (k - u) / ((k + u) * (k + u));
+    const double d = w * (k - u) * r;
     dpsi = lambda * dpsi + d;
     dpsi2 = lambda * dpsi2 + d * d;
     n = lambda * n + 1;
@@ -171,13 +171,13 @@ struct PropagatedVariance {
   double s = 0, a = 1, x = 0;  // x: influence of the next sample on the seed (consumed by Add)
   void Seed(double s0) noexcept { s = s0, a = 1, x = 0; }
   void Add(double beta, double elasticity, double xi_z, double e, int rho) noexcept {
-    const double d = 1 - beta * xi_z, q = 1 - xi_z;
-    const double g = beta / d, c = (g + elasticity / (d * d)) * q / rho, ge = g * e;
+    const double r = 1 / (1 - beta * xi_z), q_rho = (1 - xi_z) / rho;  // two divisions (as SandwichFactor)
+    const double g = beta * r, c = (g + elasticity * r * r) * q_rho, ge = g * e;
     const double influence = x;
     x = 0;
     if (!(std::isfinite(c) && std::isfinite(ge))) return;
     a *= 1 - c;
-    s = std::max(((1 - c) * (1 - c) + (rho - 1) * c * c) * s + q / rho * ge * (ge + 2 * a * influence), 0.0);
+    s = std::max(((1 - c) * (1 - c) + (rho - 1) * c * c) * s + q_rho * ge * (ge + 2 * a * influence), 0.0);
   }
 };
 
@@ -326,7 +326,7 @@ class BasicStudentRegression {
 
   // β, recording ê·dβ/dê (approx::WeightElasticity) for a root β of the weighting cubic.
   double RootElasticity(const approx::WeightingProblem& problem, double beta) noexcept {
-    const double e = approx::WeightElasticity(problem, beta);
+    const double e = approx::WeightElasticityInline(problem, weight_constants_, beta);  // of problem.nu (Weight())
     details_.elasticity = std::isfinite(e) ? e : 0;
     return beta;
   }
