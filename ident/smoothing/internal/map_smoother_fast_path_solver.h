@@ -182,7 +182,20 @@ class FastSolver {
     const int weight_columns = invariant_ ? std::min(static_cast<int>(p_.process.size()), T_ + 1) : T_ + 1;
     dual.process_weight.resize(kN * kN, weight_columns);
     dual.measurement_weight.resize(1, T_ + 1);
-    for (int t = 0; t <= T_; ++t) {
+    const int m = Middle();  // the passes' split: steps t < m, then t >= m
+    fork_.Run([&] { FinishSteps(0, m, weight_columns, &dual, res); },
+              [&] { FinishSteps(m, T_ + 1, weight_columns, &dual, res); });
+    steps_ = nullptr;
+    x_ = nullptr;
+    arena_.reset();
+    FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, res, &fork_);
+  }
+
+  // Steps [begin, end) of Finish: u, the process duals and the Newton weights, back in the data's unit.
+  void FinishSteps(int begin, int end, int weight_columns, MapSmootherDualIterate* dual_out,
+                   MapSmootherResult* res) const {
+    MapSmootherDualIterate& dual = *dual_out;
+    for (int t = begin; t < end; ++t) {
       const StepConstants<kN>& c = Constants(t);
       const StepState<kN>& s = steps_[t];
       res->u(0, t) = sigma_ * s.u;  // p + B'u = u (identity B, p = 0)
@@ -201,10 +214,6 @@ class FastSolver {
         for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, ProcessWeightColumn(dual.process_weight, t)) = c.W[i];
       dual.measurement_weight(0, t) = 1.0 / (c.m + s.qlo / s.slo + s.qhi / s.shi);
     }
-    steps_ = nullptr;
-    x_ = nullptr;
-    arena_.reset();
-    FinishMapSmootherResult(p_, o_, sigma_ * z_scale, mu, &dual, res);
   }
 
   int ConstantIndex(int t) const {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -11,6 +12,7 @@
 #include "common/error.h"
 #include "ident/smoothing/internal/compensated_arithmetic.h"
 #include "ident/smoothing/internal/dual_polish.h"
+#include "ident/smoothing/internal/fork_join.h"
 #include "ident/smoothing/internal/small_kernels.h"
 
 namespace ident::internal {
@@ -239,31 +241,81 @@ struct CertifiedDual {
   }
 };
 
-// The certificate of the dual point (res->u, y(res->u)): u projected into dom g*, y(u) in double-double, shrunk or
-// projected into dom f*, then the objectives and the certified gap. r: the measurement residuals z - Hx.
+// The dual point of res->u: u projected into dom g*, then y(u) in double-double (*y_lo its trailing parts).
+// Returns the recursion's error bound on the gap.
 template <int kN>
-void CertifyDual(const MapSmootherProblem& p, double z_scale, const Eigen::MatrixXd& r, MapSmootherResult* res) {
+double DualPoint(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo) {
   for (int t = 0; t <= p.T(); ++t)
     ProjectIntoConjugateDomain(p.gt(t), res->u.col(t).data(), p.measurement_dim(), res);
+  return DualStatesDoubleDouble<kN>(p, res, y_lo);
+}
+
+// y(u) shrunk or projected into dom f* (adding the projection's share to *error_bound); false if no finite
+// certificate remains.
+template <int kN>
+bool DualIntoDomain(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo, double* error_bound) {
+  ShrinkDualIntoDomain<kN>(p, res, y_lo);
+  return ProjectDualStates<kN>(p, res, y_lo, error_bound);
+}
+
+// The certificate of the dual point (res->u, y(res->u)): the dual point, brought into dom f*, then the objectives
+// and the certified gap. r: the measurement residuals z - Hx.
+template <int kN>
+void CertifyDual(const MapSmootherProblem& p, double z_scale, const Eigen::MatrixXd& r, MapSmootherResult* res) {
   Eigen::MatrixXd y_lo;
-  double error_bound = DualStatesDoubleDouble<kN>(p, res, &y_lo);
-  ShrinkDualIntoDomain<kN>(p, res, &y_lo);
-  const bool certified = ProjectDualStates<kN>(p, res, &y_lo, &error_bound);
+  double error_bound = DualPoint<kN>(p, res, &y_lo);
+  const bool certified = DualIntoDomain<kN>(p, res, &y_lo, &error_bound);
   EvaluateCertificate<kN>(p, z_scale, r, y_lo, error_bound, certified, res);
+}
+
+// a() and b(), on two threads if `fork` has a worker. An exception from either is rethrown here (the first
+// one's if both throw), after both have returned.
+template <class A, class B>
+void BothTasks(ForkJoin* fork, A&& a, B&& b) {
+  if (fork == nullptr) {
+    a();
+    b();
+    return;
+  }
+  std::exception_ptr error_a, error_b;
+  fork->Run(
+      [&] {
+        try {
+          a();
+        } catch (...) {
+          error_a = std::current_exception();
+        }
+      },
+      [&] {
+        try {
+          b();
+        } catch (...) {
+          error_b = std::current_exception();
+        }
+      });
+  if (error_a) std::rethrow_exception(error_a);
+  if (error_b) std::rethrow_exception(error_b);
 }
 
 // Everything of the result after the iteration, from res->x and res->u (see
 // ident/smoothing/internal/map_smoother_fast_path.h): residuals, the dual point (u, y(u)) and its certificate,
 // and the reconstruction of x from the dual. The iterate's own dual point is certified first; only if its
 // certified relative gap exceeds `polish_above` (the residual R4 amplified by y(u)'s recursion) is it polished
-// and certified again, and the tighter certificate is kept: both are true bounds.
+// and certified again, and the tighter certificate is kept: both are true bounds. Two pairs of tasks that share
+// nothing they write run side by side: the residuals and the dual point, then the certificate and the
+// reconstruction (taken again after a polish, which changes y). The same numbers on one thread or two.
 template <int kN>
 void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, double polish_above,
-                  const MapSmootherDualIterate* dual, MapSmootherResult* res) {
-  Eigen::MatrixXd r;
-  PrimalResiduals<kN>(p, res, &r);
+                  const MapSmootherDualIterate* dual, ForkJoin* fork, MapSmootherResult* res) {
+  Eigen::MatrixXd r, y_lo;
   const Eigen::MatrixXd u_iterate = dual != nullptr ? res->u : Eigen::MatrixXd();
-  CertifyDual<kN>(p, z_scale, r, res);
+  double error_bound = 0;
+  BothTasks(
+      fork, [&] { PrimalResiduals<kN>(p, res, &r); }, [&] { error_bound = DualPoint<kN>(p, res, &y_lo); });
+  const bool certified = DualIntoDomain<kN>(p, res, &y_lo, &error_bound);
+  BothTasks(
+      fork, [&] { EvaluateCertificate<kN>(p, z_scale, r, y_lo, error_bound, certified, res); },
+      [&] { ReconstructFromDual<kN>(p, mu, res); });
   if (dual != nullptr && !(res->relative_gap_bound <= polish_above)) {
     CertifiedDual unpolished;
     unpolished.Swap(res);
@@ -272,8 +324,8 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, double
     PolishMapSmootherDual(p, *dual, &v, &res->u);
     CertifyDual<kN>(p, z_scale, r, res);
     if (!(res->relative_gap_bound <= unpolished.relative_gap_bound)) unpolished.Swap(res);
+    ReconstructFromDual<kN>(p, mu, res);
   }
-  ReconstructFromDual<kN>(p, mu, res);
 }
 
 // A non-finite iterate (overflow or NaN in the iteration): nothing to evaluate, every figure NaN.
@@ -389,8 +441,8 @@ double MapSmootherDataUnit(const MapSmootherProblem& problem) {
   return bound > 0 ? bound : 1.0;
 }
 
-void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptions& options, double z_scale,
-                             double mu, const MapSmootherDualIterate* dual, MapSmootherResult* res) {
+void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptions& options, double z_scale, double mu,
+                             const MapSmootherDualIterate* dual, MapSmootherResult* res, ForkJoin* fork) {
   if (!res->x.allFinite() || !res->u.allFinite()) {
     MarkNotFinite(res);
     return;
@@ -399,19 +451,19 @@ void FinishMapSmootherResult(const MapSmootherProblem& p, const MapSmootherOptio
   const double polish_above = std::min(options.tolerance, options.gap_tolerance);
   switch (p.state_dim()) {
     case 1:
-      FinishResult<1>(p, z_scale, mu, polish_above, dual, res);
+      FinishResult<1>(p, z_scale, mu, polish_above, dual, fork, res);
       break;
     case 2:
-      FinishResult<2>(p, z_scale, mu, polish_above, dual, res);
+      FinishResult<2>(p, z_scale, mu, polish_above, dual, fork, res);
       break;
     case 3:
-      FinishResult<3>(p, z_scale, mu, polish_above, dual, res);
+      FinishResult<3>(p, z_scale, mu, polish_above, dual, fork, res);
       break;
     case 4:
-      FinishResult<4>(p, z_scale, mu, polish_above, dual, res);
+      FinishResult<4>(p, z_scale, mu, polish_above, dual, fork, res);
       break;
     default:
-      FinishResult<0>(p, z_scale, mu, polish_above, dual, res);
+      FinishResult<0>(p, z_scale, mu, polish_above, dual, fork, res);
   }
   SetStatusAndMessage(options, res);
 }

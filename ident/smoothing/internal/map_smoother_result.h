@@ -12,6 +12,8 @@
 
 namespace ident::internal {
 
+class ForkJoin;  // ident/smoothing/internal/fork_join.h
+
 // The KKT residual both paths stop on: the largest of the complementarity per constraint mu (in the unit
 // σ), the total complementarity relative to the objective's size (1e-12 per constraint standing in for an
 // objective of zero), and the relative R3, R4.
@@ -81,8 +83,10 @@ inline int ProcessWeightColumn(const Eigen::MatrixXd& process_weight, int t) {
 //    compensated sum of the per-term Fenchel-Young gaps (each >= 0 in exact arithmetic), which equals
 //    P(x) - D(u) exactly when y is y(u); w = Ax and r = z - Hx by compensated dot products.
 // z_scale: the measurements' scale in the data's unit (domain tolerances); mu: the final complementarity in
-// the iteration's unit (how far the dual is located).
+// the iteration's unit (how far the dual is located). `fork`: if given (and it has a worker), independent parts
+// run on two threads, with the same results.
 void FinishMapSmootherResult(const MapSmootherProblem& problem, const MapSmootherOptions& options, double z_scale,
-                             double mu, const MapSmootherDualIterate* dual, MapSmootherResult* res);
+                             double mu, const MapSmootherDualIterate* dual, MapSmootherResult* res,
+                             ForkJoin* fork = nullptr);
 
 }  // namespace ident::internal
