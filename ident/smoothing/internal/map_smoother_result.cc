@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "ident/linalg/internal/simd_clones.h"
 #include "ident/smoothing/internal/compensated_arithmetic.h"
 #include "ident/smoothing/internal/dual_polish.h"
 #include "ident/smoothing/internal/fork_join.h"
@@ -25,7 +26,7 @@ constexpr double kEps = std::numeric_limits<double>::epsilon();
 // The primal residuals w_t = x_t - F_{t-1} x_{t-1} (into res->w) and r_t = z_t - H_t x_t (into *r) by
 // compensated dot products: their round-off is relative to w and r, not to the (possibly far larger) states.
 template <int kN>
-void PrimalResiduals(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* r_out) {
+IDENT_SIMD_CLONES void PrimalResiduals(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* r_out) {
   const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
   Eigen::MatrixXd& r = *r_out;
   res->w.resize(n, T + 1);
@@ -63,7 +64,8 @@ double ProjectIntoConjugateDomain(const Penalty& pen, double* v, int size, MapSm
 // y = y(u) by the dynamics of (D) in double-double (exact A'y = H'u up to O(eps^2)): res->y holds the
 // leading parts, *y_lo_out the trailing ones. Returns the recursion's error bound on the gap.
 template <int kN>
-double DualStatesDoubleDouble(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo_out) {
+IDENT_SIMD_CLONES double DualStatesDoubleDouble(const MapSmootherProblem& p, MapSmootherResult* res,
+                                                Eigen::MatrixXd* y_lo_out) {
   const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
   Eigen::MatrixXd& y_lo = *y_lo_out;
   res->y.resize(n, T + 1);
@@ -147,8 +149,9 @@ bool ProjectDualStates(const MapSmootherProblem& p, MapSmootherResult* res, Eige
 // Objectives and the gap as compensated sums of per-term values; S sums the magnitudes each term is
 // computed from, for the running error bound gamma S (Higham, sec. 3.3).
 template <int kN>
-void EvaluateCertificate(const MapSmootherProblem& p, double z_scale, const Eigen::MatrixXd& r,
-                         const Eigen::MatrixXd& y_lo, double error_bound, bool certified, MapSmootherResult* res) {
+IDENT_SIMD_CLONES void EvaluateCertificate(const MapSmootherProblem& p, double z_scale, const Eigen::MatrixXd& r,
+                                           const Eigen::MatrixXd& y_lo, double error_bound, bool certified,
+                                           MapSmootherResult* res) {
   const int T = p.T(), n = kN > 0 ? kN : p.state_dim(), nz = p.measurement_dim();
   CompensatedSum primal, gap;
   double magnitudes = 0;
