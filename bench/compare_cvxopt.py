@@ -12,7 +12,8 @@ same MAP problem as a sparse QP:
 with P = A' Qbar^-1 A. Prints both objective values, their relative difference, the solve times and the ratio,
 both as wall time and as CPU time (process_time: all threads of the process). Both solvers run in this Python
 process: ident through its Python module (ident.smooth, from the build tree next to the ident program:
-model parsing, the solve and the conversion of the result), cvxopt's solvers.qp call; the "solve_seconds" of
+model parsing, the solve and the conversion of the result), cvxopt's solvers.qp call, each given its data
+already in its own types (a numpy array, cvxopt matrices: the conversions are not timed); the "solve_seconds" of
 `ident smooth --json` (a new process for every run, without file I/O) is listed as well. Each solver runs
 `repeats` times, alternating, and the smallest time of each is kept (the shared machine's load varies by 2x
 between runs of the same solve). cvxopt runs only up to --cvxopt-max (its time grows faster than T).
@@ -128,8 +129,9 @@ def run_cvxopt(z, huber, F=F, weight=100.0):
     G = spmatrix(V, I, J, (2 * N, nv))
     solvers.options.update({"show_progress": False, "abstol": 1e-10, "reltol": 1e-10, "feastol": 1e-10,
                             "maxiters": 200})
+    h = matrix(h)
     start, cpu_start = time.perf_counter(), time.process_time()
-    sol = solvers.qp(P, q, G, matrix(h))
+    sol = solvers.qp(P, q, G, h)
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu_start
     return sol["primal objective"], seconds, cpu, sol["status"]
 
@@ -195,7 +197,7 @@ def main():
                 t_ours = c_ours = t_theirs = c_theirs = t_cli = c_cli = float("inf")
                 theirs, status = None, "not run"
                 for _ in range(a.repeats):
-                    j, t, c = run_ident_in_process(module, stable_model(penalty), z)
+                    j, t, c = run_ident_in_process(module, stable_model(penalty), np.asarray(z, dtype=float))
                     t_ours, c_ours = min(t_ours, t), min(c_ours, c)
                     cli = run_ident(a.ident, stable_model(penalty), z, tmp)
                     t_cli, c_cli = min(t_cli, cli["solve_seconds"]), min(c_cli, cli["solve_cpu_seconds"])
