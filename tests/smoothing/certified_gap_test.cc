@@ -16,31 +16,13 @@
 
 #include "ident/smoothing/map_smoother.h"
 #include "models/penalties.h"
+#include "tests/smoothing/double_integrator.h"
 
 namespace ident {
 namespace {
 
+using duality_test::DoubleIntegrator;
 using models::Penalty;
-
-// x_{t+1} = [[1, 1], [0, 1]] x_t + w_t (unit covariance), z_t = x_{t,1} + Laplace noise.
-MapSmootherProblem DoubleIntegrator(int T, const Penalty& measurement, unsigned seed = 5) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> N(0, 1);
-  std::exponential_distribution<double> E(1);
-  MapSmootherProblem p;
-  p.F = {(Eigen::MatrixXd(2, 2) << 1, 1, 0, 1).finished()};
-  p.H = {(Eigen::MatrixXd(1, 2) << 1, 0).finished()};
-  p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2))};
-  p.measurement = {measurement};
-  p.z.resize(1, T + 1);
-  double position = 0, velocity = 0;
-  for (int t = 0; t <= T; ++t) {
-    velocity += N(rng);
-    position += velocity;
-    p.z(0, t) = position + (rng() % 2 ? 1 : -1) * E(rng);
-  }
-  return p;
-}
 
 // The Gaussian model's optimum: min 1/2|x_0|^2 + sum 1/2|x_t - F x_{t-1}|^2 + sum 1/2 (z_t - x_{t,1})^2 from the
 // normal equations A x = b (block tridiagonal, 2 x 2 blocks), by block Cholesky in long double; the objective

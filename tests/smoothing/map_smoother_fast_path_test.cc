@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "ident/smoothing/map_smoother.h"
+#include "tests/smoothing/double_integrator.h"
 #include "tests/smoothing/random_matrices.h"
 
 namespace ident {
@@ -157,26 +158,6 @@ void ExpectSameResult(const MapSmootherResult& a, const MapSmootherResult& b, co
   EXPECT_EQ(a.nonunique_steps, b.nonunique_steps) << label;
 }
 
-// A double integrator (positions ~ t^1.5) with Laplace measurement noise and the l1 penalty.
-MapSmootherProblem DoubleIntegratorL1(int T) {
-  std::mt19937 rng(5);
-  std::normal_distribution<double> normal(0, 1);
-  std::exponential_distribution<double> expo(1);
-  MapSmootherProblem p;
-  p.F = {(Eigen::MatrixXd(2, 2) << 1, 1, 0, 1).finished()};
-  p.H = {(Eigen::MatrixXd(1, 2) << 1, 0).finished()};
-  p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2))};
-  p.measurement = {Penalty::L1()};
-  p.z.resize(1, T + 1);
-  double position = 0, velocity = 0;
-  for (int t = 0; t <= T; ++t) {
-    velocity += normal(rng);
-    position += velocity;
-    p.z(0, t) = position + (rng() % 2 ? 1 : -1) * expo(rng);
-  }
-  return p;
-}
-
 TEST(MapSmootherFastPath, GivesTheSameResultOnOneThreadOrTwo) {
   std::mt19937 rng(77);
   MapSmootherOptions one, two, general;
@@ -202,7 +183,7 @@ TEST(MapSmootherFastPath, GivesTheSameResultOnOneThreadOrTwo) {
   // A loose tolerance: the iterate's own dual point misses gap_tolerance, so the finish polishes it and certifies
   // again (its second certificate and reconstruction run after the two-task ones).
   for (int T : {300, 3000}) {
-    const MapSmootherProblem p = DoubleIntegratorL1(T);
+    const MapSmootherProblem p = duality_test::DoubleIntegrator(T, Penalty::L1());
     for (MapSmootherOptions* o : {&one, &two}) o->tolerance = 1e-4, o->gap_tolerance = 1e-9;
     ExpectSameResult(SolveMapSmoother(p, one), SolveMapSmoother(p, two), "polished, T = " + std::to_string(T));
   }
