@@ -238,7 +238,8 @@ class LdFactor {
     Plan p;
     p.min_d = std::numeric_limits<double>::infinity();
     sweep_end_ = 0;
-    double u_next = 1 / c, ru_next = c;  // as PlanPrefixSum
+    if (!(c == fused_c_)) fused_c_ = c, fused_inv_c_ = 1 / c;  // RLS's c = 1/ν settles under forgetting
+    double u_next = fused_inv_c_, ru_next = c;                 // as PlanPrefixSum
 #pragma GCC unroll 8
     for (Eigen::Index j = n - 1; j >= 0; --j) {
       const double dj = d_(j) * s;
@@ -473,6 +474,7 @@ class LdFactor {
   Plan plan_;                        // the last PlanUpdate()
   mutable double l_bound_ = kStale;  // ≥ max |L_ij| off the diagonal; NaN = recompute
   double l_bound_before_ = kStale;   // PlanFused: l_bound_ before the update
+  double fused_c_ = kStale, fused_inv_c_ = kStale;  // PlanFused's last c and 1/c
 };
 
 }  // namespace ident

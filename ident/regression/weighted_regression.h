@@ -54,7 +54,13 @@ struct RlsOptions {
 struct LeastSquaresWeight {
   static constexpr bool kNeedsXi = false;
   static constexpr bool kNeedsInnovation = false;  // β from ν alone: taken before the innovation (one sweep)
-  double operator()(double nu, const Innovation&) const noexcept { return 1 / nu; }
+  double operator()(double nu, const Innovation&) const noexcept {
+    if (!(nu == nu_)) nu_ = nu, beta_ = 1 / nu;  // ν(t) settles under forgetting: then no division
+    return beta_;
+  }
+
+ private:
+  mutable double nu_ = std::numeric_limits<double>::quiet_NaN(), beta_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 template <class Rule, int Rho = Eigen::Dynamic>
