@@ -4,6 +4,8 @@
 #include "ident/smoothing/internal/fork_join.h"
 
 #include <chrono>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -11,6 +13,43 @@
 
 namespace ident::internal {
 namespace {
+
+// An exception from either task reaches the caller, after both tasks have run to their end; with no ForkJoin the
+// tasks run in order on the calling thread.
+TEST(ForkJoin, RunRethrowingRethrowsOnTheCallerAfterBothTasks) {
+  ForkJoin fork(/*use_worker=*/true);
+  const auto busy = [] {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(200);
+    while (std::chrono::steady_clock::now() < until) {}
+  };
+  for (int thrower = 0; thrower < 3; ++thrower)
+    for (ForkJoin* f : {&fork, static_cast<ForkJoin*>(nullptr)}) {
+      bool a_done = false, b_done = false;
+      std::string caught;
+      try {
+        RunRethrowing(
+            f,
+            [&] {
+              busy();
+              a_done = true;
+              if (thrower != 1) throw std::runtime_error("a");
+            },
+            [&] {
+              busy();
+              b_done = true;
+              if (thrower != 0) throw std::runtime_error("b");
+            });
+      } catch (const std::runtime_error& e) {
+        caught = e.what();
+      }
+      EXPECT_TRUE(a_done && b_done) << thrower;
+      EXPECT_EQ(caught, thrower == 1 ? "b" : "a") << thrower;  // thrower 2: both throw, a()'s wins
+    }
+  std::vector<int> order;
+  RunRethrowing(
+      nullptr, [&] { order.push_back(1); }, [&] { order.push_back(2); });
+  EXPECT_EQ(order, (std::vector<int>{1, 2}));
+}
 
 TEST(ForkJoin, WithoutAWorkerRunsTheTasksInOrderOnTheCallingThread) {
   ForkJoin fork(/*use_worker=*/false);

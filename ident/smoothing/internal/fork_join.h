@@ -9,10 +9,12 @@
 // Example:
 //   ForkJoin fork(/*use_worker=*/true);
 //   fork.Run([&] { Top(); }, [&] { Bottom(); });   // both done on return
+//   RunRethrowing(&fork, [&] { MayThrow(); }, [&] { Other(); });
 #pragma once
 
 #include <atomic>
 #include <condition_variable>
+#include <exception>
 #include <mutex>
 #include <thread>
 #include <type_traits>
@@ -61,5 +63,35 @@ class ForkJoin {
   void (*call_)(void*) = nullptr;
   std::thread worker_;  // last: started once the members above exist
 };
+
+// a() and b() by fork->Run (one after the other if `fork` is null), for tasks that may throw: both run to their
+// end either way, and an exception from either is caught where it is thrown and rethrown here (a()'s if both
+// throw).
+template <class A, class B>
+void RunRethrowing(ForkJoin* fork, A&& a, B&& b) {
+  std::exception_ptr error_a, error_b;
+  auto caught_a = [&] {
+    try {
+      a();
+    } catch (...) {
+      error_a = std::current_exception();
+    }
+  };
+  auto caught_b = [&] {
+    try {
+      b();
+    } catch (...) {
+      error_b = std::current_exception();
+    }
+  };
+  if (fork != nullptr) {
+    fork->Run(caught_a, caught_b);
+  } else {
+    caught_a();
+    caught_b();
+  }
+  if (error_a) std::rethrow_exception(error_a);
+  if (error_b) std::rethrow_exception(error_b);
+}
 
 }  // namespace ident::internal

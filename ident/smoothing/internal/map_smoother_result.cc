@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -271,35 +270,6 @@ void CertifyDual(const MapSmootherProblem& p, double z_scale, const Eigen::Matri
   EvaluateCertificate<kN>(p, z_scale, r, y_lo, error_bound, certified, res);
 }
 
-// a() and b(), on two threads if `fork` has a worker. An exception from either is rethrown here (the first
-// one's if both throw), after both have returned.
-template <class A, class B>
-void BothTasks(ForkJoin* fork, A&& a, B&& b) {
-  if (fork == nullptr) {
-    a();
-    b();
-    return;
-  }
-  std::exception_ptr error_a, error_b;
-  fork->Run(
-      [&] {
-        try {
-          a();
-        } catch (...) {
-          error_a = std::current_exception();
-        }
-      },
-      [&] {
-        try {
-          b();
-        } catch (...) {
-          error_b = std::current_exception();
-        }
-      });
-  if (error_a) std::rethrow_exception(error_a);
-  if (error_b) std::rethrow_exception(error_b);
-}
-
 // Everything of the result after the iteration, from res->x and res->u (see
 // ident/smoothing/internal/map_smoother_fast_path.h): residuals, the dual point (u, y(u)) and its certificate,
 // and the reconstruction of x from the dual. The iterate's own dual point is certified first; only if its
@@ -313,10 +283,10 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, double
   Eigen::MatrixXd r, y_lo;
   const Eigen::MatrixXd u_iterate = dual != nullptr ? res->u : Eigen::MatrixXd();
   double error_bound = 0;
-  BothTasks(
+  RunRethrowing(
       fork, [&] { PrimalResiduals<kN>(p, res, &r); }, [&] { error_bound = DualPoint<kN>(p, res, &y_lo); });
   const bool certified = DualIntoDomain<kN>(p, res, &y_lo, &error_bound);
-  BothTasks(
+  RunRethrowing(
       fork, [&] { EvaluateCertificate<kN>(p, z_scale, r, y_lo, error_bound, certified, res); },
       [&] { ReconstructFromDual<kN>(p, mu, res); });
   if (dual != nullptr && !(res->relative_gap_bound <= polish_above)) {
