@@ -20,11 +20,14 @@ between runs of the same solve). cvxopt runs only up to --cvxopt-max (its time g
 
 Part 2, scale: a double integrator x_{t+1} = [[1, 1], [0, 1]] x_t + w (unit process noise), z_t = x_{t,1} + v_t
 with Laplace v, whose positions reach ~T^1.5 (6e8 at T = 10^6), smoothed with l1, Huber and Gaussian
-measurement penalties at every size. For each: iterations, solve time, the certified relative gap
-(relative_gap_bound); for l1 and Huber up to --cvxopt-max cvxopt's objective and time (one run); for the
-Gaussian model the closed-form optimum by a banded Cholesky solve of the normal equations
-(scipy.linalg.solveh_banded) as an independent check that primal - optimum <= gap + bound.
-The time per step at the largest size relative to 10^5 shows whether the solve is linear in T.
+measurement penalties at every size. Every repeat runs the sizes in turn, so that each size meets the same spells
+of machine load, and the fastest run of each is kept. For each: iterations, solve time, the certified relative
+gap (relative_gap_bound); for l1 and Huber up to --cvxopt-max cvxopt's objective and time (one run), and at
+every size the certificate on a problem of the same size whose optimum is known by construction
+(known_optimum_problem: an independent check that dual - bound <= optimum and primal - optimum <= gap + bound);
+for the Gaussian model the closed-form optimum by a banded Cholesky solve of the normal equations
+(scipy.linalg.solveh_banded), the same check. The time at 10^6 relative to 10^5 shows whether the solve is
+linear in T.
 """
 import argparse, json, os, random, subprocess, sys, tempfile, time
 
@@ -55,18 +58,26 @@ def make_double_integrator(T, seed=1):
     return x + rng.laplace(size=T + 1)
 
 
-def run_ident(ident, model, z, tmp):
-    mpath, dpath = os.path.join(tmp, "model.json"), os.path.join(tmp, "data.csv")
-    with open(mpath, "w") as f:
-        json.dump(model, f)
-    with open(dpath, "w") as f:
+def write_data(z, path):
+    with open(path, "w") as f:
         f.write("z\n" + "\n".join("%.17g" % v for v in z) + "\n")
+
+
+def run_ident_files(ident, mpath, dpath):
     out = subprocess.run([ident, "smooth", "--model", mpath, dpath, "--json"], capture_output=True, text=True)
     if out.returncode != 0:
         raise RuntimeError(out.stderr.strip())
     j = json.loads(out.stdout)
     j.pop("x"), j.pop("u"), j.pop("y")
     return j
+
+
+def run_ident(ident, model, z, tmp):
+    mpath, dpath = os.path.join(tmp, "model.json"), os.path.join(tmp, "data.csv")
+    with open(mpath, "w") as f:
+        json.dump(model, f)
+    write_data(z, dpath)
+    return run_ident_files(ident, mpath, dpath)
 
 
 def load_module(ident):
@@ -176,6 +187,57 @@ def gaussian_optimum(z):
     return float(L(0.5) * (np.sum(w * w) + np.sum(r * r)))
 
 
+def known_optimum_problem(T, noise, seed=3):
+    """A double-integrator problem with l1 or Huber (kappa = 1) measurements whose optimum is known by
+    construction. With w_t = x_t - F x_{t-1} (w_0 = x_0) the process terms' gradient is w_t - F'w_{t+1}
+    (w_{T+1} = 0), so x is optimal if w_t - F'w_{t+1} = H'u_t with u_t in dg(z_t - x_t1): in components,
+    u_t = w_t1 - w_{t+1,1} and w_t2 = w_{t+1,1} + w_{t+1,2}. The multipliers u_t are chosen backwards in
+    time, by a bounded feedback that keeps w of order one (so that the positions grow like T^1.5, as in
+    make_double_integrator): half of them at |u| = 1 (a kink of l1, the linear part of Huber), half inside.
+    Then x follows from w, and z_t = x_t1 + r_t with r_t in dg*(u_t) (l1: r = 0 inside, sign(u)(1 + e) at
+    |u| = 1; Huber: r = u inside, sign(u)(1 + e) beyond). Returns z and the objective at that x in long
+    double: an upper bound on the optimum whatever the rounding of x and z, equal to it up to that rounding."""
+    rng = np.random.default_rng(seed)
+    N = T + 1
+    kink = rng.random(N) < 0.5
+    noise_u = rng.uniform(-0.5, 0.5, N)
+    u = np.zeros(N)
+    w = np.zeros((N, 2))
+    a_next = c_next = 0.0  # w_{t+1}
+    for t in range(N - 1, -1, -1):
+        c = c_next + a_next  # w_t2
+        want = -(0.3 * c + 0.8 * a_next) + noise_u[t]  # drives w back towards 0
+        u[t] = (1.0 if want >= 0 else -1.0) if kink[t] else min(0.99, max(-0.99, want))
+        a = a_next + u[t]  # w_t1
+        w[t] = (a, c)
+        a_next, c_next = a, c
+    L = np.longdouble
+    Fd = np.array([[1.0, 1.0], [0.0, 1.0]], dtype=L)
+    xl = np.zeros((N, 2), dtype=L)
+    xl[0] = w[0]
+    for t in range(1, N):
+        xl[t] = Fd @ xl[t - 1] + w[t].astype(L)
+    x = xl.astype(float)
+    e = rng.exponential(1.0, N)
+    r = np.where(kink, u * (1.0 + e), 0.0 if noise == "l1" else u)
+    z = x[:, 0] + r
+    xl = x.astype(L)  # the objective at the rounded x
+    wl = xl.copy()
+    wl[1:] -= xl[:-1] @ Fd.T
+    rl = z.astype(L) - xl[:, 0]
+    ar = np.abs(rl)
+    measurement = ar if noise == "l1" else np.where(ar <= 1, L(0.5) * rl * rl, ar - L(0.5))
+    return z, float(L(0.5) * np.sum(wl * wl) + np.sum(measurement))
+
+
+def bound_holds(run, optimum):
+    """dual - bound <= optimum (weak duality) and primal - optimum within the certified gap, up to the
+    rounding of the two objectives (1e-15 relative)."""
+    slack = 1e-15 * abs(optimum)
+    return bool(run["primal"] - run["gap"] - run["gap_error_bound"] <= optimum + slack
+                and run["primal"] - optimum <= run["gap"] + run["gap_error_bound"] + slack)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("ident", nargs="?", default="build/bin/ident")
@@ -223,17 +285,27 @@ def main():
         print("\ndouble integrator (positions up to ~T^1.5): certified relative gap, time, Gaussian closed form")
         print("%-6s %8s %5s %10s %10s %12s %16s %10s" % ("noise", "T", "it", "solve [s]", "us/step", "gap bound",
                                                        "reference", "holds/x"))
+        # Each size's data are written once; every repeat runs the sizes in turn, so that all sizes meet the
+        # same spells of machine load, and the fastest run of each is kept.
+        data = {}
         for T in sizes:
-            z = make_double_integrator(T)
-            for name, penalty in (("l1", {"penalty": "l1"}), ("huber", {"penalty": "huber", "kappa": 1}),
-                                  ("gauss", {"penalty": "quadratic", "covariance": 1})):
-                model = {"F": [[1, 1], [0, 1]], "H": [[1, 0]], "initial": {"penalty": "quadratic", "covariance": 1},
-                         "process": {"penalty": "quadratic", "covariance": 1}, "measurement": penalty}
-                best = None
-                for _ in range(a.repeats):
-                    j = run_ident(a.ident, model, z, tmp)
-                    if best is None or j["solve_seconds"] < best["solve_seconds"]:
-                        best = j
+            data[T] = (make_double_integrator(T), os.path.join(tmp, "di%d.csv" % T))
+            write_data(*data[T])
+        for name, penalty in (("l1", {"penalty": "l1"}), ("huber", {"penalty": "huber", "kappa": 1}),
+                              ("gauss", {"penalty": "quadratic", "covariance": 1})):
+            model = {"F": [[1, 1], [0, 1]], "H": [[1, 0]], "initial": {"penalty": "quadratic", "covariance": 1},
+                     "process": {"penalty": "quadratic", "covariance": 1}, "measurement": penalty}
+            mpath = os.path.join(tmp, "di_%s.json" % name)
+            with open(mpath, "w") as f:
+                json.dump(model, f)
+            runs = {T: None for T in sizes}
+            for _ in range(a.repeats):
+                for T in sizes:
+                    j = run_ident_files(a.ident, mpath, data[T][1])
+                    if runs[T] is None or j["solve_seconds"] < runs[T]["solve_seconds"]:
+                        runs[T] = j
+            for T in sizes:
+                z, best = data[T][0], runs[T]
                 row = {"noise": name, "T": T, "iterations": best["iterations"], "solve_seconds": best["solve_seconds"],
                        "solve_cpu_seconds": best["solve_cpu_seconds"], "primal": best["primal"], "gap": best["gap"],
                        "gap_error_bound": best["gap_error_bound"], "relative_gap_bound": best["relative_gap_bound"]}
@@ -249,20 +321,27 @@ def main():
                     holds = "%.0fx" % row["speedup_wall"]
                 if name == "gauss":
                     optimum = gaussian_optimum(z)
-                    excess = best["primal"] - optimum
-                    # dual - bound <= P(x_ref) (weak duality) and primal - P(x_ref) within the certified gap
-                    # up to the rounding of the two objectives (1e-15 relative)
-                    slack = 1e-15 * abs(optimum)
                     row.update({"closed_form_optimum": optimum,
-                                "closed_form_relative_excess": excess / abs(optimum),
-                                "bound_holds": bool(best["primal"] - best["gap"] - best["gap_error_bound"] <= optimum + slack
-                                                    and excess <= best["gap"] + best["gap_error_bound"] + slack)})
-                    check, holds = "%.2e" % (excess / abs(optimum)), str(row["bound_holds"])
-                print("%-6s %8d %5d %10.4f %10.3f %12.2e %16s %10s" % (
+                                "closed_form_relative_excess": (best["primal"] - optimum) / abs(optimum),
+                                "bound_holds": bound_holds(best, optimum)})
+                    check, holds = "%.2e" % row["closed_form_relative_excess"], str(row["bound_holds"])
+                else:  # the certificate on a problem of the same size and model with a known optimum
+                    zk, optimum = known_optimum_problem(T, name)
+                    kpath = os.path.join(tmp, "known.csv")
+                    write_data(zk, kpath)
+                    k = run_ident_files(a.ident, mpath, kpath)
+                    row["known_optimum"] = {"optimum": optimum, "primal": k["primal"], "iterations": k["iterations"],
+                                            "relative_excess": (k["primal"] - optimum) / abs(optimum),
+                                            "relative_gap_bound": k["relative_gap_bound"],
+                                            "bound_holds": bound_holds(k, optimum)}
+                    holds = (holds + " " if holds else "") + "known %s" % row["known_optimum"]["bound_holds"]
+                print("%-6s %8d %5d %10.4f %10.3f %12.2e %16s %s" % (
                     name, T, best["iterations"], best["solve_seconds"], 1e6 * best["solve_seconds"] / (T + 1),
                     best["relative_gap_bound"], check, holds))
                 figures["scale"].append(row)
                 sys.stdout.flush()
+    models = ["l1", "huber", "gauss"]
+    figures["scale"].sort(key=lambda r: (r["T"], models.index(r["noise"])))
     by = {(r["noise"], r["T"]): r for r in figures["scale"]}
     if 100000 in sizes and 1000000 in sizes:
         for key, field in (("time_ratio_1e6_to_1e5", "solve_seconds"), ("cpu_time_ratio_1e6_to_1e5", "solve_cpu_seconds")):

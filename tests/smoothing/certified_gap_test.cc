@@ -3,8 +3,10 @@
 // is a true bound on primal - optimum.
 //  - Gaussian: the optimum in closed form, by an independent block Cholesky solve of the normal equations
 //    in long double (64-bit mantissa); primal - optimum <= gap + gap_error_bound and dual <= optimum.
+//  - l1, Huber: problems whose optimum is known by construction (KnownOptimumProblem), the same two inequalities.
 //  - l1, Huber, Vapnik, quantile: weak duality, dual <= P(x') for every x', checked at the other models'
 //    MAP states; and for an iterate stopped early, whose gap is large, the same lower bound.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
@@ -86,6 +88,88 @@ long double GaussianOptimum(const MapSmootherProblem& p) {
     objective += 0.5L * (w0 * w0 + w1 * w1 + r * r);
   }
   return objective;
+}
+
+// A double-integrator problem (F = [[1, 1], [0, 1]], unit process and prior terms, H = [1, 0]) with l1 or
+// Huber(1) measurements whose optimum is known by construction. With w_t = x_t - F x_{t-1} (w_0 = x_0) the
+// process terms' gradient is w_t - F'w_{t+1} (w_{T+1} = 0), so x is optimal if w_t - F'w_{t+1} = H'u_t with
+// u_t in dg(z_t - x_t1); in components u_t = w_t1 - w_{t+1,1} and w_t2 = w_{t+1,1} + w_{t+1,2}. The u_t are
+// chosen backwards in time by a bounded feedback that keeps w of order one (positions ~ T^1.5), half of them
+// at |u| = 1 (a kink of l1, the linear part of Huber) and half inside; then x follows from w, and
+// z_t = x_t1 + r_t with r_t in dg*(u_t). The optimum is the objective at x in long double (at the rounded x:
+// an upper bound on the optimum, equal to it up to the rounding of x and z).
+struct KnownOptimum {
+  MapSmootherProblem problem;
+  long double optimum;
+};
+
+KnownOptimum KnownOptimumProblem(int T, bool l1, unsigned seed) {
+  using L = long double;
+  std::mt19937 rng(seed);
+  std::bernoulli_distribution kink(0.5);
+  std::uniform_real_distribution<double> noise(-0.5, 0.5);
+  std::exponential_distribution<double> excess(1.0);
+  const int N = T + 1;
+  std::vector<double> u(N);
+  std::vector<std::array<double, 2>> w(N);
+  std::vector<bool> at_kink(N);
+  double a_next = 0, c_next = 0;  // w_{t+1}
+  for (int t = N - 1; t >= 0; --t) {
+    const double c = c_next + a_next;                            // w_t2
+    const double want = -(0.3 * c + 0.8 * a_next) + noise(rng);  // drives w back towards 0
+    at_kink[t] = kink(rng);
+    u[t] = at_kink[t] ? (want >= 0 ? 1.0 : -1.0) : std::clamp(want, -0.99, 0.99);
+    const double a = a_next + u[t];  // w_t1
+    w[t] = {a, c};
+    a_next = a;
+    c_next = c;
+  }
+  KnownOptimum k;
+  MapSmootherProblem& p = k.problem;
+  p.F = {(Eigen::MatrixXd(2, 2) << 1, 1, 0, 1).finished()};
+  p.H = {(Eigen::MatrixXd(1, 2) << 1, 0).finished()};
+  p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2))};
+  p.measurement = {l1 ? Penalty::L1() : Penalty::Huber(1.0)};
+  p.z.resize(1, N);
+  std::vector<std::array<double, 2>> x(N);
+  L x0 = w[0][0], x1 = w[0][1];
+  for (int t = 0; t < N; ++t) {
+    if (t > 0) {
+      x0 += x1 + w[t][0];
+      x1 += w[t][1];
+    }
+    x[t] = {static_cast<double>(x0), static_cast<double>(x1)};
+    const double r = at_kink[t] ? u[t] * (1.0 + excess(rng)) : (l1 ? 0.0 : u[t]);
+    p.z(0, t) = x[t][0] + r;
+  }
+  k.optimum = 0;
+  for (int t = 0; t < N; ++t) {
+    L w0 = x[t][0], w1 = x[t][1];
+    if (t > 0) {
+      w0 -= static_cast<L>(x[t - 1][0]) + x[t - 1][1];
+      w1 -= x[t - 1][1];
+    }
+    const L r = static_cast<L>(p.z(0, t)) - x[t][0], ar = std::abs(r);
+    k.optimum += 0.5L * (w0 * w0 + w1 * w1) + (l1 || ar > 1 ? ar - (l1 ? 0.0L : 0.5L) : 0.5L * r * r);
+  }
+  return k;
+}
+
+TEST(CertifiedGap, L1AndHuberProblemsWithAKnownOptimumAreCertified) {
+  for (const bool l1 : {true, false})
+    for (const unsigned seed : {1u, 2u}) {
+      const KnownOptimum k = KnownOptimumProblem(20000, l1, seed);
+      ASSERT_GT(k.problem.z.cwiseAbs().maxCoeff(), 1e4);  // states far above the residuals
+      const MapSmootherResult r = SolveMapSmoother(k.problem);
+      const std::string name = (l1 ? "l1, seed " : "Huber, seed ") + std::to_string(seed);
+      ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << name << ": " << r.message;
+      const double optimum = static_cast<double>(k.optimum);
+      const double slack = 1e-14 * std::abs(optimum);  // the rounding of P(x) (a sum of T terms) and of the cast
+      EXPECT_LE(r.relative_gap_bound, 1e-8) << name;
+      EXPECT_LE(r.primal - optimum, r.gap + r.gap_error_bound + slack) << name << ": primal " << r.primal;
+      EXPECT_LE(r.primal - r.gap - r.gap_error_bound, optimum + slack) << name << ": dual " << r.dual;
+      EXPECT_LE(std::abs(r.primal - optimum), 1e-8 * optimum) << name;
+    }
 }
 
 TEST(CertifiedGap, GaussianDoubleIntegratorOfFiftyThousandStepsMatchesTheClosedForm) {
