@@ -66,17 +66,14 @@ class FastSolver {
     const std::size_t state_doubles = (sizeof(StepState<kN>) + sizeof(double) - 1) / sizeof(double);
     arena_ = std::make_unique<WorkArena>(WorkArena::Padded(N * state_doubles) + WorkArena::Padded(N * kN));
     steps_ = reinterpret_cast<StepState<kN>*>(arena_->Take(N * state_doubles));
-    for (std::size_t t = 0; t < N; ++t) new (&steps_[t]) StepState<kN>{};
     x_ = arena_->Take(N * kN);
-    for (int t = 0; t <= T_; ++t) {  // strictly interior start, C'u + s = c exactly (as the general path)
-      const StepConstants<kN>& c = constants_[ConstantIndex(t)];
-      StepState<kN>& s = steps_[t];
-      s.u = 0.5 * (c.lo + c.hi);
-      s.slo = s.u - c.lo;
-      s.shi = c.hi - s.u;
-      s.qlo = s.qhi = 1.0;
-      bound_scale_ = std::max({bound_scale_, std::abs(c.lo), std::abs(c.hi)});
-    }
+    // The records' first writes, split between the two threads as the passes are: at large T the first touch
+    // of fresh pages (the kernel's zeroing, and in a virtual machine the host's faults) takes as long as
+    // several passes.
+    const int m = Middle();
+    double top_scale = 0, bottom_scale = 0;
+    fork_.Run([&] { top_scale = StartSteps(0, m); }, [&] { bottom_scale = StartSteps(m, T_ + 1); });
+    bound_scale_ = std::max({bound_scale_, top_scale, bottom_scale});
     for (const auto& F : p.F) matrix_scale_ = std::max(matrix_scale_, 1 + F.cwiseAbs().maxCoeff());
     for (const auto& H : p.H) matrix_scale_ = std::max(matrix_scale_, 1 + H.cwiseAbs().maxCoeff());
     for (const ProcessPenalty& f : process_) weight_scale_ = std::max(weight_scale_, f.W.cwiseAbs().maxCoeff());
@@ -214,6 +211,23 @@ class FastSolver {
         for (int i = 0; i < kN * kN; ++i) dual.process_weight(i, ProcessWeightColumn(dual.process_weight, t)) = c.W[i];
       dual.measurement_weight(0, t) = 1.0 / (c.m + s.qlo / s.slo + s.qhi / s.shi);
     }
+  }
+
+  // Steps [begin, end) of the starting point: x = 0 and u, s, q strictly interior with C'u + s = c exactly (as
+  // the general path). Returns the largest |bound| among them.
+  double StartSteps(int begin, int end) {
+    double scale = 0;
+    for (int t = begin; t < end; ++t) {
+      const StepConstants<kN>& c = Constants(t);
+      StepState<kN>& s = *new (&steps_[t]) StepState<kN>{};
+      s.u = 0.5 * (c.lo + c.hi);
+      s.slo = s.u - c.lo;
+      s.shi = c.hi - s.u;
+      s.qlo = s.qhi = 1.0;
+      for (int i = 0; i < kN; ++i) x_[t * kN + i] = 0.0;  // written, not read, first: no zero page to copy
+      scale = std::max({scale, std::abs(c.lo), std::abs(c.hi)});
+    }
+    return scale;
   }
 
   int ConstantIndex(int t) const {
