@@ -343,7 +343,11 @@ template <int kN>
   s.du = du;
   s.dqhi = dqhi;
   s.dqlo = dqlo;
-  out->max_ratio = std::max({out->max_ratio, -dslo * islo, -dshi * ishi, -dqlo * s.iqlo, -dqhi * s.iqhi});
+  out->max_ratio = std::max({out->max_ratio, -dslo * islo, -dshi * ishi});
+  // -dq/q by a division only where it exceeds the largest ratio so far (rarely, after the first steps): the
+  // records keep no 1/q, which the passes would stream from memory at large T.
+  if (-dqlo > out->max_ratio * qlo) out->max_ratio = std::max(out->max_ratio, -dqlo / qlo);
+  if (-dqhi > out->max_ratio * qhi) out->max_ratio = std::max(out->max_ratio, -dqhi / qhi);
   if (!corrector) {
     out->sum1 += slo * dqlo + qlo * dslo + shi * dqhi + qhi * dshi;
     out->sum2 += dslo * dqlo + dshi * dqhi;

@@ -37,7 +37,7 @@ template <int kN>
 struct StepState {
   double u, slo, shi, qlo, qhi;       // multiplier of g_t, slacks and multipliers of lo <= u <= hi
   double du, dqlo, dqhi;              // Newton direction (ds_lo, ds_hi follow from du: SlackDirections)
-  double islo, ishi, iqlo, iqhi;      // reciprocals (once per iteration: no divisions in the other passes)
+  double islo, ishi;                  // 1/s_lo, 1/s_hi (once per iteration: no divisions in the other passes)
   double kd;                          // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
   double rt3;                         // R3 - e of the current direction (R3 and R4 live only in the forward pass)
   double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
@@ -49,22 +49,18 @@ struct StepState {
   double P[kN * kN];
 };
 
-// 1/s_lo, 1/s_hi, 1/q_lo, 1/q_hi by one division, 1/(s_lo s_hi q_lo q_hi), when that product is a normal
-// number (four divisions otherwise): the divider, not the arithmetic, bounds the factorisation pass.
+// 1/s_lo and 1/s_hi by one division, 1/(s_lo s_hi), when that product is a normal number (two divisions
+// otherwise): the divider, not the arithmetic, bounds the factorisation pass.
 template <int kN>
 [[gnu::always_inline]] inline void Reciprocals(StepState<kN>& s) {
-  const double ss = s.slo * s.shi, qq = s.qlo * s.qhi, all = ss * qq;
-  if (all >= std::numeric_limits<double>::min() && all <= std::numeric_limits<double>::max()) {
-    const double inv = 1.0 / all, iss = qq * inv, iqq = ss * inv;
-    s.islo = s.shi * iss;
-    s.ishi = s.slo * iss;
-    s.iqlo = s.qhi * iqq;
-    s.iqhi = s.qlo * iqq;
+  const double ss = s.slo * s.shi;
+  if (ss >= std::numeric_limits<double>::min() && ss <= std::numeric_limits<double>::max()) {
+    const double inv = 1.0 / ss;
+    s.islo = s.shi * inv;
+    s.ishi = s.slo * inv;
   } else {
     s.islo = 1.0 / s.slo;
     s.ishi = 1.0 / s.shi;
-    s.iqlo = 1.0 / s.qlo;
-    s.iqhi = 1.0 / s.qhi;
   }
 }
 
