@@ -122,7 +122,7 @@ IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::TopF
   const int m = Middle();
   if (m == 0) return out;
   bool ok = true;  // on this thread's stack, as `out`: the halves' results would share a cache line
-  double R4p[kN] = {}, r3p = 0, Pp[kN * kN] = {}, vp[kN] = {};
+  double R4p[kN] = {}, r3p = 0, Pp[kPackedSize<kN>] = {}, vp[kN] = {};
   for (int t = 0; t < m; ++t) {
     ApplyStep(t, alpha, true);
     double vd[kN], R4[kN];
@@ -155,7 +155,7 @@ IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::Bott
   const int m = Middle();
   if (m == T_) return out;
   bool ok = true;                                                             // on this thread's stack, as `out`
-  double vdn[kN] = {}, R4n[kN] = {}, r3n = 0, Qn[kN * kN] = {}, wn[kN] = {};  // vd, R4, R3 of step t+1
+  double vdn[kN] = {}, R4n[kN] = {}, r3n = 0, Qn[kPackedSize<kN>] = {}, wn[kN] = {};  // vd, R4, R3 of step t+1
   if (alpha > 0)
     for (int i = 0; i < kN; ++i) x_[T_ * kN + i] += alpha * steps_[T_].dx[i];
   for (int t = T_; t > m; --t) {
@@ -213,16 +213,19 @@ template <int kN>
   const double r2lo = slo * qlo, r2hi = shi * qhi;
   const double e = (-r2hi + qhi * r1hi) * ishi - (-r2lo + qlo * r1lo) * islo;
   const double rt3 = r3 - e;
+  double Pk[kPackedSize<kN>];
+  for (int k = 0; k < kN; ++k)
+    for (int i = 0; i <= k; ++i) Pk[Packed(i, k)] = P[i + k * kN];
   double v[kN];
-  SubstitutionStep<kN>(c, P, gf, rt3, R4, va, wb, v);
-  for (int i = 0; i < kN * kN; ++i) s.P[i] = P[i];
+  SubstitutionStep<kN>(c, Pk, gf, rt3, R4, va, wb, v);
+  for (int i = 0; i < kPackedSize<kN>; ++i) s.P[i] = Pk[i];
   for (int i = 0; i < kN; ++i) {
     s.gf[i] = gf[i];
     s.v[i] = v[i];
   }
   s.rt3 = rt3;
   if (carry)
-    for (int i = 0; i < kN * kN; ++i) carry[i] = P[i];
+    for (int i = 0; i < kPackedSize<kN>; ++i) carry[i] = Pk[i];
   if (v_carry)
     for (int i = 0; i < kN; ++i) v_carry[i] = v[i];
   return true;
@@ -308,8 +311,8 @@ IDENT_SIMD_CLONES inline void FastSolver<kN>::BackwardHalf(double target, bool c
     }
     double dx[kN];
     for (int i = 0; i < kN; ++i) {
-      double nd = s.P[i] * ex[0];
-      for (int k = 1; k < kN; ++k) nd += s.P[i + k * kN] * ex[k];
+      double nd = s.P[Packed(i, 0)] * ex[0];
+      for (int k = 1; k < kN; ++k) nd += s.P[Packed(i, k)] * ex[k];
       dx[i] = s.v[i] - nd;
     }
     Recover(t, dx, target, corrector, out);

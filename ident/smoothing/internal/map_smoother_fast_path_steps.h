@@ -32,6 +32,12 @@ struct StepConstants {
   double lo, hi, m;  // measurement penalty: box [lo, hi], M = m
 };
 
+// A symmetric kN x kN matrix as its upper triangle, column by column: (i, k), i <= k, at i + k(k+1)/2. The step
+// records and the passes' carried blocks keep P_t this way: at large T the passes stream the records from memory.
+template <int kN>
+constexpr int kPackedSize = kN*(kN + 1) / 2;
+constexpr int Packed(int i, int k) { return i <= k ? i + k * (k + 1) / 2 : k + i * (i + 1) / 2; }
+
 // The iterate and work values of one time step (nz = 1: one PLQ coordinate per step).
 template <int kN>
 struct StepState {
@@ -46,7 +52,7 @@ struct StepState {
   // Top half (t < m): P_t = S_t^-1, v_t = P_t (b_t - E_t v_{t-1}), dx_t = v_t - P_t E_{t+1}' dx_{t+1}. Bottom half
   // (t > m): the same names for Q_t and w_t of the elimination from the end, w_t = Q_t (b_t - E_{t+1}' w_{t+1}),
   // dx_t = w_t - Q_t E_t dx_{t-1}. Middle (t = m): the inverse of the Schur complement of both, and v_m = dx_m.
-  double P[kN * kN];
+  double P[kPackedSize<kN>];  // packed (Packed)
 };
 
 // 1/s_lo and 1/s_hi by one division, 1/(s_lo s_hi), when that product is a normal number (two divisions
@@ -133,21 +139,21 @@ void FillStepConstants(const MapSmootherProblem& p, int t, const Eigen::MatrixXd
 }
 
 // S0 = Db_t - E_t Pa E_t' - E_{t+1}' Qb E_{t+1} (column-major, symmetric): the Schur complement of step t
-// before the measurement's term, with Pa = P_{t-1} of the top half and Qb = Q_{t+1} of the bottom half (each
-// nullptr where that side does not eliminate into step t).
+// before the measurement's term, with Pa = P_{t-1} of the top half and Qb = Q_{t+1} of the bottom half (packed;
+// each nullptr where that side does not eliminate into step t).
 template <int kN>
 [[gnu::always_inline]] inline void SchurBase(const StepConstants<kN>& c, const double* Pa, const double* Qb,
                                              double* S0) {
   if constexpr (kN == 2) {
     double s11 = c.Db[0], s12 = c.Db[1], s22 = c.Db[3];
     if (Pa) {
-      const double p11 = Pa[0], p12 = Pa[1], p22 = Pa[3];
+      const double p11 = Pa[0], p12 = Pa[1], p22 = Pa[2];
       s11 -= c.EPE[0] * p11 + c.EPE[1] * p12 + c.EPE[2] * p22;
       s12 -= c.EPE[3] * p11 + c.EPE[4] * p12 + c.EPE[5] * p22;
       s22 -= c.EPE[6] * p11 + c.EPE[7] * p12 + c.EPE[8] * p22;
     }
     if (Qb) {
-      const double q11 = Qb[0], q12 = Qb[1], q22 = Qb[3];
+      const double q11 = Qb[0], q12 = Qb[1], q22 = Qb[2];
       s11 -= c.ETE[0] * q11 + c.ETE[1] * q12 + c.ETE[2] * q22;
       s12 -= c.ETE[3] * q11 + c.ETE[4] * q12 + c.ETE[5] * q22;
       s22 -= c.ETE[6] * q11 + c.ETE[7] * q12 + c.ETE[8] * q22;
@@ -164,7 +170,7 @@ template <int kN>
       for (int j = 0; j < kN; ++j)
         for (int i = 0; i < kN; ++i) {
           double xa = 0;
-          for (int k = 0; k < kN; ++k) xa += X[i + k * kN] * a(j, k);
+          for (int k = 0; k < kN; ++k) xa += X[Packed(i, k)] * a(j, k);
           XA[i + j * kN] = xa;
         }
       for (int j = 0; j < kN; ++j)
@@ -226,8 +232,9 @@ template <int kN>
   return true;
 }
 
-// One step of the forward substitutions: v = a gf - P (b + E_t va + E_{t+1}' wb), with va = v_{t-1} of the top half
-// and wb = w_{t+1} of the bottom half (each nullptr where that side does not eliminate into step t; b nullptr: 0).
+// One step of the forward substitutions: v = a gf - P (b + E_t va + E_{t+1}' wb), P packed, with va = v_{t-1} of the
+// top half and wb = w_{t+1} of the bottom half (each nullptr where that side does not eliminate into step t; b
+// nullptr: 0).
 template <int kN>
 [[gnu::always_inline]] inline void SubstitutionStep(const StepConstants<kN>& c, const double* P, const double* gf,
                                                     double a, const double* b, const double* va, const double* wb,
@@ -241,8 +248,8 @@ template <int kN>
     for (int i = 0; i < kN; ++i)
       for (int k = 0; k < kN; ++k) w[i] += c.En[k + i * kN] * wb[k];
   for (int i = 0; i < kN; ++i) {
-    double pw = P[i] * w[0];  // the sums start at their first term: no + 0.0 (which does not fold)
-    for (int k = 1; k < kN; ++k) pw += P[i + k * kN] * w[k];
+    double pw = P[Packed(i, 0)] * w[0];  // the sums start at their first term: no + 0.0 (which does not fold)
+    for (int k = 1; k < kN; ++k) pw += P[Packed(i, k)] * w[k];
     v[i] = a * gf[i] - pw;
   }
 }
