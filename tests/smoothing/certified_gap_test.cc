@@ -3,7 +3,8 @@
 // is a true bound on primal - optimum.
 //  - Gaussian: the optimum in closed form, by an independent block Cholesky solve of the normal equations
 //    in long double (64-bit mantissa); primal - optimum <= gap + gap_error_bound and dual <= optimum.
-//  - l1, Huber: problems whose optimum is known by construction (KnownOptimumProblem), the same two inequalities.
+//  - l1, Huber, Vapnik, quantile: problems whose optimum is known by construction (KnownOptimumProblem), the
+//    same two inequalities.
 //  - l1, Huber, Vapnik, quantile: weak duality, dual <= P(x') for every x', checked at the other models'
 //    MAP states; and for an iterate stopped early, whose gap is large, the same lower bound.
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -90,35 +92,52 @@ long double GaussianOptimum(const MapSmootherProblem& p) {
   return objective;
 }
 
-// A double-integrator problem (F = [[1, 1], [0, 1]], unit process and prior terms, H = [1, 0]) with l1 or
-// Huber(1) measurements whose optimum is known by construction. With w_t = x_t - F x_{t-1} (w_0 = x_0) the
-// process terms' gradient is w_t - F'w_{t+1} (w_{T+1} = 0), so x is optimal if w_t - F'w_{t+1} = H'u_t with
-// u_t in dg(z_t - x_t1); in components u_t = w_t1 - w_{t+1,1} and w_t2 = w_{t+1,1} + w_{t+1,2}. The u_t are
-// chosen backwards in time by a bounded feedback that keeps w of order one (positions ~ T^1.5), half of them
-// at |u| = 1 (a kink of l1, the linear part of Huber) and half inside; then x follows from w, and
-// z_t = x_t1 + r_t with r_t in dg*(u_t). The optimum is the objective at x in long double (at the rounded x:
-// an upper bound on the optimum, equal to it up to the rounding of x and z).
+// The measurement penalties of the known-optimum problems: l1, Huber(1), Vapnik(0.5), Quantile(0.3).
+enum class Kink { kL1, kHuber, kVapnik, kQuantile };
+constexpr double kEpsilon = 0.5, kTau = 0.3;
+
+// A double-integrator problem (F = [[1, 1], [0, 1]], unit process and prior terms, H = [1, 0]) whose optimum is
+// known by construction. With w_t = x_t - F x_{t-1} (w_0 = x_0) the process terms' gradient is w_t - F'w_{t+1}
+// (w_{T+1} = 0), so x is optimal if w_t - F'w_{t+1} = H'u_t with u_t in dg(z_t - x_t1); in components
+// u_t = w_t1 - w_{t+1,1} and w_t2 = w_{t+1,1} + w_{t+1,2}. The u_t are chosen backwards in time by a bounded
+// feedback that keeps w of order one (positions ~ T^1.5), half of them at an end of dom g* (a kink of l1,
+// Vapnik or the quantile penalty, the linear part of Huber) and half inside, and z_t = x_t1 + r_t with r_t in
+// dg*(u_t). The optimum is the objective at x in long double (at the rounded x: an upper bound on the
+// optimum, equal to it up to the rounding of x and z).
 struct KnownOptimum {
   MapSmootherProblem problem;
   long double optimum;
 };
 
-KnownOptimum KnownOptimumProblem(int T, bool l1, unsigned seed) {
+KnownOptimum KnownOptimumProblem(int T, Kink g, unsigned seed) {
   using L = long double;
   std::mt19937 rng(seed);
-  std::bernoulli_distribution kink(0.5);
-  std::uniform_real_distribution<double> noise(-0.5, 0.5);
+  std::bernoulli_distribution kink(0.5), inside_knee(0.3);
+  std::uniform_real_distribution<double> noise(-0.5, 0.5), unit(-0.9, 0.9);
   std::exponential_distribution<double> excess(1.0);
+  const double u_lo = g == Kink::kQuantile ? kTau - 1 : -1, u_hi = g == Kink::kQuantile ? kTau : 1;
   const int N = T + 1;
-  std::vector<double> u(N);
+  std::vector<double> u(N), r(N);
   std::vector<std::array<double, 2>> w(N);
-  std::vector<bool> at_kink(N);
   double a_next = 0, c_next = 0;  // w_{t+1}
   for (int t = N - 1; t >= 0; --t) {
     const double c = c_next + a_next;                            // w_t2
     const double want = -(0.3 * c + 0.8 * a_next) + noise(rng);  // drives w back towards 0
-    at_kink[t] = kink(rng);
-    u[t] = at_kink[t] ? (want >= 0 ? 1.0 : -1.0) : std::clamp(want, -0.99, 0.99);
+    if (kink(rng)) {  // an end of dom g*: r beyond the kink, on the side of u's sign
+      u[t] = want >= 0 ? u_hi : u_lo;
+      const double beyond = excess(rng);
+      r[t] = g == Kink::kQuantile ? (u[t] > 0 ? beyond : -beyond)
+                                  : u[t] * ((g == Kink::kVapnik  ? kEpsilon
+                                             : g == Kink::kHuber ? 1.0
+                                                                 : 0.0) +
+                                            beyond);
+    } else if (g == Kink::kVapnik && inside_knee(rng)) {  // u = 0: r strictly inside the insensitive zone
+      u[t] = 0;
+      r[t] = kEpsilon * unit(rng);
+    } else {
+      u[t] = std::clamp(want, u_lo + 0.01, u_hi - 0.01);
+      r[t] = g == Kink::kHuber ? u[t] : g == Kink::kVapnik ? (u[t] > 0 ? kEpsilon : u[t] < 0 ? -kEpsilon : 0.0) : 0.0;
+    }
     const double a = a_next + u[t];  // w_t1
     w[t] = {a, c};
     a_next = a;
@@ -129,7 +148,10 @@ KnownOptimum KnownOptimumProblem(int T, bool l1, unsigned seed) {
   p.F = {(Eigen::MatrixXd(2, 2) << 1, 1, 0, 1).finished()};
   p.H = {(Eigen::MatrixXd(1, 2) << 1, 0).finished()};
   p.process = {Penalty::Quadratic(Eigen::MatrixXd::Identity(2, 2))};
-  p.measurement = {l1 ? Penalty::L1() : Penalty::Huber(1.0)};
+  p.measurement = {g == Kink::kL1       ? Penalty::L1()
+                   : g == Kink::kHuber  ? Penalty::Huber(1.0)
+                   : g == Kink::kVapnik ? Penalty::Vapnik(kEpsilon)
+                                        : Penalty::Quantile(kTau)};
   p.z.resize(1, N);
   std::vector<std::array<double, 2>> x(N);
   L x0 = w[0][0], x1 = w[0][1];
@@ -139,8 +161,7 @@ KnownOptimum KnownOptimumProblem(int T, bool l1, unsigned seed) {
       x1 += w[t][1];
     }
     x[t] = {static_cast<double>(x0), static_cast<double>(x1)};
-    const double r = at_kink[t] ? u[t] * (1.0 + excess(rng)) : (l1 ? 0.0 : u[t]);
-    p.z(0, t) = x[t][0] + r;
+    p.z(0, t) = x[t][0] + r[t];
   }
   k.optimum = 0;
   for (int t = 0; t < N; ++t) {
@@ -149,19 +170,25 @@ KnownOptimum KnownOptimumProblem(int T, bool l1, unsigned seed) {
       w0 -= static_cast<L>(x[t - 1][0]) + x[t - 1][1];
       w1 -= x[t - 1][1];
     }
-    const L r = static_cast<L>(p.z(0, t)) - x[t][0], ar = std::abs(r);
-    k.optimum += 0.5L * (w0 * w0 + w1 * w1) + (l1 || ar > 1 ? ar - (l1 ? 0.0L : 0.5L) : 0.5L * r * r);
+    const L res = static_cast<L>(p.z(0, t)) - x[t][0], ar = std::abs(res);
+    L measurement = ar;  // l1
+    if (g == Kink::kHuber) measurement = ar <= 1 ? 0.5L * res * res : ar - 0.5L;
+    if (g == Kink::kVapnik) measurement = std::max(L(0), ar - L(kEpsilon));
+    if (g == Kink::kQuantile) measurement = res >= 0 ? L(kTau) * res : L(kTau - 1) * res;
+    k.optimum += 0.5L * (w0 * w0 + w1 * w1) + measurement;
   }
   return k;
 }
 
-TEST(CertifiedGap, L1AndHuberProblemsWithAKnownOptimumAreCertified) {
-  for (const bool l1 : {true, false})
+TEST(CertifiedGap, ProblemsWithAKnownOptimumAreCertified) {
+  const std::pair<Kink, const char*> models[] = {
+      {Kink::kL1, "l1"}, {Kink::kHuber, "Huber"}, {Kink::kVapnik, "Vapnik"}, {Kink::kQuantile, "quantile"}};
+  for (const auto& [g, model] : models)
     for (const unsigned seed : {1u, 2u}) {
-      const KnownOptimum k = KnownOptimumProblem(20000, l1, seed);
+      const KnownOptimum k = KnownOptimumProblem(20000, g, seed);
       ASSERT_GT(k.problem.z.cwiseAbs().maxCoeff(), 1e4);  // states far above the residuals
       const MapSmootherResult r = SolveMapSmoother(k.problem);
-      const std::string name = (l1 ? "l1, seed " : "Huber, seed ") + std::to_string(seed);
+      const std::string name = std::string(model) + ", seed " + std::to_string(seed);
       ASSERT_EQ(r.status, MapSmootherStatus::kConverged) << name << ": " << r.message;
       const double optimum = static_cast<double>(k.optimum);
       const double slack = 1e-14 * std::abs(optimum);  // the rounding of P(x) (a sum of T terms) and of the cast
