@@ -224,15 +224,20 @@ void ReconstructFromDual(const MapSmootherProblem& p, double mu, MapSmootherResu
   res->max_abs_x_difference = (res->x_from_dual - res->x).cwiseAbs().maxCoeff();
 }
 
-// A dual point and its certificate, the fields of MapSmootherResult that CertifyDual sets.
+// A dual point, its certificate and the states rebuilt from it: the fields of MapSmootherResult that CertifyDual
+// and ReconstructFromDual set.
 struct CertifiedDual {
-  Eigen::MatrixXd u, y;
+  Eigen::MatrixXd u, y, x_from_dual;
+  std::vector<int> nonunique_steps;
   double primal = 0, dual = 0, gap = 0, relative_gap = 0, gap_error_bound = 0, relative_gap_bound = 0;
-  double dual_infeasibility = 0;
+  double dual_infeasibility = 0, max_abs_x_difference = 0;
+  bool reconstruction_unique = false;
 
   void Swap(MapSmootherResult* res) {
     u.swap(res->u);
     y.swap(res->y);
+    x_from_dual.swap(res->x_from_dual);
+    nonunique_steps.swap(res->nonunique_steps);
     std::swap(primal, res->primal);
     std::swap(dual, res->dual);
     std::swap(gap, res->gap);
@@ -240,6 +245,8 @@ struct CertifiedDual {
     std::swap(gap_error_bound, res->gap_error_bound);
     std::swap(relative_gap_bound, res->relative_gap_bound);
     std::swap(dual_infeasibility, res->dual_infeasibility);
+    std::swap(max_abs_x_difference, res->max_abs_x_difference);
+    std::swap(reconstruction_unique, res->reconstruction_unique);
   }
 };
 
@@ -296,8 +303,10 @@ void FinishResult(const MapSmootherProblem& p, double z_scale, double mu, double
     Eigen::MatrixXd v = dual->process_dual;
     PolishMapSmootherDual(p, *dual, &v, &res->u);
     CertifyDual<kN>(p, z_scale, r, res);
-    if (!(res->relative_gap_bound <= unpolished.relative_gap_bound)) unpolished.Swap(res);
-    ReconstructFromDual<kN>(p, mu, res);
+    if (res->relative_gap_bound <= unpolished.relative_gap_bound)
+      ReconstructFromDual<kN>(p, mu, res);
+    else
+      unpolished.Swap(res);  // with the reconstruction from its y
   }
 }
 
