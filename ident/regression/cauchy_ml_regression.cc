@@ -4,6 +4,7 @@
 #include "ident/regression/batch_regression.h"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -308,7 +309,16 @@ BatchRegressionResult CauchyMlRegression(const Eigen::Ref<const Eigen::MatrixXd>
   IDENT_REQUIRE(error.empty(), "{}", error);
   RequireRegressionData(Z, y);
   const Orthonormalised f = RequireFullRank(Z);
-  const CauchyProblem problem(f.Q, y);
+  // y in units of a power of two near its median magnitude (its largest if that is 0): every step below
+  // is then the same, bit for bit, for y and 2^k·y (the NLL's n·log γ term, and with it the stopping and
+  // line-search tests that compare NLL differences with |NLL|, would otherwise depend on the units of y).
+  Eigen::VectorXd magnitude = y.cwiseAbs();
+  const Eigen::Index middle = magnitude.size() / 2;
+  std::nth_element(magnitude.data(), magnitude.data() + middle, magnitude.data() + magnitude.size());
+  const int unit = std::ilogb(magnitude(middle) > 0 ? magnitude(middle) : y.cwiseAbs().maxCoeff());
+  const int exponent = unit == FP_ILOGB0 || unit == FP_ILOGBNAN || unit == INT_MAX ? 0 : unit;
+  const Eigen::VectorXd y_scaled = y.unaryExpr([exponent](double v) { return std::ldexp(v, -exponent); });
+  const CauchyProblem problem(f.Q, y_scaled);
 
   std::vector<CauchyPoint> points = ScreenedStarts(problem, options);
   BatchRegressionResult result;
@@ -336,10 +346,11 @@ BatchRegressionResult CauchyMlRegression(const Eigen::Ref<const Eigen::MatrixXd>
     result.objective = -kInf;
     return result;
   }
-  result.theta = f.T * best.beta;
-  result.scale = best.gamma;
-  result.covariance = f.T * problem.Covariance(best) * f.T.transpose();
-  result.objective = best.nll;
+  const auto in_units_of_y = [](int power) { return [power](double v) { return std::ldexp(v, power); }; };
+  result.theta = (f.T * best.beta).unaryExpr(in_units_of_y(exponent));
+  result.scale = std::ldexp(best.gamma, exponent);
+  result.covariance = (f.T * problem.Covariance(best) * f.T.transpose()).unaryExpr(in_units_of_y(2 * exponent));
+  result.objective = best.nll + static_cast<double>(y.size()) * exponent * std::numbers::ln2;
   result.iterations = best.iterations;
   result.gradient_norm = best.gradient_norm;
   result.converged = best.gradient_norm <= options.gradient_tolerance;
