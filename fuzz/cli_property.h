@@ -42,12 +42,8 @@ namespace ident::fuzz {
 namespace cli_internal {
 
 inline const std::string& Dir() {
-  static const std::string dir = [] {
-    char name[] = "/tmp/ident-cli-fuzz-XXXXXX";
-    const char* made = mkdtemp(name);
-    return std::string(made ? made : "/tmp");
-  }();
-  return dir;
+  static const ScratchDir dir("ident-cli-fuzz-");
+  return dir.path();
 }
 
 inline std::string Slurp(const std::string& path) {

@@ -78,12 +78,8 @@ inline Outcome Run(const std::string& path, bool streamed, const EstimatorSettin
 }
 
 inline std::string Path(const char* name) {
-  static const std::string dir = [] {
-    char templ[] = "/tmp/ident-fit-fuzz-XXXXXX";
-    const char* made = mkdtemp(templ);
-    return std::string(made ? made : "/tmp");
-  }();
-  return dir + "/" + name;
+  static const ScratchDir dir("ident-fit-fuzz-");
+  return dir.path() + "/" + name;
 }
 
 }  // namespace fit_differential_internal

@@ -4,13 +4,19 @@
 //   IDENT_FUZZ_ENTRY(fn)   defines LLVMFuzzerTestOneInput from a property check
 //                          `std::string fn(const uint8_t*, size_t)` ("" = all properties hold);
 //                          a violated property prints its name and traps, so libFuzzer saves the input.
+//   ScratchDir             a directory for one process's files, removed when the process exits normally
+//                          (a violated property traps, so the files of the failing input stay)
 #pragma once
+
+#include <stdlib.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
+#include <system_error>
 
 namespace ident::fuzz {
 
@@ -33,6 +39,27 @@ class ByteReader {
   const std::uint8_t* data_;
   std::size_t size_;
   std::size_t pos_ = 0;
+};
+
+// /tmp/<prefix>XXXXXX for one process's files ("/tmp" itself if it cannot be made), removed with its
+// contents when the object is destroyed: keep it in a function-local static.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const char* prefix) : path_(std::string("/tmp/") + prefix + "XXXXXX") {
+    made_ = mkdtemp(path_.data()) != nullptr;
+    if (!made_) path_ = "/tmp";
+  }
+  ~ScratchDir() {
+    std::error_code ignored;
+    if (made_) std::filesystem::remove_all(path_, ignored);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  bool made_ = false;
 };
 
 }  // namespace ident::fuzz
