@@ -6,8 +6,6 @@
 // factorises as symmetric positive definite.
 #pragma once
 
-#include <unistd.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -17,6 +15,7 @@
 
 #include "cli/estimator_options.h"
 #include "common/error.h"
+#include "fuzz/fuzz_util.h"
 #include "ident/linalg/ld_factor.h"
 
 namespace ident::fuzz {
@@ -24,7 +23,8 @@ namespace ident::fuzz {
 inline std::string PriorJsonProperty(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return {};
   const int rho = 1 + data[0] % 4;
-  static const std::string path = "/tmp/ident_prior_fuzz_" + std::to_string(::getpid()) + ".json";
+  static const ScratchDir dir("ident-prior-fuzz-");
+  static const std::string path = dir.path() + "/prior.json";
   if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
     std::fwrite(data + 1, 1, size - 1, f);
     std::fclose(f);

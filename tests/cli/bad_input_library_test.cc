@@ -28,6 +28,7 @@
 #include "models/measurement.h"
 #include "models/penalties.h"
 #include "models/state_space.h"
+#include "tests/support/cli.h"
 
 namespace ident {
 namespace {
@@ -158,7 +159,7 @@ TEST(StreamingFit, EqualsTheInMemoryFitOnTheDryerRecord) {
 }
 
 TEST(StreamingFit, CountsDataRowsLikeTheReader) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = ident::testing::TempDir();
   const std::string path = dir + "/count.csv";
   {
     std::FILE* f = std::fopen(path.c_str(), "w");
@@ -181,7 +182,7 @@ TEST(StreamingFit, CommentsAndHeaderlessFilesCountLikeTheReader) {
     text += fmt::format("{:.17g};{:.17g};{:.17g}\n", dryer.values(i, 0), dryer.values(i, 1), dryer.values(i, 2));
     if (i % 100 == 7) text += "  # a comment\n";
   }
-  const std::string path = ::testing::TempDir() + "/dryer_headerless.dat";
+  const std::string path = ident::testing::TempDir() + "/dryer_headerless.dat";
   {
     std::FILE* f = std::fopen(path.c_str(), "w");
     ASSERT_NE(f, nullptr);
@@ -204,7 +205,7 @@ TEST(StreamingFit, CommentsAndHeaderlessFilesCountLikeTheReader) {
 // The record's length is checked from the row count before anything of the model's size is built;
 // a bad row is still reported first.
 TEST(BadInputLibrary, RecordLengthIsCheckedFromTheRowCountAlone) {
-  const std::string dir = ::testing::TempDir();
+  const std::string dir = ident::testing::TempDir();
   auto write = [&](const std::string& name, const std::string& text) {
     const std::string path = dir + "/" + name;
     std::FILE* f = std::fopen(path.c_str(), "w");

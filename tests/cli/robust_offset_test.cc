@@ -111,7 +111,7 @@ TEST(RobustOffset, OutlierSizeDoesNotEnterThroughTheDetrending) {
 // `ident fit` on a file with the outliers in it reports the filtered offset in detrend_means and lands near
 // the clean fit; with --estimator rls the plain mean.
 TEST(RobustOffset, FitReportsTheFilteredOffset) {
-  const std::string path = ::testing::TempDir() + "/gas_furnace_spiked.csv";
+  const std::string path = ident::testing::TempDir() + "/gas_furnace_spiked.csv";
   std::FILE* in = std::fopen(testing::DatasetPath("gas_furnace.csv").c_str(), "r");
   ASSERT_NE(in, nullptr);
   std::FILE* out = std::fopen(path.c_str(), "w");
