@@ -4,7 +4,6 @@
 #include "ident/regression/batch_regression.h"
 
 #include <algorithm>
-#include <climits>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -29,11 +28,28 @@ struct CauchyPoint {
   double gradient_norm = kInf;
 };
 
+// Σ log(1 + u_i²) without overflow: 2 log|u| where u² would (the two agree to 1e-300 there). Vectorised
+// unless some |u| is that large.
+template <class Derived>
+double SumLogOnePlusSquare(const Eigen::ArrayBase<Derived>& u) {
+  if (u.abs().maxCoeff() < 1e150) return (1 + u.square()).log().sum();
+  return u.unaryExpr([](double v) { return std::abs(v) < 1e150 ? std::log1p(v * v) : 2 * std::log(std::abs(v)); })
+      .sum();
+}
+
 class CauchyProblem {
  public:
   CauchyProblem(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y)
-      : Q_(Q), y_(y), r_(Q.rows()), w_(Q.rows()), t_(Q.rows()), Qb_(Q.rows()), u_(Q.rows()), d_(Q.rows()),
-        d2_(Q.rows()), Qw_(Q.rows(), Q.cols()) {}
+      : Q_(Q),
+        y_(y),
+        r_(Q.rows()),
+        w_(Q.rows()),
+        t_(Q.rows()),
+        Qb_(Q.rows()),
+        u_(Q.rows()),
+        w1_(Q.rows()),
+        uw_(Q.rows()),
+        Qw_(Q.rows(), Q.cols()) {}
 
   Eigen::Index n() const { return Q_.rows(); }
   Eigen::Index p() const { return Q_.cols(); }
@@ -42,10 +58,11 @@ class CauchyProblem {
 
   double Nll(const Eigen::VectorXd& beta, double gamma) const {
     if (!(gamma > 0) || !std::isfinite(gamma)) return kInf;
+    // Σ log(r² + γ²) − n log γ in the standardised residuals r/γ: no overflow of r² for a gross error.
     r_.noalias() = y_ - Q_ * beta;
     const double nd = static_cast<double>(n());
-    const double g2 = gamma * gamma;
-    return (r_.array().square() + g2).log().sum() - nd * std::log(gamma) + nd * std::log(std::numbers::pi);
+    u_ = r_.array() * (1 / gamma);
+    return SumLogOnePlusSquare(u_) + nd * std::log(gamma) + nd * std::log(std::numbers::pi);
   }
 
   // A start at β with γ = median|r| (mean |r| if that is 0); nll = +inf if the residuals all vanish.
@@ -61,13 +78,16 @@ class CauchyProblem {
   // One ECM step of the t (k = 1) model: weights at the current point, then β, then γ (never increases
   // the NLL). Returns false (point unchanged) if the weighted fit or γ breaks down.
   bool EmStep(CauchyPoint& point) const {
-    const double g2 = point.gamma * point.gamma;
+    // w = 2γ²/(r² + γ²), and γ'² = mean(w r'²), as mean((√w r')²) where r'² overflows: a gross error's
+    // weight underflows to 0, never 0·∞.
     r_.noalias() = y_ - Q_ * point.beta;
-    w_ = 2 * g2 / (r_.array().square() + g2);
+    w_ = 2 / (1 + (r_.array() * (1 / point.gamma)).square());
     Eigen::VectorXd beta;
     if (!WeightedFit(Q_, y_, w_, beta, Qw_)) return false;
     Qb_.noalias() = Q_ * beta;
-    const double gamma = std::sqrt(w_.dot((y_ - Qb_).cwiseAbs2()) / static_cast<double>(n()));
+    double weighted = (w_.array() * (y_ - Qb_).array().square()).sum();
+    if (!std::isfinite(weighted)) weighted = (w_.array().sqrt() * (y_ - Qb_).array()).square().sum();
+    const double gamma = std::sqrt(weighted / static_cast<double>(n()));
     if (!(gamma > 0) || !std::isfinite(gamma)) return false;
     point.beta = std::move(beta);
     point.gamma = gamma;
@@ -77,26 +97,27 @@ class CauchyProblem {
 
   // Gradient g and Hessian H of the NLL in (β, η = log γ) at `point`.
   void Derivatives(const CauchyPoint& point, Eigen::VectorXd& g, Eigen::MatrixXd& H) const {
-    // In the standardised residuals u = r/γ (d = 1 + u²): the same sums as in r and γ², without the
-    // under/overflow of (r² + γ²)² on data in very small or large units.
+    // In the standardised residuals u = r/γ, through w = 1/(1 + u²) and uw = u·w only (u²w² = (uw)²): the
+    // same sums as in r and γ², without the under/overflow of (r² + γ²)² on data in very small or large
+    // units, or of u² for a gross error (whose w and uw then underflow to 0).
     const Eigen::Index np = p();
     const double inv_gamma = 1 / point.gamma;
     Qb_.noalias() = Q_ * point.beta;
     u_ = (y_ - Qb_).array() * inv_gamma;
-    d_ = 1 + u_.square();
-    d2_ = d_.square();
+    w1_ = 1 / (1 + u_.square());
+    uw_ = u_ * w1_;
     g.resize(np + 1);
     H.resize(np + 1, np + 1);
-    t_ = 2 * u_ / d_;
+    t_ = 2 * uw_;
     g.head(np) = -inv_gamma * (Q_.transpose() * t_.matrix());
-    g(np) = (2 / d_).sum() - static_cast<double>(n());
-    t_ = 2 * (1 - u_.square()) / d2_;
+    g(np) = 2 * w1_.sum() - static_cast<double>(n());
+    t_ = 2 * (w1_.square() - uw_.square());  // 2(1 − u²)/(1 + u²)²
     Qw_ = Q_.array().colwise() * t_;
     H.topLeftCorner(np, np) = (inv_gamma * inv_gamma) * (Qw_.transpose() * Q_);
-    t_ = 4 * u_ / d2_;
+    t_ = 4 * uw_ * w1_;  // 4u/(1 + u²)²
     H.col(np).head(np) = inv_gamma * (Q_.transpose() * t_.matrix());
     H.row(np).head(np) = H.col(np).head(np).transpose();
-    H(np, np) = (4 * u_.square() / d2_).sum();
+    H(np, np) = 4 * uw_.square().sum();  // Σ 4u²/(1 + u²)²
   }
 
   // ‖(γ ∂/∂β, ∂/∂η)‖: scale free (each term of the sums is O(1)).
@@ -170,7 +191,7 @@ class CauchyProblem {
     const Eigen::LLT<Eigen::MatrixXd> llt(A);
     if (llt.info() == Eigen::Success) {
       const Eigen::ArrayXd u = (y_ - Q_ * point.beta).array() / point.gamma;  // ψ(r) = 2r/(r² + γ²)
-      const Eigen::MatrixXd Qpsi = Q_.array().colwise() * (2 * u / (1 + u.square()) / point.gamma);
+      const Eigen::MatrixXd Qpsi = Q_.array().colwise() * (2 * (u / (1 + u.square())) / point.gamma);
       const Eigen::MatrixXd Ainv = llt.solve(Eigen::MatrixXd::Identity(np, np));
       return Ainv * (Qpsi.transpose() * Qpsi) * Ainv;
     }
@@ -188,7 +209,7 @@ class CauchyProblem {
   mutable Eigen::VectorXd r_, w_;
   mutable Eigen::ArrayXd t_;
   mutable Eigen::VectorXd Qb_;
-  mutable Eigen::ArrayXd u_, d_, d2_;
+  mutable Eigen::ArrayXd u_, w1_, uw_;
   mutable Eigen::MatrixXd Qw_;
   mutable std::vector<double> sorted_;
 };
@@ -309,14 +330,17 @@ BatchRegressionResult CauchyMlRegression(const Eigen::Ref<const Eigen::MatrixXd>
   IDENT_REQUIRE(error.empty(), "{}", error);
   RequireRegressionData(Z, y);
   const Orthonormalised f = RequireFullRank(Z);
-  // y in units of a power of two near its median magnitude (its largest if that is 0): every step below
-  // is then the same, bit for bit, for y and 2^k·y (the NLL's n·log γ term, and with it the stopping and
-  // line-search tests that compare NLL differences with |NLL|, would otherwise depend on the units of y).
+  // y in units of a power of two near its median magnitude (its largest if that is 0, and no smaller than
+  // 2^-1000 of the largest, so that y stays finite in them). Every step below is then the same, bit for
+  // bit, for y and 2^k·y: the NLL's n·log γ term, and with it the stopping and line-search tests that
+  // compare NLL changes with |NLL|, would otherwise depend on the units of y.
   Eigen::VectorXd magnitude = y.cwiseAbs();
+  const double largest = magnitude.maxCoeff();
   const Eigen::Index middle = magnitude.size() / 2;
   std::nth_element(magnitude.data(), magnitude.data() + middle, magnitude.data() + magnitude.size());
-  const int unit = std::ilogb(magnitude(middle) > 0 ? magnitude(middle) : y.cwiseAbs().maxCoeff());
-  const int exponent = unit == FP_ILOGB0 || unit == FP_ILOGBNAN || unit == INT_MAX ? 0 : unit;
+  const int exponent = largest > 0 ? std::max(std::ilogb(magnitude(middle) > 0 ? magnitude(middle) : largest),
+                                              std::ilogb(largest) - 1000)
+                                   : 0;
   const Eigen::VectorXd y_scaled = y.unaryExpr([exponent](double v) { return std::ldexp(v, -exponent); });
   const CauchyProblem problem(f.Q, y_scaled);
 
@@ -363,8 +387,8 @@ double CauchyNegativeLogLikelihood(const Eigen::Ref<const Eigen::MatrixXd>& Z,
   IDENT_REQUIRE(Z.rows() == y.size() && Z.cols() == theta.size(), "Z is {}x{}, y has {} and theta {} entries", Z.rows(),
                 Z.cols(), y.size(), theta.size());
   const double nd = static_cast<double>(y.size());
-  return ((y - Z * theta).array().square() + gamma * gamma).log().sum() - nd * std::log(gamma) +
-         nd * std::log(std::numbers::pi);
+  const Eigen::ArrayXd u = (y - Z * theta).array() / gamma;
+  return batch_regression_detail::SumLogOnePlusSquare(u) + nd * std::log(gamma) + nd * std::log(std::numbers::pi);
 }
 
 }  // namespace ident

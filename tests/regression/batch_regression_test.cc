@@ -390,6 +390,22 @@ TEST(CauchyMlRegression, PowerOfTwoUnitsChangeNothingButTheUnits) {
   }
 }
 
+// A gross error of any size is an outlier: the fit never squares a residual (1e200² overflows), it works
+// with r/γ and 1/(1 + (r/γ)²).
+TEST(CauchyMlRegression, AGrossErrorOfAnySizeLeavesTheFitAlone) {
+  Record d = Stackloss();
+  d.y(3) = 1e12;  // its score 2r/(r² + γ²) ≈ 2e-12: θ within ~1e-13 of the fit without the row
+  const BatchRegressionResult moderate = CauchyMlRegression(d.Z, d.y);
+  ASSERT_TRUE(moderate.converged);
+  for (double gross : {1e150, 1e200, 1e300}) {
+    d.y(3) = gross;
+    const BatchRegressionResult m = CauchyMlRegression(d.Z, d.y);
+    EXPECT_TRUE(m.converged) << gross;
+    EXPECT_LE(MaxRelativeDifference(m.theta, moderate.theta), 1e-9) << gross;
+    EXPECT_NEAR(m.scale, moderate.scale, 1e-9 * moderate.scale) << gross;
+  }
+}
+
 TEST(BatchRegression, RejectsInvalidInput) {
   const Record d = StarsCyg();
   Eigen::VectorXd y_nan = d.y;
