@@ -53,8 +53,10 @@ BatchRegressionResult HuberRegression(const Eigen::Ref<const Eigen::MatrixXd>& Z
     next.noalias() = y - f.Q * beta;
     ++result.iterations;
     // rlm's relative change of the residuals, without its absolute floor max(1e-20, ‖r‖²), which stops the
-    // iteration at once on data in small units (‖r‖² > 0 here: the MAD scale s is positive).
-    const double delta = std::sqrt((next - r).squaredNorm() / r.squaredNorm());
+    // iteration at once on data in small units (‖r‖² > 0 here: the MAD scale s is positive); relative to
+    // √n·s where that is smaller, so that a gross error, which dominates ‖r‖, does not hide the change of
+    // the other residuals. Norms without overflow: a residual of 1e200 squares to infinity.
+    const double delta = (next - r).stableNorm() / std::min(r.stableNorm(), std::sqrt(static_cast<double>(n)) * s);
     r.swap(next);
     if (delta <= options.tolerance) {
       result.converged = true;

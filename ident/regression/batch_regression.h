@@ -7,8 +7,9 @@
 //   Huber:   minimise Σ ρ_k(r_i/s), ρ_k(u) = u²/2 (|u| ≤ k), k|u| − k²/2 (else), k = 1.345, by IRLS from
 //            the least-squares fit, as MASS::rlm's default: every iteration s = median|r|/0.6745 of the
 //            current residuals, weights w_i = min(1, k s/|r_i|), weighted least squares for Θ; stop when
-//            ‖r_new − r_old‖/‖r_old‖ ≤ tolerance (rlm's irls.delta; rlm stops at 1e-4 or after 20 steps,
-//            here 1e-12 by default). Cov(Θ̂) = κ² s² [Σψ(u_i)²/(n−ρ)] / [Σψ'(u_i)/n]² (Z'Z)⁻¹,
+//            ‖r_new − r_old‖/min(‖r_old‖, √n·s) ≤ tolerance (rlm's irls.delta divides by ‖r_old‖ alone, and
+//            stops at 1e-4 or after 20 steps; a gross error then dominates ‖r_old‖ and stops the iteration
+//            far from the fixed point; here 1e-12 by default). Cov(Θ̂) = κ² s² [Σψ(u_i)²/(n−ρ)] / [Σψ'(u_i)/n]² (Z'Z)⁻¹,
 //            u_i = r_i/s, κ = 1 + ρ var(ψ')/(n mean(ψ')²) with var's n−1 denominator (summary.rlm).
 //   Cauchy:  minimise the negative log-likelihood NLL(Θ, γ) = Σ log(γ² + r_i²) − n log γ + n log π. It is
 //            multimodal: starts are random elemental subsets (ρ rows solved exactly), LTS fits
@@ -79,7 +80,7 @@ struct BatchRegressionResult {
 
 struct HuberOptions {
   double k = 1.345;           // ψ's corner, in units of s
-  double tolerance = 1e-12;   // on ‖r_new − r_old‖/‖r_old‖; MASS::rlm: 1e-4
+  double tolerance = 1e-12;  // on ‖r_new − r_old‖/min(‖r_old‖, √n·s); MASS::rlm: 1e-4 on ‖r_new − r_old‖/‖r_old‖
   int max_iterations = 1000;  // MASS::rlm: 20
 
   // "" if valid, else one line naming the option.
