@@ -41,6 +41,7 @@ std::unique_ptr<AnyRegressionEstimator> MakeStudent(const EstimatorSettings& s, 
   options.base.forgetting = s.forgetting;
   options.base.prior = s.prior;
   options.base.exact = s.exact;
+  options.provisional_v0 = s.provisional_v0;
   IDENT_REQUIRE(!s.exact || !s.lock_in.any(),
                 "the lock-in options have no effect with exact (the paper's recursion has no lock-in safeguard)");
   if (s.lock_in.window) options.lock_in_window = *s.lock_in.window;
@@ -122,10 +123,13 @@ struct Entry {
 std::vector<Entry>& Registry() {
   static std::vector<Entry> registry = {
       {"rls", MakeRls, {.data_scaled_prior = true}, "forgetting"},
-      {"cauchy", MakeCauchy, {.lock_in = true, .robust = true}, "forgetting, delta, lock_in_window, lock_in_threshold"},
+      {"cauchy",
+       MakeCauchy,
+       {.data_scaled_prior = true, .lock_in = true, .robust = true},
+       "forgetting, delta, lock_in_window, lock_in_threshold"},
       {"student",
        MakeStudentT,
-       {.lock_in = true, .robust = true},
+       {.data_scaled_prior = true, .lock_in = true, .robust = true},
        "k, dof, forgetting, delta, lock_in_window, lock_in_threshold"},
       {"huber",
        [](const EstimatorSettings& s, int rho) { return MakeBatch(s, rho, "huber", BatchMethod::kHuber); },
@@ -221,9 +225,21 @@ void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFac
 
 std::optional<RegressionPrior> DataScaledDefaultPrior(const EstimatorSettings& settings,
                                                       const Eigen::VectorXd& mean_squares) {
-  if (!RegressionEstimatorTraits(settings.name).data_scaled_prior || settings.prior || settings.exact) return {};
+  const EstimatorTraits traits = RegressionEstimatorTraits(settings.name);
+  if (!traits.data_scaled_prior || traits.lock_in || settings.prior || settings.exact) return {};
   if (!((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all())) return {};
   return RegressionPrior::Flat(mean_squares);
+}
+
+bool UseDataScaledPrior(EstimatorSettings& settings, const Eigen::VectorXd& mean_squares) {
+  const EstimatorTraits traits = RegressionEstimatorTraits(settings.name);
+  if (!traits.data_scaled_prior || settings.prior || settings.exact) return false;
+  if (traits.lock_in) {
+    settings.provisional_v0 = DataScaledProvisionalV0(mean_squares);
+    return settings.provisional_v0.has_value();
+  }
+  settings.prior = DataScaledDefaultPrior(settings, mean_squares);
+  return settings.prior.has_value();
 }
 
 }  // namespace ident

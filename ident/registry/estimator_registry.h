@@ -62,7 +62,8 @@ std::vector<std::string> RegressionEstimatorNames();
 // What a workflow needs to know of a registered estimator before it builds one.
 struct EstimatorTraits {
   // Its default prior is flat with the data's own scale, RegressionPrior::Flat(mean squares of the
-  // regressors) (RLS); the Kárný–Hangos start-up prior is scale-invariant already, the batch ones have none.
+  // regressors) (RLS), or — the Kárný–Hangos estimators, whose robust start is scale-invariant — the
+  // provisional prior of its start-up is (DataScaledProvisionalV0); the batch ones have none.
   bool data_scaled_prior = false;
   // It has the lock-in safeguard and the ω-exponent convention δ (the Kárný–Hangos estimators).
   bool lock_in = false;
@@ -96,5 +97,10 @@ void RegisterRegressionEstimator(const std::string& name, RegressionEstimatorFac
 // name a problem of scale).
 std::optional<RegressionPrior> DataScaledDefaultPrior(const EstimatorSettings& settings,
                                                       const Eigen::VectorXd& mean_squares);
+// Puts the default prior of `settings` in the data's own scale (mean squares of y and of each regressor
+// over the estimation data): the flat prior of DataScaledDefaultPrior, or for a Kárný–Hangos estimator
+// (EstimatorTraits::lock_in) the provisional V(0) of its start-up (DataScaledProvisionalV0), which leaves
+// its robust start as it is. False (settings unchanged) where DataScaledDefaultPrior would be empty.
+bool UseDataScaledPrior(EstimatorSettings& settings, const Eigen::VectorXd& mean_squares);
 
 }  // namespace ident

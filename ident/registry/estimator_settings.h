@@ -43,6 +43,8 @@ struct EstimatorSettings {
   std::string name = "rls";
   ForgettingOptions forgetting;
   std::optional<RegressionPrior> prior;  // explicit (ν(0), V(0)); otherwise the estimator's default
+  // cauchy/student without `prior`: V(0) of the start-up's provisional estimate (SafeStudentOptions)
+  std::optional<Eigen::MatrixXd> provisional_v0;
   std::optional<double> dof;             // Student-t degrees of freedom k
   std::string noise;                     // "lc": the noise law ("laplace", "huber:1.345", …)
   std::optional<int> delta;              // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos; unset: 1)

@@ -26,10 +26,17 @@ double StudentScaleSquared(const Eigen::ArrayXd& r2, double k, double start) {
   return s2;
 }
 
-// The estimator that runs until the first restart: the explicit prior, or the provisional one without the
-// plain class's own start-up rule.
-StudentRegressionOptions Provisional(StudentRegressionOptions o) {
-  if (!o.exact && !o.prior) o.exact = true;
+// The estimator that runs until the first restart: the explicit prior, or the provisional one (in the data's
+// units if given) without the plain class's own start-up rule.
+StudentRegressionOptions Provisional(StudentRegressionOptions o, int rho, const std::optional<Eigen::MatrixXd>& v0) {
+  if (!o.exact && !o.prior) {
+    if (v0) {
+      IDENT_REQUIRE(v0->rows() == rho + 1 && v0->cols() == rho + 1, "provisional V0 is {}x{}; need {}x{}", v0->rows(),
+                    v0->cols(), rho + 1, rho + 1);
+      o.prior = RegressionPrior{o.DefaultPrior(rho).nu0, *v0};
+    }
+    o.exact = true;
+  }
   if (!o.exact) o.leverage_guard = true;
   return o;
 }
@@ -168,9 +175,17 @@ void ScaleNoise(RegressionPrior& prior, double factor) {
 
 }  // namespace
 
+std::optional<Eigen::MatrixXd> DataScaledProvisionalV0(const Eigen::VectorXd& mean_squares) {
+  if (mean_squares.size() < 2 || !((mean_squares.array() >= 1e-280).all() && (mean_squares.array() <= 1e280).all()))
+    return std::nullopt;
+  Eigen::VectorXd diagonal = 1e-3 * mean_squares;
+  diagonal(0) = mean_squares(0);
+  return Eigen::MatrixXd(diagonal.asDiagonal());
+}
+
 SafeStudentRegression::SafeStudentRegression(int num_parameters, const SafeStudentOptions& options)
     : options_(options),
-      est_(std::in_place, num_parameters, Provisional(options.base)),
+      est_(std::in_place, num_parameters, Provisional(options.base, num_parameters, options.provisional_v0)),
       monitor_(DefaultMonitorWindow(options, num_parameters), options.lock_in_threshold) {
   IDENT_REQUIRE(std::isfinite(options.scale_growth) && options.scale_growth >= 1,
                 "scale_growth = {}; need a finite G >= 1", options.scale_growth);
@@ -406,7 +421,7 @@ bool SafeStudentRegression::BeginPass() {
 }
 
 void SafeStudentRegression::Reset() {
-  est_ = StudentRegression(num_parameters(), Provisional(options_.base));
+  est_ = StudentRegression(num_parameters(), Provisional(options_.base, num_parameters(), options_.provisional_v0));
   stored_ = ring_start_ = updates_ = 0;
   next_restart_ = 0;
   backoff_ = 1;

@@ -71,7 +71,16 @@ struct SafeStudentOptions {
   double lock_in_threshold = 0.3;  // νβ below this counts as a low weight
   long history_limit = 0;          // samples kept for replay; 0 = all
   long history_reserve = 0;        // samples the history is sized for at construction
+  // The start-up's provisional prior (ρ+1 square), in place of StudentRegressionOptions::DefaultPrior's
+  // diag(1, 1e−3·I), which is in absolute units: the provisional estimate judges the outputs that the
+  // workflow cleans before the start, so a prior in the data's own units (DataScaledProvisionalPrior) keeps
+  // those verdicts the same whatever the units. Ignored with an explicit `base.prior` or `base.exact`.
+  std::optional<Eigen::MatrixXd> provisional_v0;
 };
+
+// diag(m_0, 1e−3·m_1, …, 1e−3·m_ρ): DefaultPrior's V(0) with each entry in units of the mean square m_i of
+// y (i = 0) and of each regressor over the estimation data; nullopt unless every m_i is in [1e−280, 1e280].
+std::optional<Eigen::MatrixXd> DataScaledProvisionalV0(const Eigen::VectorXd& mean_squares);
 
 class SafeStudentRegression {
  public:

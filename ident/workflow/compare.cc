@@ -186,7 +186,7 @@ Spread Spread::Of(std::vector<double> v) {
 
 namespace {
 
-// The estimators' settings with their default priors in the data's own scale (DataScaledDefaultPrior,
+// The estimators' settings with their default priors in the data's own scale (UseDataScaledPrior,
 // ident/registry/estimator_registry.h) from the clean estimation part's mean squares, the clean least-squares
 // reference's settings, and the fit options every trial uses.
 struct TrialSettings {
@@ -200,8 +200,7 @@ TrialSettings ScaledSettings(const io::DataTable& data, Segment estimation, Data
   TrialSettings t{estimators, {}, options};
   const Eigen::VectorXd mean_squares = EstimationMeanSquares(data, estimation, source);
   if ((t.least_squares.prior = DataScaledDefaultPrior(t.least_squares, mean_squares))) {
-    for (auto& s : t.estimators)
-      if (std::optional<RegressionPrior> prior = DataScaledDefaultPrior(s, mean_squares)) s.prior = prior;
+    for (auto& s : t.estimators) UseDataScaledPrior(s, mean_squares);
     bool absolute_prior = false;  // an --exact estimator keeps the unit-free flat prior and its check
     for (const auto& s : t.estimators) absolute_prior = absolute_prior || (!s.prior && s.exact);
     if (!absolute_prior) t.fit.min_regressor_information = 0;

@@ -98,9 +98,8 @@ nlohmann::ordered_json ResidualJson(const ResidualAnalysis& a) {
 }  // namespace
 
 void FitPlan::UseScaledPrior(const Eigen::VectorXd& mean_squares) {
-  const std::optional<RegressionPrior> prior = DataScaledDefaultPrior(settings, mean_squares);
-  if (!prior) return;  // out of range (or no usable sample): the absolute flat prior, whose check names the problem
-  settings.prior = prior;
+  // Out of range (or no usable sample): the absolute default prior, whose check names the problem.
+  if (!UseDataScaledPrior(settings, mean_squares)) return;
   estimator = MakeRegressionEstimator(settings, estimator->num_parameters());
   options.min_regressor_information = 0;
 }
@@ -123,8 +122,10 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
   plan.options.decision = request.model.Decision();
   if (plan.settings.prior) plan.options.min_regressor_information = 0;  // the user's prior, the user's scale
   const bool default_prior = !plan.settings.prior && !plan.settings.exact;
-  plan.scaled_prior = default_prior && RegressionEstimatorTraits(plan.settings.name).data_scaled_prior;
-  if (default_prior && !plan.scaled_prior) plan.options.min_regressor_information = 0;
+  const EstimatorTraits traits = RegressionEstimatorTraits(plan.settings.name);
+  plan.scaled_prior = default_prior && traits.data_scaled_prior;
+  // The regressor-information check guards the flat prior; a Kárný–Hangos start is scale-invariant.
+  if (default_prior && (!plan.scaled_prior || traits.lock_in)) plan.options.min_regressor_information = 0;
   return plan;
 }
 

@@ -47,9 +47,9 @@ struct FitPlan {
   FitOptions options;         // split, passes, detrending, decision; trace and on_update are the caller's
   bool scaled_prior = false;  // the default prior is to be put in the data's scale (UseScaledPrior)
 
-  // Rebuilds the estimator with DataScaledDefaultPrior(mean squares of y and the regressors over the
-  // estimation part); keeps the absolute flat prior (whose check then names the problem) when the mean
-  // squares are out of range or no sample is usable.
+  // Rebuilds the estimator with its default prior in the data's scale (UseDataScaledPrior, from the mean
+  // squares of y and the regressors over the estimation part); keeps the absolute default (whose check then
+  // names the problem) when the mean squares are out of range or no sample is usable.
   void UseScaledPrior(const Eigen::VectorXd& mean_squares);
 };
 

@@ -38,18 +38,22 @@ class RecordingEstimator final : public testing::ForwardingEstimator {
   std::vector<Eigen::VectorXd> regressors;
 };
 
-// Fits `table` (output y, input u) with `cauchy` as `ident fit --split 0.5 --detrend none` does, with
-// output cleaning on, recording every update's row and regressor.
+// Fits `table` (output y, input u) with `cauchy` as `ident fit --split 0.5 --detrend none` does (its
+// provisional prior in the data's units), with output cleaning on, recording every update's row and
+// regressor.
 std::unique_ptr<RecordingEstimator> FitRecording(const io::DataTable& table, const std::string& path,
                                                  const models::ArxStructure& arx) {
   auto source = workflow::MakeArxSource(table.names, "y", {"u"}, arx, path, {.enabled = true});
   EstimatorSettings settings;
   settings.name = "cauchy";
+  UseDataScaledPrior(settings,
+                     workflow::EstimationMeanSquares(table, {0, static_cast<int>(table.num_rows() / 2)}, *source));
   auto estimator =
       std::make_unique<RecordingEstimator>(MakeRegressionEstimator(settings, source->num_parameters()));
   workflow::FitOptions options;
   options.split = 0.5;
   options.detrend = workflow::Detrend::kNone;
+  options.min_regressor_information = 0;
   options.on_row = [e = estimator.get()](int r) { e->row = r; };
   workflow::Fit(table, *source, *estimator, options);
   return estimator;
@@ -89,32 +93,39 @@ TEST(WarmUpCleaning, AScreenedOutlierNeverReturnsIntoTheRegressorsDuringTheStart
 // After the start-up: pairs of same-signed outliers of 1000σ (the second looks like the echo of an innovation
 // under the measured reading of the first) and the exchanger record, which starts at rest (the cleaner's
 // scales see exact zeros there). No updated regressor holds a measured outlier: the equations that hold a
-// cleaned output are left out, and a cleaned output comes back only on an echo's evidence.
+// cleaned output are left out, and a cleaned output comes back only on an echo's evidence. The same in other
+// units: the cleaning before the start judges by the provisional estimate, whose prior is in the data's
+// units (with it in absolute units, exchanger in units 2^-38 had 12 such regressors, in units 2^40 two).
 TEST(Cleaning, NoUpdatedRegressorHoldsAGrossOutlier) {
-  for (const char* record : {"dryer.csv", "exchanger.csv"}) {
-    const std::string path = testing::DatasetPath(record);
-    io::DataTable table = io::ReadCsv(path);
-    const int y_column = 2;  // t, u, y
-    ASSERT_EQ(table.names[y_column], "y");
-    const int estimation_rows = static_cast<int>(table.num_rows() / 2);
-    Eigen::VectorXd y = table.values.col(y_column);
-    const double size = 1000 * (std::string(record) == "dryer.csv" ? 0.0412 : 0.334);  // 1000 LS residual stds
-    std::vector<int> outliers;
-    for (int p = 60; p + 1 < estimation_rows; p += 37)
-      for (int q : {p, p + 1}) {
-        y(q) += (p / 37) % 2 ? size : -size;
-        outliers.push_back(q);
-      }
-    table.values.col(y_column) = y;
-    const models::ArxStructure arx(2, {2}, {std::string(record) == "dryer.csv" ? 3 : 1});
-    const std::unique_ptr<RecordingEstimator> estimator = FitRecording(table, path, arx);
-    int held = 0;
-    for (std::size_t i = 0; i < estimator->rows.size(); ++i)
-      for (int lag = 1; lag <= 2; ++lag)
-        for (int p : outliers)
-          if (estimator->rows[i] - p == lag && std::abs(estimator->regressors[i](lag - 1) + y(p)) < 1e-9) ++held;
-    EXPECT_EQ(held, 0) << record << ": updated regressors holding a measured outlier";
-  }
+  for (const int units : {0, -38, 40})
+    for (const char* record : {"dryer.csv", "exchanger.csv"}) {
+      const std::string path = testing::DatasetPath(record);
+      io::DataTable table = io::ReadCsv(path);
+      const int y_column = 2;  // t, u, y
+      ASSERT_EQ(table.names[y_column], "y");
+      const int estimation_rows = static_cast<int>(table.num_rows() / 2);
+      Eigen::VectorXd y = table.values.col(y_column);
+      const double size = 1000 * (std::string(record) == "dryer.csv" ? 0.0412 : 0.334);  // 1000 LS residual stds
+      std::vector<int> outliers;
+      for (int p = 60; p + 1 < estimation_rows; p += 37)
+        for (int q : {p, p + 1}) {
+          y(q) += (p / 37) % 2 ? size : -size;
+          outliers.push_back(q);
+        }
+      table.values.col(y_column) = y;
+      table.values *= std::ldexp(1.0, units);
+      y *= std::ldexp(1.0, units);
+      const models::ArxStructure arx(2, {2}, {std::string(record) == "dryer.csv" ? 3 : 1});
+      const std::unique_ptr<RecordingEstimator> estimator = FitRecording(table, path, arx);
+      int held = 0;
+      for (std::size_t i = 0; i < estimator->rows.size(); ++i)
+        for (int lag = 1; lag <= 2; ++lag)
+          for (int p : outliers)
+            if (estimator->rows[i] - p == lag &&
+                std::abs(estimator->regressors[i](lag - 1) + y(p)) < 1e-9 * std::ldexp(1.0, units))
+              ++held;
+      EXPECT_EQ(held, 0) << record << " in units 2^" << units << ": updated regressors holding a measured outlier";
+    }
 }
 
 }  // namespace
