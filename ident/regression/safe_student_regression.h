@@ -3,10 +3,11 @@
 // and the registry's "cauchy"/"student" run, and what an embedding should use (docs/explanation/karny-hangos-estimator.md).
 //
 //   1. Robust start. The first W = max(20, 4ρ) samples run on the provisional prior ν(0) = ρ+k+δ,
-//      V(0) = diag(1, 1e−3·I). Then a high-breakdown batch fit of the window (Cauchy maximum likelihood
-//      from elemental-subset starts, ident/regression/batch_regression.h, leaving out rows with a regressor beyond
-//      five robust scales) gives Θ_r, and the estimator restarts from the class member of W pseudo-samples
-//      centred there (D_y(0) = G^{(k+1)/k}·s_e², s_e the residuals' robust scale) and replays the window.
+//      V(0) = diag(1, 1e−3·I), or `provisional_v0` in the data's units (the workflow's choice). Then a
+//      high-breakdown batch fit of the window (Cauchy maximum likelihood from elemental-subset starts,
+//      ident/regression/batch_regression.h, leaving out rows with a regressor beyond five robust scales)
+//      gives Θ_r, and the estimator restarts from the class member of W pseudo-samples centred there
+//      (D_y(0) = G^{(k+1)/k}·s_e², s_e the residuals' robust scale) and replays the window.
 //      Outliers in y and in the regressors, up to the fit's breakdown point, do not move the start. While
 //      the window does not determine every coefficient from its inliers — regressors not identifiable (a
 //      record that starts in steady state), more than half of the rows fitted exactly, a direction whose
