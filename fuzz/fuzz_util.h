@@ -41,13 +41,18 @@ class ByteReader {
   std::size_t pos_ = 0;
 };
 
-// /tmp/<prefix>XXXXXX for one process's files ("/tmp" itself if it cannot be made), removed with its
-// contents when the object is destroyed: keep it in a function-local static.
+// <temporary directory>/<prefix>XXXXXX for one process's files (the temporary directory itself if it
+// cannot be made), removed with its contents when the object is destroyed: keep it in a function-local
+// static. The test programs' files go into one too (tests/support/cli.h TempDir).
 class ScratchDir {
  public:
-  explicit ScratchDir(const char* prefix) : path_(std::string("/tmp/") + prefix + "XXXXXX") {
+  explicit ScratchDir(const char* prefix) {
+    std::error_code ec;
+    const std::filesystem::path base = std::filesystem::temp_directory_path(ec);
+    const std::filesystem::path tmp = ec ? std::filesystem::path("/tmp") : base;
+    path_ = (tmp / (std::string(prefix) + "XXXXXX")).string();
     made_ = mkdtemp(path_.data()) != nullptr;
-    if (!made_) path_ = "/tmp";
+    if (!made_) path_ = tmp.string();
   }
   ~ScratchDir() {
     std::error_code ignored;

@@ -12,30 +12,15 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
-#include <system_error>
+
+#include "fuzz/fuzz_util.h"
 
 namespace ident::testing {
 
-namespace {
-
-// A fresh directory for the files of one test process, removed with its contents when the process exits
-// normally (forked children leave with _exit and do not remove it).
-struct ProcessTempDir {
-  std::string path = (std::filesystem::temp_directory_path() / "ident-test-XXXXXX").string();
-  ProcessTempDir() {
-    if (!mkdtemp(path.data())) throw std::runtime_error("mkdtemp failed");
-  }
-  ~ProcessTempDir() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path, ignored);
-  }
-};
-
-}  // namespace
-
 std::string TempDir() {
-  static const ProcessTempDir dir;
-  return dir.path;
+  // Removed with its contents when the process exits normally (forked children leave with _exit).
+  static const fuzz::ScratchDir dir("ident-test-");
+  return dir.path();
 }
 
 std::string WriteFile(const std::string& name, const std::string& text) {
