@@ -26,8 +26,9 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kDryerArx = " --output y --input u --na 2 --nb 2 --nk 3";
-// The grid unrefined (--grid-tolerance 0): these tests are about the output files, not the grid.
-const std::string kSmallMems = "mems --steps 400 --grid-points 16 --grid-tolerance 0 --t-mean 1";
+// The grid unrefined (--grid-tolerance 0) and EP on single readings (--ep-window 1): these tests are about
+// the output files, not the observers.
+const std::string kSmallMems = "mems --steps 400 --grid-points 16 --grid-tolerance 0 --t-mean 1 --ep-window 1";
 
 // A fresh directory for one test, holding a copy of datasets/dryer.csv as d.csv.
 fs::path DirWithDryer(const std::string& name) {
