@@ -6,10 +6,10 @@
 #include <limits>
 #include <vector>
 
-#include <Eigen/Cholesky>
 #include <boost/math/quadrature/sinh_sinh.hpp>
 #include <boost/math/tools/minima.hpp>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::approx {
@@ -31,7 +31,7 @@ struct Frame {  // centre and widths of the class member in Θ
 Frame FrameOf(const Eigen::MatrixXd& V) {
   const Eigen::Index rho = V.rows() - 1;
   const Eigen::MatrixXd Vz = V.bottomRightCorner(rho, rho);
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(Vz);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt = dense::Ldlt(Vz);
   Frame f;
   f.centre = ldlt.solve(V.bottomLeftCorner(rho, 1));
   const double Dy = V(0, 0) - V.col(0).tail(rho).dot(f.centre);

@@ -4,9 +4,8 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/Cholesky>
-
 #include "approx/weighting_polynomial.h"
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::approx {
@@ -19,7 +18,7 @@ void Check(const NormalisedStatistics& s, const Eigen::VectorXd& h) {
 }
 
 double LogDet(const Eigen::MatrixXd& A) {
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt = dense::Ldlt(A);
   return ldlt.vectorD().array().log().sum();
 }
 
@@ -28,7 +27,7 @@ double LogDet(const Eigen::MatrixXd& A) {
 DenseInnovation ComputeInnovation(const Eigen::MatrixXd& V, const Eigen::VectorXd& h) {
   const Eigen::Index rho = V.rows() - 1;
   const Eigen::VectorXd z = h.tail(rho);
-  return {1 - h.dot(V.ldlt().solve(h)), 1 - z.dot(V.bottomRightCorner(rho, rho).ldlt().solve(z))};
+  return {1 - h.dot(dense::Ldlt(V).solve(h)), 1 - z.dot(dense::Ldlt(V.bottomRightCorner(rho, rho)).solve(z))};
 }
 
 NormalisedStatistics RankOneCandidate(const NormalisedStatistics& s, const Eigen::VectorXd& h, double beta) {

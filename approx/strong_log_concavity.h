@@ -21,10 +21,9 @@
 // [1] T. Henningsson, K. J. Åström, "Log-concave Observers", MTNS 2006.
 #pragma once
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::approx {
@@ -33,7 +32,7 @@ class LcBound {
  public:
   explicit LcBound(Eigen::MatrixXd P) : P_(std::move(P)) {
     IDENT_REQUIRE(P_.rows() >= 1 && P_.rows() == P_.cols() && P_.allFinite(), "bound P must be square and finite");
-    IDENT_REQUIRE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P_).eigenvalues().minCoeff() > 0,
+    IDENT_REQUIRE(dense::SymmetricEigen(P_, Eigen::ComputeEigenvectors).eigenvalues().minCoeff() > 0,
                   "bound P must be positive definite");
   }
   const Eigen::MatrixXd& P() const { return P_; }
@@ -57,14 +56,14 @@ class LcBound {
   void Multiply(const Eigen::Ref<const Eigen::MatrixXd>& Q) {
     IDENT_REQUIRE(Q.rows() == dim() && Q.cols() == dim(), "Q is {}×{}; bound has dimension {}", Q.rows(), Q.cols(),
                   dim());
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Q);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig = dense::SymmetricEigen(Q);
     IDENT_REQUIRE(eig.eigenvalues().minCoeff() >= -1e-12 * (1 + Q.cwiseAbs().maxCoeff()),
                   "Q must be positive semidefinite");
     const Eigen::MatrixXd S =
         eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();  // Q = S S'
     const Eigen::MatrixXd PS = P_ * S;
     const Eigen::MatrixXd M = Eigen::MatrixXd::Identity(dim(), dim()) + S.transpose() * PS;
-    P_ -= PS * M.llt().solve(PS.transpose());
+    P_ -= PS * dense::Llt(M).solve(PS.transpose());
     Symmetrize();
   }
   // Rank-one product: a function of c'x in LC(q) (Q = q c c').

@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 #include <boost/math/quadrature/gauss.hpp>
 
+#include "common/dense_decompositions.h"
 #include "models/internal/noise_density_shared.h"
 #include "models/measurement.h"
 #include "models/noise_density.h"
@@ -36,8 +37,8 @@ const std::array<HermiteRule, 9>& HermiteRules() {
       const int n = kHermiteSizes[r];
       Eigen::VectorXd diag = Eigen::VectorXd::Zero(n), sub(n - 1);
       for (int k = 1; k < n; ++k) sub(k - 1) = std::sqrt(static_cast<double>(k));
-      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
-      eig.computeFromTridiagonal(diag, sub, Eigen::EigenvaluesOnly);
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig =
+          dense::SymmetricTridiagonalEigen(diag, sub, Eigen::EigenvaluesOnly);
       out[r].n = n;
       for (int i = 0; i < n; ++i) {
         double x = eig.eigenvalues()(i), norm = 0;

@@ -4,9 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::models {
@@ -53,11 +51,11 @@ Penalty Penalty::Quadratic(const Eigen::MatrixXd& covariance) {
   const double scale = covariance.cwiseAbs().maxCoeff();
   IDENT_REQUIRE(((covariance - covariance.transpose()).cwiseAbs().array() <= 1e-12 * scale).all(),
                 "covariance is not symmetric");
-  Eigen::LLT<Eigen::MatrixXd> llt(covariance);
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(covariance);
   IDENT_REQUIRE(llt.info() == Eigen::Success && scale > 0, "covariance is not positive definite");
   Penalty f(Kind::kQuadratic, m);
   f.matrix_ = covariance;
-  f.precision_ = llt.solve(Eigen::MatrixXd::Identity(m, m));
+  f.precision_ = dense::Inverse(llt);
   f.plq_ = Identity(m, -kInfinity, kInfinity, 0.0);
   f.plq_.M = covariance;  // sup_u { u'r - 1/2 u'C u } = 1/2 r'C^-1 r
   f.plq_.diagonal_M = IsDiagonal(covariance);
@@ -130,7 +128,7 @@ Penalty Penalty::BoxMonitoring(const Eigen::VectorXd& lo, const Eigen::VectorXd&
                   "box bound {}: lo = {}, hi = {}; need lo < hi", i, lo(i), hi(i));
     unbounded = unbounded || std::isinf(lo(i)) || std::isinf(hi(i));
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(M);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig = dense::SymmetricEigen(M);
   const double min_eig = eig.eigenvalues().minCoeff();
   IDENT_REQUIRE(min_eig >= -1e-12 * (1 + M.cwiseAbs().maxCoeff()), "M is not positive semidefinite (eigenvalue {})",
                 min_eig);

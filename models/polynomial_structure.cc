@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::models {
@@ -86,7 +86,7 @@ double LargestRootModulus(const double* p, int n) {
   Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(n, n);
   for (int j = 0; j < n; ++j) companion(0, j) = -p[j];
   for (int i = 1; i < n; ++i) companion(i, i - 1) = 1;
-  return companion.eigenvalues().cwiseAbs().maxCoeff();
+  return dense::Eigenvalues(companion).cwiseAbs().maxCoeff();
 }
 
 }  // namespace ident::models

@@ -2,8 +2,7 @@
 
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
-
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::models {
@@ -24,7 +23,7 @@ void LinearStateSpace::Validate() const {
   IDENT_REQUIRE((process_noise - process_noise.transpose()).cwiseAbs().maxCoeff() <=
                     1e-12 * (1.0 + process_noise.cwiseAbs().maxCoeff()),
                 "process_noise is not symmetric");
-  const double min_eig = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(process_noise).eigenvalues().minCoeff();
+  const double min_eig = dense::SymmetricEigen(process_noise, Eigen::ComputeEigenvectors).eigenvalues().minCoeff();
   IDENT_REQUIRE(min_eig >= -1e-12 * (1.0 + process_noise.cwiseAbs().maxCoeff()),
                 "process_noise has eigenvalue {}; need positive semidefinite", min_eig);
 }

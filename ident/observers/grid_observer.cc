@@ -5,9 +5,9 @@
 #include <limits>
 
 #include <fmt/format.h>
-#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "models/measurement.h"
 
@@ -55,7 +55,7 @@ GridObserver::GridObserver(const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0,
   dim_ = static_cast<int>(options_.points.size());
   IDENT_REQUIRE(m0.size() == dim_ && m0.allFinite(), "m0 has {} entries; the grid has {} dimensions", m0.size(), dim_);
   IDENT_REQUIRE(P0.rows() == dim_ && P0.cols() == dim_ && P0.allFinite(), "P0 must be finite {}×{}", dim_, dim_);
-  Eigen::LLT<Eigen::MatrixXd> llt(P0);
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(P0);
   IDENT_REQUIRE(llt.info() == Eigen::Success, "P0 is not positive definite");
   total_ = padded_total_ = 1;
   for (int i = 0; i < dim_; ++i) {
@@ -88,7 +88,7 @@ GridObserver::GridObserver(const Eigen::VectorXd& m0, const Eigen::MatrixXd& P0,
   cov_.resize(dim_, dim_);
   mean_new_.resize(dim_);
   cov_new_.resize(dim_, dim_);
-  const Eigen::MatrixXd Pinv = llt.solve(Eigen::MatrixXd::Identity(dim_, dim_));
+  const Eigen::MatrixXd Pinv = dense::Inverse(llt);
   for (int idx = 0; idx < total_; ++idx) {
     NodeCoordinates(idx, x_);
     const Eigen::VectorXd d = x_ - m0;

@@ -39,6 +39,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "common/step_report.h"
 #include "ident/linalg/householder_triangularize.h"
@@ -116,7 +117,7 @@ BasicKalmanFilter<N>::BasicKalmanFilter(const Eigen::Ref<const Eigen::VectorXd>&
   IDENT_REQUIRE(N == Eigen::Dynamic || n == N, "x0 has {} entries; this filter has {} states", n, N);
   IDENT_REQUIRE(P0.rows() == n && P0.cols() == n && P0.allFinite(), "P0 is {}×{}; need finite {}×{}", P0.rows(),
                 P0.cols(), n, n);
-  Eigen::LLT<Eigen::MatrixXd> llt(0.5 * (P0 + P0.transpose()));
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(0.5 * (P0 + P0.transpose()));
   IDENT_REQUIRE(llt.info() == Eigen::Success, "P0 is not positive definite");
   x_ = x0;
   S_ = llt.matrixL();
@@ -230,7 +231,7 @@ StepReport BasicKalmanFilter<N>::Correct(const Eigen::Ref<const Eigen::MatrixXd>
   }
   if (p == 1) return Correct(C.row(0).transpose(), R(0, 0), y(0));
   if (r_cached_.rows() != p || r_cached_ != R) {
-    Eigen::LLT<Eigen::MatrixXd> llt(R);
+    const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(R);
     if (llt.info() != Eigen::Success) return {StepStatus::kRejectedInvalid};
     r_cached_ = R;
     r_sqrt_ = llt.matrixL();

@@ -38,10 +38,9 @@
 #include <cmath>
 #include <memory>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "common/step_report.h"
 #include "ident/observers/state_observer.h"
@@ -133,7 +132,7 @@ BasicLcGaussianFilter<N>::BasicLcGaussianFilter(const Eigen::Ref<const Eigen::Ve
   IDENT_REQUIRE(N == Eigen::Dynamic || n == N, "m0 has {} entries; this filter has {} states", n, N);
   IDENT_REQUIRE(P0.rows() == n && P0.cols() == n && P0.allFinite(), "P0 is {}×{}; need finite {}×{}", P0.rows(),
                 P0.cols(), n, n);
-  IDENT_REQUIRE(Eigen::LLT<Eigen::MatrixXd>(P0).info() == Eigen::Success, "P0 is not positive definite");
+  IDENT_REQUIRE(dense::Llt(P0).info() == Eigen::Success, "P0 is not positive definite");
   m_ = m0;
   P_ = 0.5 * (P0 + P0.transpose());  // exactly symmetric (ScaleAndApplyTilt keeps it so)
   k_.resize(n);
@@ -254,7 +253,7 @@ StepReport BasicLcGaussianFilter<N>::ApplyPairTilt(const Eigen::Ref<const Eigen:
   k2_.noalias() = cross * s_inv;  // K = Cov(x, s) S⁻¹
   // D = S − V_t ≥ 0 (clip round-off): symmetric 2×2 eigen-decomposition, negative eigenvalues to 0.
   const Eigen::Matrix2d d = 0.5 * ((prior_cov - t.covariance) + (prior_cov - t.covariance).transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(d);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig = dense::SymmetricEigen2x2(d);
   const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(0.0);
   const Eigen::Matrix2d d_psd = eig.eigenvectors() * lambda.asDiagonal() * eig.eigenvectors().transpose();
   m_new_ = m_;

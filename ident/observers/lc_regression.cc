@@ -5,8 +5,7 @@
 #include <limits>
 #include <vector>
 
-#include <Eigen/Cholesky>
-
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/regression/batch_regression.h"
 #include "ident/regression/regression_prior.h"
@@ -45,7 +44,7 @@ double LeverageScale(const Eigen::VectorXd& column) {
 // leverage w_i z_i'(Z'WZ)⁻¹z_i exceeds kMaxStartLeverage or Z'WZ is numerically singular.
 bool WeightedLeverageBounded(const Eigen::MatrixXd& Z, const Eigen::VectorXd& r) {
   const Eigen::VectorXd w = (1 / (1 + r.array().square())).matrix();
-  const Eigen::LDLT<Eigen::MatrixXd> weighted(Z.transpose() * w.asDiagonal() * Z);
+  const Eigen::LDLT<Eigen::MatrixXd> weighted = dense::Ldlt(Z.transpose() * w.asDiagonal() * Z);
   if (weighted.info() != Eigen::Success || !(weighted.vectorD().minCoeff() > 1e-12 * weighted.vectorD().maxCoeff()))
     return false;
   const Eigen::MatrixXd Hw = weighted.solve(Z.transpose());
@@ -62,9 +61,9 @@ Eigen::MatrixXd KeptRowsCovariance(const Eigen::MatrixXd& Z, const Eigen::Vector
   for (Eigen::Index i = 0; i < Z.rows(); ++i)
     if (!(scale > 0) || std::abs(residuals(i)) <= kGrossResidual * scale)
       information.selfadjointView<Eigen::Lower>().rankUpdate(Z.row(i).transpose());
-  const Eigen::LLT<Eigen::MatrixXd> llt(information.selfadjointView<Eigen::Lower>());
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(information.selfadjointView<Eigen::Lower>());
   if (llt.info() != Eigen::Success) return Eigen::MatrixXd::Constant(rho, rho, std::nan(""));
-  return llt.solve(Eigen::MatrixXd::Identity(rho, rho));
+  return dense::Inverse(llt);
 }
 
 LcRegressionOptions CheckedLcOptions(int rho, LcRegressionOptions o) {
@@ -194,7 +193,7 @@ bool LcRegression::Start(bool summarise) noexcept {
     const Eigen::VectorXd Y = Yall(inliers);
     const Eigen::MatrixXd Z = Zall(inliers, Eigen::all);
     const Eigen::MatrixXd ZtZ = Z.transpose() * Z;
-    Eigen::LDLT<Eigen::MatrixXd> ldlt(ZtZ / static_cast<double>(Z.rows()));
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt = dense::Ldlt(ZtZ / static_cast<double>(Z.rows()));
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().maxCoeff()))
       return have_window_ = false;
     // One row alone deciding a direction (leverage z'(Z'Z)⁻¹z above 0.8) would set it to that row's value,

@@ -6,11 +6,11 @@
 #include <numbers>
 #include <utility>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/special_functions/owens_t.hpp>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "models/truncated_bivariate_normal.h"
 
@@ -229,7 +229,7 @@ TruncatedGaussianFilter::TruncatedGaussianFilter(const models::ThresholdSensor& 
   IDENT_REQUIRE(
       (covariance - covariance.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1 + covariance.cwiseAbs().maxCoeff()),
       "TruncatedGaussianFilter: prior covariance not symmetric");
-  IDENT_REQUIRE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues().minCoeff() > 0,
+  IDENT_REQUIRE(dense::SymmetricEigen2x2(covariance).eigenvalues().minCoeff() > 0,
                 "TruncatedGaussianFilter: prior covariance not positive definite");
   c_ = sensor.c().head<2>();
 }

@@ -10,10 +10,9 @@
 #include <random>
 #include <utility>
 
-#include <Eigen/Cholesky>
-#include <Eigen/LU>
-#include <Eigen/QR>
+#include <Eigen/Core>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/regression/internal/batch_regression_common.h"
 
@@ -130,7 +129,7 @@ class CauchyProblem {
   // step length decreases the NLL. Where the predicted decrease is below the NLL's round-off, the full step
   // is judged by the scaled gradient instead (it must shrink below point.gradient_norm).
   bool NewtonStep(CauchyPoint& point, const Eigen::VectorXd& g, const Eigen::MatrixXd& H) const {
-    const Eigen::LLT<Eigen::MatrixXd> llt(H);
+    const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(H);
     if (llt.info() != Eigen::Success) return false;
     const Eigen::VectorXd step = -llt.solve(g);
     const Eigen::Index np = p();
@@ -188,16 +187,16 @@ class CauchyProblem {
     Eigen::MatrixXd H;
     Derivatives(point, g, H);
     const Eigen::MatrixXd A = H.topLeftCorner(np, np);
-    const Eigen::LLT<Eigen::MatrixXd> llt(A);
+    const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(A);
     if (llt.info() == Eigen::Success) {
       const Eigen::ArrayXd u = (y_ - Q_ * point.beta).array() / point.gamma;  // ψ(r) = 2r/(r² + γ²)
       const Eigen::MatrixXd Qpsi = Q_.array().colwise() * (2 * (u / (1 + u.square())) / point.gamma);
-      const Eigen::MatrixXd Ainv = llt.solve(Eigen::MatrixXd::Identity(np, np));
+      const Eigen::MatrixXd Ainv = dense::Inverse(llt);
       return Ainv * (Qpsi.transpose() * Qpsi) * Ainv;
     }
-    const Eigen::FullPivLU<Eigen::MatrixXd> lu(H);
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu = dense::FullPivLu(H);
     if (!lu.isInvertible()) return Eigen::MatrixXd::Constant(np, np, kNaN);
-    return lu.inverse().topLeftCorner(np, np);
+    return dense::Inverse(lu).topLeftCorner(np, np);
   }
 
  private:
@@ -235,7 +234,7 @@ class ElementalSampler {
       Qs.row(j) = problem_.Q().row(order_[jj]);
       ys(j) = problem_.y()(order_[jj]);
     }
-    const Eigen::FullPivLU<Eigen::MatrixXd> lu(Qs);
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu = dense::FullPivLu(Qs);
     if (!lu.isInvertible()) return false;
     beta = lu.solve(ys);
     return beta.allFinite();

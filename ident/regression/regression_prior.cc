@@ -4,8 +4,9 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Core>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/linalg/ld_factor.h"
 
@@ -30,9 +31,9 @@ RegressionPrior RegressionPrior::FromGuess(const Eigen::VectorXd& theta0, const 
                 P0.cols(), rho, rho);
   IDENT_REQUIRE(std::isfinite(sigma0) && sigma0 > 0, "sigma0 = {}; need a positive noise scale", sigma0);
   IDENT_REQUIRE(nu0 > rho + delta, "nu0 = {}; need nu0 > rho + delta = {}", nu0, rho + delta);
-  Eigen::LLT<Eigen::MatrixXd> llt(P0);
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(P0);
   IDENT_REQUIRE(llt.info() == Eigen::Success, "prior covariance P0 is not positive definite");
-  const Eigen::MatrixXd Vz = sigma0 * sigma0 * llt.solve(Eigen::MatrixXd::Identity(rho, rho)) / (nu0 - delta - rho);
+  const Eigen::MatrixXd Vz = sigma0 * sigma0 * dense::Inverse(llt) / (nu0 - delta - rho);
   RegressionPrior prior;
   prior.nu0 = nu0;
   prior.V0.resize(rho + 1, rho + 1);

@@ -5,9 +5,9 @@
 #include <optional>
 #include <vector>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
+#include <Eigen/Core>
 
+#include "common/dense_decompositions.h"
 #include "ident/regression/batch_regression.h"
 
 namespace ident {
@@ -76,14 +76,14 @@ Eigen::MatrixXd OrdinaryRows(const Eigen::Ref<const Eigen::MatrixXd>& window,
 void RequireInlierSupport(const Eigen::Ref<const Eigen::MatrixXd>& Z, const Eigen::VectorXd& w,
                           const Eigen::MatrixXd& M, bool strict) {
   constexpr double kInlierShare = 0.1, kMaxLeverage = 0.8;
-  const Eigen::Index rho = Z.cols();
   const Eigen::MatrixXd M0 = Z.transpose() * Z / static_cast<double>(Z.rows());
-  const Eigen::LLT<Eigen::MatrixXd> chol(M0);
+  const Eigen::LLT<Eigen::MatrixXd> chol = dense::Llt(M0);
   IDENT_REQUIRE(chol.info() == Eigen::Success, "the window's regressors are rank-deficient");
-  const Eigen::MatrixXd Linv = chol.matrixL().solve(Eigen::MatrixXd::Identity(rho, rho));
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> relative(Linv * M * Linv.transpose(), Eigen::EigenvaluesOnly);
+  const Eigen::MatrixXd Linv = dense::LowerTriangularInverse(chol.matrixLLT());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> relative =
+      dense::SymmetricEigen(Linv * M * Linv.transpose(), Eigen::EigenvaluesOnly);
   IDENT_REQUIRE(relative.eigenvalues()(0) >= kInlierShare || !strict, "a direction rests on the fit's outliers");
-  const Eigen::LLT<Eigen::MatrixXd> information(Z.transpose() * w.asDiagonal() * Z);
+  const Eigen::LLT<Eigen::MatrixXd> information = dense::Llt(Z.transpose() * w.asDiagonal() * Z);
   for (Eigen::Index i = 0; i < Z.rows(); ++i) {
     const Eigen::VectorXd zi = Z.row(i).transpose();
     IDENT_REQUIRE(w(i) * zi.dot(information.solve(zi)) <= kMaxLeverage || !strict, "a direction rests on a few rows");
@@ -104,7 +104,7 @@ double WindowInfluence(const Eigen::Ref<const Eigen::MatrixXd>& Z, const Eigen::
   influence.setZero(keep.size());
   for (Eigen::Index i = 0, k = 0; i < keep.size(); ++i)
     if (keep(i)) influence(i) = score(k++);
-  const Eigen::LLT<Eigen::MatrixXd> metric(M);
+  const Eigen::LLT<Eigen::MatrixXd> metric = dense::Llt(M);
   double seed = 0;
   for (Eigen::Index i = 0; i < Z.rows(); ++i) {
     const Eigen::VectorXd zi = Z.row(i).transpose();
@@ -169,7 +169,7 @@ void ScaleNoise(RegressionPrior& prior, double factor) {
   if (factor == 1) return;
   const Eigen::Index rho = prior.V0.rows() - 1;
   const Eigen::VectorXd vzy = prior.V0.bottomLeftCorner(rho, 1);
-  const double explained = prior.V0.bottomRightCorner(rho, rho).ldlt().solve(vzy).dot(vzy);
+  const double explained = dense::Ldlt(prior.V0.bottomRightCorner(rho, rho)).solve(vzy).dot(vzy);
   prior.V0(0, 0) = factor * (prior.V0(0, 0) - explained) + explained;
 }
 

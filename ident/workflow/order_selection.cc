@@ -5,8 +5,8 @@
 #include <limits>
 
 #include <fmt/format.h>
-#include <Eigen/Cholesky>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::workflow {
@@ -94,7 +94,7 @@ StructureScore ScoreArxStructure(const Eigen::MatrixXd& G, const Eigen::MatrixXd
     Gzy(i) = G(idx[i], 0);
     for (int j = 0; j < d; ++j) Gzz(i, j) = G(idx[i], idx[j]);
   }
-  const Eigen::LLT<Eigen::MatrixXd> llt(Gzz);
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(Gzz);
   IDENT_REQUIRE(llt.info() == Eigen::Success && llt.matrixL().toDenseMatrix().diagonal().minCoeff() >
                                                     1e-10 * std::sqrt(Gzz.diagonal().maxCoeff()),
                 "{}: ARX({},{},{}) is not determined by the data (its regressors are collinear)", source, na, nb, nk);

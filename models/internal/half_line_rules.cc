@@ -1,5 +1,6 @@
 // The Gauss rules of models/internal/half_line_rules.h.
 #include "models/internal/half_line_rules.h"
+#include "common/dense_decompositions.h"
 
 #include <algorithm>
 #include <cmath>
@@ -57,8 +58,8 @@ HalfLineRule<N> BuildRule(double alpha) {
     p_prev = p;
     p = q / sub(k);
   }
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig;
-  eig.computeFromTridiagonal(diag, sub, Eigen::ComputeEigenvectors);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig =
+      dense::SymmetricTridiagonalEigen(diag, sub, Eigen::ComputeEigenvectors);
   HalfLineRule<N> rule;
   rule.alpha = alpha;
   for (int i = 0; i < N; ++i) {

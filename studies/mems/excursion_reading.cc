@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "models/truncated_bivariate_normal.h"
 #include "studies/mems/crossing_reading.h"
@@ -144,7 +145,8 @@ double ExcursionReading::Refit(Factor& f) {
   const Eigen::Matrix2d pc = InverseBlock(vc, f.dim), pt = InverseBlock(vt, f.dim);
   Eigen::Matrix2d lambda = pt - pc;
   if (f.dim == 2) {
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(0.5 * (lambda + lambda.transpose()));
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig =
+        dense::SymmetricEigen2x2(0.5 * (lambda + lambda.transpose()));
     lambda = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
   } else {
     lambda(0, 0) = std::max(lambda(0, 0), 0.0);

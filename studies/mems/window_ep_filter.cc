@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "models/truncated_bivariate_normal.h"
 #include "studies/mems/crossing_reading.h"
@@ -38,7 +39,7 @@ WindowEpFilter::WindowEpFilter(const models::ThresholdSensor& sensor, const Eige
   IDENT_REQUIRE(
       (covariance - covariance.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * (1 + covariance.cwiseAbs().maxCoeff()),
       "WindowEpFilter: prior covariance not symmetric");
-  IDENT_REQUIRE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(covariance).eigenvalues().minCoeff() >= 0,
+  IDENT_REQUIRE(dense::SymmetricEigen2x2(covariance).eigenvalues().minCoeff() >= 0,
                 "WindowEpFilter: prior covariance not positive semidefinite");
   h_ << sensor.c()(0), sensor.c()(1), 0.0;
   // z(0) = (x(0), s(−1)); s(−1) is never read (no wedge at the first step), so it is set to c'x(0).

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "common/dense_decompositions.h"
 #include "tests/cli/experiment_records.h"
 #include "tests/support/cli.h"
 
@@ -37,7 +38,7 @@ TEST_F(Experiments, TwoFilesEqualLeastSquaresOfEachExperimentsOwnRegressors) {
   Eigen::MatrixXd Z;
   Eigen::VectorXd Y;
   ExperimentRegressors(records, Z, Y);
-  const Eigen::VectorXd ls = Z.colPivHouseholderQr().solve(Y);
+  const Eigen::VectorXd ls = dense::ColPivQr(Z).solve(Y);
   const nlohmann::json j = ExperimentsFitJson(a + " " + b + kExperimentsArx);
   const std::vector<double> theta = j["theta"];
   ASSERT_EQ(theta.size(), 4u);

@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "common/dense_decompositions.h"
 #include "tests/cli/experiment_records.h"
 #include "tests/support/cli.h"
 
@@ -51,7 +52,7 @@ PieceFit PieceLeastSquares(const std::vector<ExperimentRecord>& pieces, int na, 
   Eigen::VectorXd Y;
   PieceRegressors(pieces, na, nb, nk, t0, Z, Y);
   PieceFit r;
-  r.theta = Z.colPivHouseholderQr().solve(Y);
+  r.theta = dense::ColPivQr(Z).solve(Y);
   r.samples = static_cast<int>(Y.size());
   r.loss = (Y - Z * r.theta).squaredNorm() / r.samples;
   return r;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/data_source.h"
@@ -61,7 +62,7 @@ TEST(SelectOrders, EveryLossIsItsOwnLeastSquaresFitOnTheSameSamples) {
     Eigen::VectorXd y, yv;
     Regression(p, p.estimation, t0, s.na, s.nb, s.nk, Z, y);
     Regression(p, p.validation, t0, s.na, s.nb, s.nk, Zv, yv);
-    const Eigen::VectorXd theta = Z.colPivHouseholderQr().solve(y);
+    const Eigen::VectorXd theta = dense::ColPivQr(Z).solve(y);
     const double loss = (y - Z * theta).squaredNorm() / y.size();
     const std::string name = "ARX(" + std::to_string(s.na) + "," + std::to_string(s.nb) + "," +
                              std::to_string(s.nk) + ")";

@@ -1,5 +1,6 @@
 // Block-tridiagonal Cholesky (ident/linalg/block_tridiagonal.h) against a dense LLT solve of the same matrix.
 #include "ident/linalg/block_tridiagonal.h"
+#include "common/dense_decompositions.h"
 
 #include <random>
 
@@ -35,7 +36,7 @@ TEST(BlockTridiagonalCholesky, SolveMatchesDenseCholesky) {
       for (int i = 0; i < size; ++i) b(i) = N(rng);
       Eigen::MatrixXd x = Eigen::Map<Eigen::MatrixXd>(b.data(), n, blocks);
       chol.Solve(x);
-      const Eigen::VectorXd dense = A.llt().solve(b);
+      const Eigen::VectorXd dense = ident::dense::Llt(A).solve(b);
       EXPECT_LT((Eigen::Map<Eigen::VectorXd>(x.data(), size) - dense).cwiseAbs().maxCoeff(), 1e-10)
           << "n " << n << " blocks " << blocks;
     }

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident {
@@ -58,7 +59,7 @@ TEST(LdFactor, SolveTransposedSolvesLtg) {
   f.SolveTransposed(h, g);
   EXPECT_LT((Eigen::MatrixXd(f.L()).transpose() * g - h).norm(), 1e-13);
   // h' V^{-1} h = g' D^{-1} g.
-  EXPECT_NEAR(h.dot(V.ldlt().solve(h)), g.dot(f.d().cwiseInverse().asDiagonal() * g), 1e-10);
+  EXPECT_NEAR(h.dot(dense::Ldlt(V).solve(h)), g.dot(f.d().cwiseInverse().asDiagonal() * g), 1e-10);
 }
 
 TEST(LdFactor, FixedSizeAgreesWithDynamic) {

@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "approx/strong_log_concavity.h"
+#include "common/dense_decompositions.h"
 #include "ident/observers/covariance_bound.h"
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
@@ -20,9 +21,7 @@
 namespace ident {
 namespace {
 
-double MinEig(const Eigen::MatrixXd& M) {
-  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues().minCoeff();
-}
+double MinEig(const Eigen::MatrixXd& M) { return dense::SymmetricEigen(M).eigenvalues().minCoeff(); }
 
 // Random log-concave factor f0(x) = exp(−a|b'x − c| − softplus(g'x)) · 1[d'x ≤ e].
 struct RandomLogConcave {

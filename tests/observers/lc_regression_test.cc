@@ -2,6 +2,7 @@
 // recursive least squares (Gaussian noise, to 1e-12), an exact grid posterior (ρ = 1, 2), the batch MAP
 // estimate by Newton/IRLS (ρ = 4), and on outliers of growing size.
 #include "ident/observers/lc_regression.h"
+#include "common/dense_decompositions.h"
 
 #include <cmath>
 #include <random>
@@ -228,7 +229,7 @@ TEST(LcRegression, MatchesTheExactGridPosterior) {
 Eigen::VectorXd BatchMap(const models::LogConcaveNoise& f, double sigma, const Eigen::VectorXd& m0,
                          const Eigen::MatrixXd& P0, const StaticData& d) {
   const Eigen::MatrixXd P0inv = P0.inverse();
-  Eigen::VectorXd th = (d.Z.transpose() * d.Z).ldlt().solve(d.Z.transpose() * d.y);
+  Eigen::VectorXd th = dense::Ldlt(d.Z.transpose() * d.Z).solve(d.Z.transpose() * d.y);
   for (int it = 0; it < 20000; ++it) {
     Eigen::MatrixXd A = P0inv;
     Eigen::VectorXd b = P0inv * m0;
@@ -238,7 +239,7 @@ Eigen::VectorXd BatchMap(const models::LogConcaveNoise& f, double sigma, const E
       A += w * d.Z.row(i).transpose() * d.Z.row(i);
       b += w * d.y(i) * d.Z.row(i).transpose();
     }
-    const Eigen::VectorXd next = A.ldlt().solve(b);
+    const Eigen::VectorXd next = dense::Ldlt(A).solve(b);
     const double step = (next - th).norm();
     th = next;
     if (step < 1e-13 * (1 + th.norm())) break;

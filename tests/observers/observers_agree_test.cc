@@ -9,6 +9,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
@@ -29,8 +30,7 @@ Sim Simulate(const models::LinearStateSpace& model, const Eigen::VectorXd& c, do
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal;
   const int n = model.num_states();
-  const Eigen::MatrixXd L =
-      Eigen::LLT<Eigen::MatrixXd>(model.process_noise + 1e-300 * Eigen::MatrixXd::Identity(n, n)).matrixL();
+  const Eigen::MatrixXd L = dense::Llt(model.process_noise + 1e-300 * Eigen::MatrixXd::Identity(n, n)).matrixL();
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n), w(n);
   Sim s;
   for (int k = 0; k < steps; ++k) {
@@ -95,7 +95,7 @@ TEST(KalmanFilter, SquareRootFormMatchesTextbookCovarianceFormAndBatchLikelihood
     }
   Eigen::VectorXd e(steps);
   for (int k = 0; k < steps; ++k) e(k) = sim.y[k] - ymean(k);
-  Eigen::LLT<Eigen::MatrixXd> llt(Ycov);
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(Ycov);
   const Eigen::MatrixXd Lc = llt.matrixL();
   const double log_det = 2 * Lc.diagonal().array().log().sum();
   const double batch = -0.5 * (steps * std::log(2 * std::numbers::pi) + log_det + e.dot(llt.solve(e)));

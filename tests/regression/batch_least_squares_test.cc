@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/dense_decompositions.h"
 #include "ident/regression/rls.h"
 #include "tests/support/test_data.h"
 
@@ -46,7 +47,7 @@ TEST_P(BatchLeastSquares, FlatPriorRlsEqualsQrSolutionAndReadmeBaseline) {
   Eigen::MatrixXd Z;
   Eigen::VectorXd Y;
   BuildRegression(c, Z, Y);
-  const Eigen::VectorXd batch = Z.householderQr().solve(Y);
+  const Eigen::VectorXd batch = dense::HouseholderQr(Z).solve(Y);
   RecursiveLeastSquares rls(static_cast<int>(Z.cols()));
   for (Eigen::Index t = 0; t < Z.rows(); ++t) ASSERT_TRUE(rls.Update(Y(t), Z.row(t).transpose()).updated());
   const Eigen::VectorXd theta = rls.parameters();
@@ -72,7 +73,7 @@ TEST(BatchLeastSquaresSmallUnits, ScaledFlatPriorKeepsRlsOnTheQrSolution) {
   BuildRegression(ArxCase{"dryer.csv", 2, 2, 3, {}, 0}, Z, Y);
   Z *= 1e-5;
   Y *= 1e-5;
-  const Eigen::VectorXd batch = Z.householderQr().solve(Y);
+  const Eigen::VectorXd batch = dense::HouseholderQr(Z).solve(Y);
   Eigen::VectorXd mean_squares(Z.cols() + 1);
   mean_squares(0) = Y.squaredNorm() / static_cast<double>(Y.size());
   mean_squares.tail(Z.cols()) = Z.colwise().squaredNorm().transpose() / static_cast<double>(Z.rows());

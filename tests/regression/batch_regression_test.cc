@@ -20,6 +20,7 @@
 #include <fmt/core.h>
 #include <gtest/gtest.h>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/regression/batch_regression.h"
 #include "ident/regression/regression_estimator.h"
@@ -259,7 +260,7 @@ double IndependentEmNll(const Record& d, Eigen::VectorXd theta, double gamma, in
     const Eigen::ArrayXd r = (d.y - d.Z * theta).array();
     const Eigen::ArrayXd w = 2 / (1 + r.square() / (gamma * gamma));
     const Eigen::ArrayXd sw = w.sqrt();
-    theta = (d.Z.array().colwise() * sw).matrix().householderQr().solve((d.y.array() * sw).matrix());
+    theta = dense::HouseholderQr((d.Z.array().colwise() * sw).matrix()).solve((d.y.array() * sw).matrix());
     gamma = std::sqrt((w * (d.y - d.Z * theta).array().square()).sum() / static_cast<double>(n));
   }
   const Eigen::ArrayXd r = (d.y - d.Z * theta).array();
@@ -276,7 +277,7 @@ TEST(CauchyMlRegression, LeastSquaresStartAloneEndsAtTheLocalOptimumOfStarsCyg) 
   EXPECT_NEAR(local.scale, 0.3572055876, 1e-7);
   EXPECT_NEAR(local.objective, 50.67460473, 1e-7);
   // Plain EM (this file's own, below) from the least-squares fit ends there too.
-  const Eigen::VectorXd ls = d.Z.householderQr().solve(d.y);
+  const Eigen::VectorXd ls = dense::HouseholderQr(d.Z).solve(d.y);
   EXPECT_NEAR(IndependentEmNll(d, ls, (d.y - d.Z * ls).cwiseAbs().mean(), 3000), 50.67460473, 1e-7);
   const BatchRegressionResult global = CauchyMlRegression(d.Z, d.y);
   EXPECT_LT(global.objective, local.objective - 1);
@@ -333,7 +334,7 @@ TEST(CauchyMlRegression, NoneOfTwoThousandRandomStartsBeatsIt) {
         Zs.row(j) = d.Z.row(i);
         ys(j) = d.y(i);
       }
-      const Eigen::FullPivLU<Eigen::MatrixXd> lu(Zs);
+      const Eigen::FullPivLU<Eigen::MatrixXd> lu = dense::FullPivLu(Zs);
       if (!lu.isInvertible()) continue;
       const double gamma = m.scale * std::exp(log_scale(rng));
       best = std::min(best, IndependentEmNll(d, lu.solve(ys), gamma, 200));
@@ -355,7 +356,7 @@ TEST(CauchyMlRegression, CovarianceIsTheSandwich) {
     const Eigen::MatrixXd Ainv = A.inverse();
     const Eigen::MatrixXd expected = Ainv * B * Ainv;
     EXPECT_LE((m.covariance - expected).norm(), 1e-6 * expected.norm()) << c.name;
-    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(m.covariance).info(), Eigen::Success) << c.name;
+    EXPECT_EQ(dense::Llt(m.covariance).info(), Eigen::Success) << c.name;
   }
 }
 

@@ -3,6 +3,7 @@
 // Θ̂ = Λ_z⁻¹Λ_zy, Λ = λ^T ν0V0 + Σ_k λ^{T−k} h_k h_k' (dense Cholesky), the covariance-form RLS oracle
 // (tests/support/dense_rls.h) and ident's fixed-size RLS, to 1e-9.
 #include "bench/support/ld_kernel.h"
+#include "common/dense_decompositions.h"
 
 #include <algorithm>
 #include <array>
@@ -54,8 +55,7 @@ void CheckKernel() {
     h << y, z;
     info = lambda * info + h * h.transpose();
   }
-  const Eigen::VectorXd closed_form =
-      info.bottomRightCorner(Rho, Rho).llt().solve(info.col(0).tail(Rho));
+  const Eigen::VectorXd closed_form = dense::Llt(info.bottomRightCorner(Rho, Rho)).solve(info.col(0).tail(Rho));
   const std::array<double, Rho> k = kernel.Parameters();
   const double vs_closed = KernelRelativeDifference(k, closed_form, Rho);
   const double vs_dense = KernelRelativeDifference(k, dense.parameters(), Rho);

@@ -10,6 +10,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "common/dense_decompositions.h"
 #include "ident/regression/rls.h"
 #include "tests/regression/arx_stream.h"
 #include "tests/support/alloc_counter.h"
@@ -130,7 +131,7 @@ TYPED_TEST(RlsRealtime, CovarianceAtAnyTimeEqualsBatchLeastSquares) {
     Eigen::MatrixXd Z(N, 4);
     Eigen::VectorXd y(N);
     for (int t = 0; t < N; ++t) Z.row(t) = data[t].z.transpose(), y(t) = data[t].y;
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(Z.transpose() * Z);
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt = dense::Ldlt(Z.transpose() * Z);
     const Eigen::VectorXd theta = ldlt.solve(Z.transpose() * y);
     const double s2 = (y - Z * theta).squaredNorm() / (N - 4);
     const Eigen::MatrixXd cov = s2 * ldlt.solve(Eigen::MatrixXd::Identity(4, 4));
@@ -184,7 +185,7 @@ TYPED_TEST(RlsRealtime, ForgettingChangedOnTheFlyEqualsWeightedBatchLeastSquares
     weight *= lambda[t];
   }
   info += weight * o.prior->nu0 * o.prior->V0;
-  const Eigen::VectorXd theta = info.bottomRightCorner(4, 4).ldlt().solve(info.bottomLeftCorner(4, 1));
+  const Eigen::VectorXd theta = dense::Ldlt(info.bottomRightCorner(4, 4)).solve(info.bottomLeftCorner(4, 1));
   EXPECT_LT((rls.parameters() - theta).norm(), 1e-10 * theta.norm());
   EXPECT_THROW(rls.set_forgetting(1.5), InvalidArgument);
   EXPECT_EQ(rls.options().forgetting.factor, 0.99);  // unchanged by the rejected value

@@ -13,6 +13,7 @@
 #include <Eigen/Cholesky>
 
 #include "approx/weighting_polynomial.h"
+#include "common/dense_decompositions.h"
 #include "ident/regression/student_regression.h"
 #include "tests/regression/arx_stream.h"
 #include "tests/support/alloc_counter.h"
@@ -155,7 +156,7 @@ TYPED_TEST(StudentRealtime, PosteriorCovarianceAtAnyTimeEqualsTheDenseMultivaria
     DenseStep(V, r, data[t].y, data[t].z);
     nu = 0.99 * nu + 1;
     if (t != 0 && t != 30 && t != 399) continue;
-    const Eigen::LLT<Eigen::MatrixXd> Vz(V.bottomRightCorner(4, 4));
+    const Eigen::LLT<Eigen::MatrixXd> Vz = dense::Llt(V.bottomRightCorner(4, 4));
     const Eigen::VectorXd Vzy = V.bottomLeftCorner(4, 1);
     const double Dy = V(0, 0) - Vzy.dot(Vz.solve(Vzy));
     const Eigen::MatrixXd cov = Dy / (nu - 1 - 4) * Vz.solve(Eigen::MatrixXd::Identity(4, 4));
@@ -179,7 +180,8 @@ TYPED_TEST(StudentRealtime, CovarianceIsTheLargerOfSandwichAndPropagationAtAnyTi
   TypeParam est(4, o);
   Eigen::MatrixXd V = o.prior->V0;
   double psi2 = 0, dpsi = 0, dpsi2 = 0, n = 0;
-  const double dy0 = V(0, 0) - (V.block(0, 1, 1, 4) * V.bottomRightCorner(4, 4).llt().solve(V.block(1, 0, 4, 1)))(0, 0);
+  const double dy0 =
+      V(0, 0) - (V.block(0, 1, 1, 4) * dense::Llt(V.bottomRightCorner(4, 4)).solve(V.block(1, 0, 4, 1)))(0, 0);
   double s = dy0 / (o.prior->nu0 - 1 - 4);
   int propagated_larger = 0;
   Eigen::Matrix4d P;
@@ -208,8 +210,8 @@ TYPED_TEST(StudentRealtime, CovarianceIsTheLargerOfSandwichAndPropagationAtAnyTi
     const double sandwich = kappa * kappa * n / (n - 4) * (psi2 / n) / (m * m) / n;
     propagated_larger += s > sandwich;
     if (t != 5 && t != 30 && t != 399) continue;
-    const Eigen::MatrixXd cov = std::max(s, sandwich) * Eigen::LLT<Eigen::MatrixXd>(V.bottomRightCorner(4, 4))
-                                                            .solve(Eigen::MatrixXd::Identity(4, 4));
+    const Eigen::MatrixXd cov =
+        std::max(s, sandwich) * dense::Llt(V.bottomRightCorner(4, 4)).solve(Eigen::MatrixXd::Identity(4, 4));
     EXPECT_LT((P - cov).norm(), 1e-6 * cov.norm()) << "t = " << t;
     EXPECT_LT((P - est.covariance()).norm(), 1e-14 * cov.norm()) << "t = " << t;
   }
@@ -258,8 +260,8 @@ TYPED_TEST(StudentRealtime, ForgettingChangedOnTheFlyEqualsTheDenseRecursion) {
     h << data[t].y, data[t].z;
     const Eigen::VectorXd z = h.tail(4);
     nu = lambda * nu + 1;
-    const double xi = 1 - h.dot(V.ldlt().solve(h));
-    const double xi_z = 1 - z.dot(V.bottomRightCorner(4, 4).ldlt().solve(z));
+    const double xi = 1 - h.dot(dense::Ldlt(V).solve(h));
+    const double xi_z = 1 - z.dot(dense::Ldlt(V.bottomRightCorner(4, 4)).solve(z));
     const approx::WeightSolution w = approx::SolveWeight({nu, xi, xi_z, 4, 1.0, 1});
     ASSERT_TRUE(w.ok);
     max_beta_diff = std::max(max_beta_diff, std::abs(w.beta - r.weight) / w.beta);
@@ -267,7 +269,7 @@ TYPED_TEST(StudentRealtime, ForgettingChangedOnTheFlyEqualsTheDenseRecursion) {
   }
   EXPECT_NEAR(est.nu(), nu, 1e-12 * nu);
   EXPECT_LT(max_beta_diff, 1e-8);
-  const Eigen::VectorXd theta = V.bottomRightCorner(4, 4).ldlt().solve(V.bottomLeftCorner(4, 1));
+  const Eigen::VectorXd theta = dense::Ldlt(V.bottomRightCorner(4, 4)).solve(V.bottomLeftCorner(4, 1));
   EXPECT_LT((est.parameters() - theta).norm(), 1e-8 * theta.norm());
 }
 

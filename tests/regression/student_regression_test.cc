@@ -1,6 +1,7 @@
 // StudentRegression (Kárný–Hangos, LD form) against an independent dense recursion and the
 // properties of spec §10: LD ≡ dense, invariance, admissibility, forgetting, outliers, limits.
 #include "ident/regression/student_regression.h"
+#include "common/dense_decompositions.h"
 
 #include <algorithm>
 #include <cmath>
@@ -40,16 +41,16 @@ struct DenseStudent {
     nu += 1;
     Eigen::VectorXd h(n);
     h << y, z;
-    const double xi = 1 - h.dot(V.ldlt().solve(h));
+    const double xi = 1 - h.dot(dense::Ldlt(V).solve(h));
     const Eigen::MatrixXd Vz = V.bottomRightCorner(rho, rho);
-    const double xi_z = 1 - z.dot(Vz.ldlt().solve(z));
+    const double xi_z = 1 - z.dot(dense::Ldlt(Vz).solve(z));
     const double beta = approx::SolveWeight({nu, xi, xi_z, rho, k, delta}).beta;
     V = (1 - beta) * V + beta * h * h.transpose();
     return beta;
   }
   Eigen::VectorXd Theta() const {
     const int rho = static_cast<int>(V.rows()) - 1;
-    return V.bottomRightCorner(rho, rho).ldlt().solve(V.bottomLeftCorner(rho, 1));
+    return dense::Ldlt(V.bottomRightCorner(rho, rho)).solve(V.bottomLeftCorner(rho, 1));
   }
 };
 

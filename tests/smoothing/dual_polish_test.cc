@@ -4,6 +4,7 @@
 // whose solution is d = -Wd C' (C Wd C')^-1 rho with C = [A', -H'] and Wd = blkdiag(W_t, Wg_t), solved
 // here with the whole constraint matrix written out.
 #include "ident/smoothing/internal/dual_polish.h"
+#include "common/dense_decompositions.h"
 
 #include <random>
 #include <string>
@@ -75,7 +76,7 @@ void DenseProjection(const PolishCase& c, Eigen::MatrixXd* v, Eigen::MatrixXd* u
         Eigen::Map<const Eigen::MatrixXd>(c.dual.measurement_weight.col(t).data(), nz, nz);
   }
   const Eigen::VectorXd rho = Residual(p, c.v, c.u);
-  const Eigen::VectorXd d = -Wd * C.transpose() * (C * Wd * C.transpose()).ldlt().solve(rho);
+  const Eigen::VectorXd d = -Wd * C.transpose() * dense::Ldlt(C * Wd * C.transpose()).solve(rho);
   *v = c.v + Eigen::Map<const Eigen::MatrixXd>(d.data(), n, N);
   *u = c.u + Eigen::Map<const Eigen::MatrixXd>(d.data() + nv, nz, N);
 }

@@ -3,6 +3,7 @@
 // active-set solution of the dense dual box QP for l1/Huber measurement noise, weak duality at
 // arbitrary feasible points, and the duality gap on random PLQ instances.
 #include "ident/smoothing/map_smoother.h"
+#include "common/dense_decompositions.h"
 
 #include <cmath>
 #include <random>
@@ -227,7 +228,7 @@ DenseSolution SolveDualByEnumeration(const MapSmootherProblem& p, const Eigen::M
         rhs(i) = z(free[i]) - K.row(free[i]).dot(u);
         for (int j = 0; j < m; ++j) KF(i, j) = K(free[i], free[j]);
       }
-      const Eigen::VectorXd uF = KF.ldlt().solve(rhs);
+      const Eigen::VectorXd uF = dense::Ldlt(KF).solve(rhs);
       for (int i = 0; i < m; ++i) u(free[i]) = uF(i);
     }
     const Eigen::VectorXd grad = z - K * u;  // gradient of the concave objective

@@ -17,6 +17,7 @@
 #include <Eigen/LU>
 #include <boost/math/quadrature/gauss_kronrod.hpp>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/observers/lc_gaussian_filter.h"
 #include "ident/observers/truncated_gaussian_filter.h"
@@ -145,7 +146,7 @@ struct DenseEp {
         }
         const Eigen::MatrixXd pc = Vc.inverse();
         Eigen::MatrixXd lam = Vt.inverse() - pc;
-        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (lam + lam.transpose()));
+        const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig = dense::SymmetricEigen(0.5 * (lam + lam.transpose()));
         lam = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
         const Eigen::MatrixXd Vn = (pc + lam).inverse();
         const Eigen::VectorXd eta = (pc + lam) * mt - pc * mc;

@@ -14,6 +14,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/regression/regression_prior.h"
 
@@ -30,7 +31,7 @@ class BasicDenseRls {
     const Eigen::Index rho = prior.num_parameters();
     const Eigen::MatrixXd Vz = prior.V0.bottomRightCorner(rho, rho);
     const Eigen::VectorXd Vzy = prior.V0.bottomLeftCorner(rho, 1);
-    Eigen::LLT<Eigen::MatrixXd> llt(Vz);
+    const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(Vz);
     theta_ = llt.solve(Vzy);
     P_ = llt.solve(Eigen::MatrixXd::Identity(rho, rho)) / prior.nu0;
     nu_ = prior.nu0;

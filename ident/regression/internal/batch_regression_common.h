@@ -10,8 +10,8 @@
 #include <random>
 
 #include <Eigen/Core>
-#include <Eigen/QR>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::batch_regression_detail {
@@ -39,14 +39,13 @@ struct Orthonormalised {
 };
 
 inline Orthonormalised Orthonormalise(const Eigen::Ref<const Eigen::MatrixXd>& Z) {
-  const Eigen::Index n = Z.rows(), p = Z.cols();
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(Z);
+  const Eigen::Index p = Z.cols();
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr = dense::ColPivQr(Z);
   Orthonormalised f;
   f.rank = qr.rank();
   if (f.rank < p) return f;
-  f.Q = qr.householderQ() * Eigen::MatrixXd::Identity(n, p);
-  const Eigen::MatrixXd Rinv =
-      qr.matrixR().topLeftCorner(p, p).triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(p, p));
+  f.Q = dense::LeadingQColumns(qr, p);
+  const Eigen::MatrixXd Rinv = dense::UpperTriangularInverse(qr.matrixR().topLeftCorner(p, p));
   f.T = qr.colsPermutation() * Rinv;
   return f;
 }
@@ -63,7 +62,7 @@ inline Orthonormalised RequireFullRank(const Eigen::Ref<const Eigen::MatrixXd>& 
 inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y,
                         const Eigen::VectorXd& w, Eigen::VectorXd& beta, Eigen::MatrixXd& Qw) {
   Qw = Q.array().colwise() * w.array();
-  const Eigen::LLT<Eigen::MatrixXd> llt(Qw.transpose() * Q);
+  const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(Qw.transpose() * Q);
   if (llt.info() != Eigen::Success) return false;
   beta = llt.solve(Qw.transpose() * y);
   return beta.allFinite();

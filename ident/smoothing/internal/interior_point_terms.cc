@@ -1,5 +1,6 @@
 #include "ident/smoothing/internal/interior_point_terms.h"
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::internal::interior_point {
@@ -19,9 +20,9 @@ std::unique_ptr<Prepared> PreparePenalty(const Penalty& pen, double sigma) {
   prep->constant = !(f.lo.array().isFinite().any() || f.hi.array().isFinite().any());
   prep->identity_B = f.B.rows() == f.B.cols() && f.B.isIdentity(0.0) && f.b.isZero(0.0) && f.p.isZero(0.0);
   if (prep->constant) {
-    Eigen::LLT<Eigen::MatrixXd> llt(f.M);
+    const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(f.M);
     IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds", pen.Name());
-    prep->Kinv = llt.solve(Eigen::MatrixXd::Identity(prep->k, prep->k));
+    prep->Kinv = dense::Inverse(llt);
     prep->W = f.B.transpose() * prep->Kinv * f.B;
     prep->c0 = f.p - f.B.transpose() * (prep->Kinv * f.b);
   } else if (!f.diagonal_M) {

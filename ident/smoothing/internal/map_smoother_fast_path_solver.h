@@ -14,6 +14,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/linalg/internal/simd_clones.h"
 #include "ident/linalg/work_arena.h"
@@ -49,7 +50,7 @@ class FastSolver {
       if (std::find(seen.begin(), seen.end(), f) != seen.end()) continue;
       seen.push_back(f);
       const PlqForm& q = f->plq();
-      Eigen::LLT<Eigen::MatrixXd> llt(q.M);
+      const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(q.M);
       IDENT_REQUIRE(llt.info() == Eigen::Success, "{} penalty: M must be positive definite without bounds", f->Name());
       const Eigen::MatrixXd KinvB = llt.solve(q.B);
       process_.push_back({f, q.B.transpose() * KinvB, (q.p - KinvB.transpose() * q.b) / sigma_});  // in the unit σ

@@ -12,8 +12,8 @@
 
 #include <fmt/format.h>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 
+#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "ident/regression/rls.h"
 #include "ident/workflow/fit.h"
@@ -232,7 +232,7 @@ class Estimation {
     IDENT_REQUIRE(scale.allFinite(),
                   "{}: the regressors' sum of squares overflows (values near 1e308?); rescale the data", name);
     const Eigen::MatrixXd C = scale.cwiseInverse().asDiagonal() * G * scale.cwiseInverse().asDiagonal();
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig = dense::SymmetricEigen(C);
     IDENT_REQUIRE(eig.eigenvalues()(0) > 1e-12 * rho,
                   "{}: the regressors are collinear over the estimation part (smallest eigenvalue of their "
                   "correlation matrix {:.3g}); the model is not identifiable (if a gross outlier has moved the "
