@@ -74,7 +74,7 @@ struct SafeStudentOptions {
   long history_reserve = 0;        // samples the history is sized for at construction
   // The start-up's provisional prior (ρ+1 square), in place of StudentRegressionOptions::DefaultPrior's
   // diag(1, 1e−3·I), which is in absolute units: the provisional estimate judges the outputs that the
-  // workflow cleans before the start, so a prior in the data's own units (DataScaledProvisionalPrior) keeps
+  // workflow cleans before the start, so a prior in the data's own units (DataScaledProvisionalV0) keeps
   // those verdicts the same whatever the units. Ignored with an explicit `base.prior` or `base.exact`.
   std::optional<Eigen::MatrixXd> provisional_v0;
 };
