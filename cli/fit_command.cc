@@ -177,10 +177,13 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
       fmt::print("  robust start after update {} from its last {} samples\n", l.start_update, l.start_window);
     for (const RestartEvent& e : l.events)
       if (e.end_of_data)
-        fmt::print("    restart at the end of the data (update {}): a restart from the robust fit of all {} samples "
-                   "kept, replayed and refined by further passes, has the higher likelihood and replaces the "
-                   "estimate\n",
-                   e.update, e.replayed);
+        fmt::print(
+            "    restart at the end of the data (update {}): a restart from the robust fit of all {} samples "
+            "kept{}, replayed and refined by further passes, has the higher likelihood and replaces the "
+            "estimate\n",
+            e.update, e.replayed,
+            e.left_out ? fmt::format(" (and {} whose regressor carries a gross output outlier left out)", e.left_out)
+                       : "");
       else
         fmt::print("    restart at update {}{}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
                  e.update, e.pass > 1 ? fmt::format(" of pass {}", e.pass) : "", e.replayed,

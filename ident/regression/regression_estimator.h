@@ -52,6 +52,8 @@ struct RestartEvent {
   long update = 0;               // the update (1-based) at which the monitor flagged the lock-in
   long replayed = 0;             // samples the restarted estimator was run on (all kept samples)
   long dropped = 0;              // samples seen but no longer kept (history limit), not replayed
+  long left_out = 0;             // samples not replayed because their regressor carries a gross output outlier
+                                 // (an end-of-data restart's lagged-output screen)
   double low_weight_before = 0;  // share of the monitor window with νβ < threshold, at the flag
   double low_weight_after = 0;   // the same over the last window of the replay
   bool resolved = true;          // false: still more than half low after the replay (heavy tails, not

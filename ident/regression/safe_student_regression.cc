@@ -9,6 +9,7 @@
 
 #include "common/dense_decompositions.h"
 #include "ident/regression/batch_regression.h"
+#include "ident/regression/internal/lagged_output_screen.h"
 
 namespace ident {
 namespace {
@@ -48,11 +49,13 @@ int DefaultMonitorWindow(const SafeStudentOptions& o, int rho) {
 }
 
 // The window's rows without a regressor coordinate beyond kLeverage robust scales of its column (a gross
-// output outlier entering later ARX regressors is such a row), as long as at least 2ρ+1 rows remain.
+// output outlier entering later ARX regressors is such a row) and not `poisoned` (their regressor carries an
+// output the lagged-output screen flags, internal/lagged_output_screen.h), as long as at least 2ρ+1 rows remain.
 Eigen::MatrixXd OrdinaryRows(const Eigen::Ref<const Eigen::MatrixXd>& window,
+                             const Eigen::Array<bool, Eigen::Dynamic, 1>& poisoned,
                              Eigen::Array<bool, Eigen::Dynamic, 1>& keep) {
   const Eigen::Index rho = window.cols() - 1, n = window.rows();
-  keep = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(n, true);
+  keep = !poisoned;
   for (Eigen::Index j = 1; j <= rho; ++j) {
     Eigen::VectorXd column = window.col(j);
     std::nth_element(column.data(), column.data() + n / 2, column.data() + n);
@@ -125,11 +128,12 @@ double WindowInfluence(const Eigen::Ref<const Eigen::MatrixXd>& Z, const Eigen::
 // With `strict` = false (the end of the data: no later window can do better) only a rank-deficient window
 // has no start.
 std::optional<RegressionPrior> RobustWindowPrior(const Eigen::Ref<const Eigen::MatrixXd>& window,
+                                                 const Eigen::Array<bool, Eigen::Dynamic, 1>& poisoned,
                                                  const SafeStudentOptions& options, double nu0, double growth,
                                                  bool strict, Eigen::VectorXd& influence, double& seed) {
   const Eigen::Index rho = window.cols() - 1;
   Eigen::Array<bool, Eigen::Dynamic, 1> keep;
-  const Eigen::MatrixXd kept = OrdinaryRows(window, keep);
+  const Eigen::MatrixXd kept = OrdinaryRows(window, poisoned, keep);
   const auto Z = kept.rightCols(rho);
   try {
     CauchyMlOptions search;  // a window of tens of rows: fewer starts than a whole record needs
@@ -270,28 +274,43 @@ Eigen::ArrayXd SafeStudentRegression::KeptSquaredResiduals(const Eigen::VectorXd
   return r2;
 }
 
-double SafeStudentRegression::ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta) const {
-  // Student-t_k negative log-likelihood of the kept samples at Θ with the scale at its maximum-likelihood
+double SafeStudentRegression::ProfileNegativeLogLikelihood(
+    const Eigen::VectorXd& theta, const Eigen::Array<bool, Eigen::Dynamic, 1>& left_out) const {
+  const Eigen::ArrayXd all = KeptSquaredResiduals(theta);
+  if (left_out.size() != all.size() || !left_out.any()) return NegativeLogLikelihood(all);
+  Eigen::ArrayXd r2(all.size() - left_out.count());
+  for (Eigen::Index i = 0, j = 0; i < all.size(); ++i)
+    if (!left_out(i)) r2(j++) = all(i);
+  return NegativeLogLikelihood(r2);
+}
+
+double SafeStudentRegression::NegativeLogLikelihood(const Eigen::ArrayXd& r2) const {
+  // Student-t_k negative log-likelihood of residuals r (r2 = r²) with the scale at its maximum-likelihood
   // value (StudentScaleSquared); constants dropped.
   const double k = options_.base.dof;
-  const Eigen::ArrayXd r2 = KeptSquaredResiduals(theta);
   double start = std::pow(RobustScale(r2.sqrt().matrix()), 2);
   if (!(start > 0)) start = std::max(r2.mean(), 1e-300);
   const double s2 = StudentScaleSquared(r2, k, start);
   if (!(s2 > 0 && std::isfinite(s2))) return std::numeric_limits<double>::infinity();
-  return 0.5 * (k + 1) * (1 + r2 / (k * s2)).log().sum() + 0.5 * static_cast<double>(stored_) * std::log(s2);
+  return 0.5 * (k + 1) * (1 + r2 / (k * s2)).log().sum() + 0.5 * static_cast<double>(r2.size()) * std::log(s2);
 }
 
 bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
   if (!options_.restart_on_lock_in || stored_ != updates_ || stored_ > kMaxCompetingSamples) return false;
   try {
-    // The kept samples, oldest first (BeginPass clears the history; the candidates are fed them again).
-    Eigen::MatrixXd samples(num_parameters() + 1, stored_);
-    for (long i = 0; i < stored_; ++i) samples.col(i) = history_.col(Column(i));
     const std::size_t index = events_.size();
     std::optional<SafeStudentRegression> best;
-    double best_nll = ProfileNegativeLogLikelihood(parameters());
-    const WindowStart fit = FitWindow(stored_, StartWeight(RestartKind::kEndOfData, stored_), /*strict=*/true);
+    // Every hypothesis is judged on the same samples: the kept ones but those whose regressor carries a
+    // gross output outlier (the lagged-output screen of the fit of every kept sample), which no estimate should
+    // have to explain; the competitors start from the fit of those samples alone and replay them alone (the
+    // others count as dropped).
+    WindowStart fit = FitWindow(stored_, StartWeight(RestartKind::kEndOfData, stored_), /*strict=*/true);
+    double best_nll = ProfileNegativeLogLikelihood(parameters(), fit.poisoned);
+    SafeStudentRegression base = *this;
+    if (base.LeaveOut(fit.poisoned)) LeaveOut(fit, fit.poisoned);  // the fit has left them out already
+    // The samples the competitors see, oldest first (BeginPass clears the history; they are fed them again).
+    Eigen::MatrixXd samples(num_parameters() + 1, base.stored_);
+    for (long i = 0; i < base.stored_; ++i) samples.col(i) = base.history_.col(base.Column(i));
     // The start-up's D_y(0) carries the safety factor G^{(k+1)/k} against lock-in (spec §8); from a fit of
     // every sample the scale the fit found is a hypothesis of its own.
     const double k = options_.base.dof, safety = std::pow(options_.scale_growth, (k + 1) / k);
@@ -300,10 +319,10 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
       double scale_factor;
     } hypotheses[] = {{RestartKind::kEndOfData, 1}, {RestartKind::kEndOfData, 1 / safety}, {RestartKind::kLockIn, 1}};
     for (const auto& h : hypotheses) {
-      SafeStudentRegression candidate = *this;
+      SafeStudentRegression candidate = base;
       WindowStart start = fit;
       if (start.prior) {
-        start.prior->nu0 = StartWeight(h.kind, stored_);
+        start.prior->nu0 = StartWeight(h.kind, base.stored_);
         ScaleNoise(*start.prior, h.scale_factor);
       }
       candidate.StartFrom(std::move(start), h.kind);
@@ -311,7 +330,7 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
       // did; further passes from its estimate (BeginPass) let it settle, as --passes does.
       for (int pass = 1; pass < kCompetingPasses && candidate.BeginPass(); ++pass)
         for (long i = 0; i < samples.cols(); ++i) candidate.Update(samples(0, i), samples.col(i).tail(num_parameters()));
-      const double nll = candidate.ProfileNegativeLogLikelihood(candidate.parameters());
+      const double nll = candidate.ProfileNegativeLogLikelihood(candidate.parameters(), {});
       if (nll < best_nll) best_nll = nll, best = std::move(candidate);
     }
     if (!best) return false;
@@ -321,6 +340,34 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
   } catch (...) {
     return false;
   }
+}
+
+void SafeStudentRegression::LeaveOut(WindowStart& start, const Eigen::Array<bool, Eigen::Dynamic, 1>& left_out) {
+  const Eigen::Index n = start.window.rows(), k = n - left_out.count();
+  Eigen::MatrixXd window(k, start.window.cols());
+  Eigen::VectorXd influence(k);
+  for (Eigen::Index i = 0, j = 0; i < n; ++i) {
+    if (left_out(i)) continue;
+    window.row(j) = start.window.row(i);
+    influence(j++) = start.influence.size() == n ? start.influence(i) : 0.0;
+  }
+  start.window = std::move(window);
+  if (start.influence.size() == n) start.influence = std::move(influence);
+  start.poisoned = Eigen::Array<bool, Eigen::Dynamic, 1>::Constant(k, false);
+}
+
+bool SafeStudentRegression::LeaveOut(const Eigen::Array<bool, Eigen::Dynamic, 1>& left_out) {
+  if (left_out.size() != stored_ || !left_out.any() || left_out.count() > stored_ - 2 * num_parameters() - 2)
+    return false;
+  Eigen::MatrixXd kept(history_.rows(), history_.cols());
+  long k = 0;
+  for (long i = 0; i < stored_; ++i)
+    if (!left_out(i)) kept.col(k++) = history_.col(Column(i));
+  history_ = std::move(kept);
+  left_out_ += stored_ - k;
+  stored_ = k;
+  ring_start_ = 0;
+  return true;
 }
 
 double SafeStudentRegression::StartWeight(RestartKind kind, long recent) const {
@@ -344,7 +391,9 @@ SafeStudentRegression::WindowStart SafeStudentRegression::FitWindow(long recent,
     start.spread(j) = RobustScale(start.window.col(j + 1));
   }
   const double k = options_.base.dof, growth = std::pow(options_.scale_growth, (k + 1) / (2 * k));
-  start.prior = RobustWindowPrior(start.window, options_, nu0, growth, strict, start.influence, start.seed);
+  start.poisoned = internal::ScreenLaggedOutputs(start.window).poisoned;
+  start.prior =
+      RobustWindowPrior(start.window, start.poisoned, options_, nu0, growth, strict, start.influence, start.seed);
   return start;
 }
 
@@ -385,7 +434,8 @@ void SafeStudentRegression::StartFrom(WindowStart start, RestartKind kind) noexc
   event.pass = pass_;
   event.update = updates_;
   event.replayed = stored_;
-  event.dropped = updates_ - stored_;
+  event.dropped = updates_ - stored_ - left_out_;
+  event.left_out = left_out_;
   event.low_weight_before = low_before;
   event.low_weight_after = monitor_.low_fraction();
   event.resolved = !monitor_.flagged();
@@ -411,7 +461,7 @@ bool SafeStudentRegression::BeginPass() {
   est_ = StudentRegression(num_parameters(), o);
   est_->use_sandwich_covariance(true);  // the samples again: the estimate settles at the M-estimator's
   start_influence_.resize(0);
-  stored_ = ring_start_ = updates_ = 0;
+  stored_ = ring_start_ = updates_ = left_out_ = 0;
   next_restart_ = 0;
   backoff_ = 1;
   started_ = true;
@@ -422,7 +472,7 @@ bool SafeStudentRegression::BeginPass() {
 
 void SafeStudentRegression::Reset() {
   est_ = StudentRegression(num_parameters(), Provisional(options_.base, num_parameters(), options_.provisional_v0));
-  stored_ = ring_start_ = updates_ = 0;
+  stored_ = ring_start_ = updates_ = left_out_ = 0;
   next_restart_ = 0;
   backoff_ = 1;
   started_ = false;

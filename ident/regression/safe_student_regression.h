@@ -206,6 +206,7 @@ class SafeStudentRegression {
   // on it, and the regressors' median and robust scale (the leverage guard's reference).
   struct WindowStart {
     Eigen::MatrixXd window;
+    Eigen::Array<bool, Eigen::Dynamic, 1> poisoned;  // rows whose regressor carries a gross output outlier
     Eigen::VectorXd centre, spread, influence;
     std::optional<RegressionPrior> prior;
     double seed = 0;
@@ -222,9 +223,19 @@ class SafeStudentRegression {
   void Replay() noexcept;
   // (y − Θ'z)² of every kept sample, oldest first.
   Eigen::ArrayXd KeptSquaredResiduals(const Eigen::VectorXd& theta) const;
-  // Student-t_k NLL of the kept samples at Θ, scale at its ML value (constants dropped).
-  double ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta) const;
+  // Student-t_k NLL of the kept samples at Θ but those `left_out` (one flag per kept sample, oldest first),
+  // scale at its ML value (constants dropped).
+  double ProfileNegativeLogLikelihood(const Eigen::VectorXd& theta,
+                                      const Eigen::Array<bool, Eigen::Dynamic, 1>& left_out) const;
+  // Student-t_k NLL of residuals r given as r² (scale at its ML value, constants dropped).
+  double NegativeLogLikelihood(const Eigen::ArrayXd& r2) const;
   bool CompeteWithRobustRestart() noexcept;
+  // Removes the kept samples marked in `left_out` (one flag per kept sample, oldest first) from the history, so
+  // that a restart replays the others alone. False (nothing removed) unless some are marked and at least
+  // 2ρ+2 samples remain.
+  bool LeaveOut(const Eigen::Array<bool, Eigen::Dynamic, 1>& left_out);
+  // The same rows out of a window's start (its window rows and their influence on the fit).
+  static void LeaveOut(WindowStart& start, const Eigen::Array<bool, Eigen::Dynamic, 1>& left_out);
 
   SafeStudentOptions options_;
   std::optional<StudentRegression> est_;
@@ -235,6 +246,7 @@ class SafeStudentRegression {
   Eigen::VectorXd start_influence_;  // influence of the last (re)start window's samples on its fit
   Eigen::VectorXd centre_, spread_;  // median and robust scale of each regressor in the last (re)start window
   long stored_ = 0, ring_start_ = 0, updates_ = 0, next_restart_ = 0, backoff_ = 1;
+  long left_out_ = 0;  // updates no longer kept because LeaveOut removed them (not the history limit)
   int lock_ins_ = 0;
   int pass_ = 1;  // RestartEvent::pass
   std::vector<RestartEvent> events_;

@@ -17,6 +17,7 @@ nlohmann::ordered_json RestartEventsJson(const std::vector<RestartEvent>& events
     list.push_back({{"update", e.update},
                     {"replayed", e.replayed},
                     {"dropped", e.dropped},
+                    {"left_out", e.left_out},
                     {"low_weight_before", e.low_weight_before},
                     {"low_weight_after", e.low_weight_after},
                     {"resolved", e.resolved},

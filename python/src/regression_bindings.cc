@@ -138,6 +138,7 @@ py::object LockInDict(const std::optional<LockInStatus>& status) {
     d["update"] = e.update;
     d["replayed"] = e.replayed;
     d["dropped"] = e.dropped;
+    d["left_out"] = e.left_out;
     d["low_weight_before"] = e.low_weight_before;
     d["low_weight_after"] = e.low_weight_after;
     d["resolved"] = e.resolved;

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "ident/regression/batch_regression.h"
+#include "ident/regression/internal/lagged_output_screen.h"
 #include "ident/regression/lock_in_monitor.h"
 #include "ident/regression/regression_prior.h"
 #include "ident/regression/rls.h"
@@ -160,9 +161,14 @@ TEST(SafeStudentRegression, RecoversFromTheCauchyLockIn) {
   EXPECT_GE(locked, 2);  // the mechanism is reproduced (76 of 200 runs in the study)
 }
 
-// The documented robust prior of a window (ident/regression/safe_student_regression.h), rebuilt here from the public
-// parts: Cauchy ML of the window, weights 2/(1 + r²/γ²), M_w, σ0 = G^{(k+1)/(2k)}·RobustScale(r).
-RegressionPrior RobustPriorOf(const Eigen::MatrixXd& window, double nu0, double dof, double growth = 4) {
+// The documented robust prior of a window (ident/regression/safe_student_regression.h), rebuilt here from its
+// parts: Cauchy ML of the window's rows that carry no gross output outlier (the lagged-output screen), weights
+// 2/(1 + r²/γ²), M_w, σ0 = G^{(k+1)/(2k)}·RobustScale(r).
+RegressionPrior RobustPriorOf(const Eigen::MatrixXd& all_rows, double nu0, double dof, double growth = 4) {
+  const Eigen::Array<bool, Eigen::Dynamic, 1> poisoned = internal::ScreenLaggedOutputs(all_rows).poisoned;
+  Eigen::MatrixXd window(all_rows.rows() - poisoned.count(), all_rows.cols());
+  for (Eigen::Index i = 0, k = 0; i < all_rows.rows(); ++i)
+    if (!poisoned(i)) window.row(k++) = all_rows.row(i);
   const Eigen::MatrixXd Z = window.rightCols(window.cols() - 1);
   const BatchRegressionResult fit = CauchyMlRegression(Z, window.col(0));
   const Eigen::VectorXd r = window.col(0) - Z * fit.theta;
