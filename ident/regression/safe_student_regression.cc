@@ -302,8 +302,8 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
     std::optional<SafeStudentRegression> best;
     // Every hypothesis is judged on the same samples: the kept ones but those whose regressor carries a
     // gross output outlier (the lagged-output screen of the fit of every kept sample), which no estimate should
-    // have to explain; the competitors start from the fit of those samples alone and replay them alone (the
-    // others count as dropped).
+    // have to explain; the competitors start from the fit of the others and replay them alone (the left-out
+    // ones are reported as RestartEvent::left_out).
     WindowStart fit = FitWindow(stored_, StartWeight(RestartKind::kEndOfData, stored_), /*strict=*/true);
     double best_nll = ProfileNegativeLogLikelihood(parameters(), fit.poisoned);
     SafeStudentRegression base = *this;

@@ -5,8 +5,8 @@
 //   1. Robust start. The first W = max(20, 4ρ) samples run on the provisional prior ν(0) = ρ+k+δ,
 //      V(0) = diag(1, 1e−3·I), or `provisional_v0` in the data's units (the workflow's choice). Then a
 //      high-breakdown batch fit of the window (Cauchy maximum likelihood from elemental-subset starts,
-//      ident/regression/batch_regression.h, leaving out rows with a regressor beyond five robust scales)
-//      gives Θ_r, and the estimator restarts from the class member of W pseudo-samples centred there
+//      ident/regression/batch_regression.h, leaving out rows with a regressor beyond five robust scales and
+//      rows whose regressor carries a gross output outlier, internal/lagged_output_screen.h) gives Θ_r, and the estimator restarts from the class member of W pseudo-samples centred there
 //      (D_y(0) = G^{(k+1)/k}·s_e², s_e the residuals' robust scale) and replays the window.
 //      Outliers in y and in the regressors, up to the fit's breakdown point, do not move the start. While
 //      the window does not determine every coefficient from its inliers — regressors not identifiable (a
@@ -159,7 +159,9 @@ class SafeStudentRegression {
   // (ν0 = ρ+k+δ), each followed by a replay of every kept sample and kCompetingPasses − 1 further passes
   // (BeginPass). The one with the highest Student-t_k likelihood of the kept samples (scale profiled out)
   // is kept, a hypothesis if it beats the recursion's; an adopted one is recorded
-  // (RestartEvent::end_of_data). Up to kMaxCompetingSamples kept samples (the robust fit, made once, costs
+  // (RestartEvent::end_of_data). Samples whose regressor carries a gross output outlier (the fit's
+  // lagged-output screen) take no part: the likelihoods leave them out and the hypotheses replay the
+  // others alone (RestartEvent::left_out). Up to kMaxCompetingSamples kept samples (the robust fit, made once, costs
   // O(nρ²) per start it tries); none of this with `base.exact` or without restarts. The workflow calls it
   // after FinishStartup when the regressors do not depend on the estimate (not ARMAX/OE).
   bool ReconsiderAtEnd() noexcept;
