@@ -209,7 +209,7 @@ TEST(SafeStudentRegression, RestartReplaysEverySampleFromTheRobustPriorOfTheRece
   SafeStudentRegression safe(4, WithPrior(1e-6));
   const int R = 100;  // max(W, M) for ρ = 4 with an explicit prior: M = max(100, 20ρ)
   int t = 0;
-  while (safe.restarts() == 0 && t < 1500) safe.Update(d.y[t], d.z[t]), ++t;
+  while (safe.restarts() == 0 && t < std::ssize(d.y)) safe.Update(d.y[t], d.z[t]), ++t;
   ASSERT_EQ(safe.restarts(), 1);
   const StudentRegression rebuilt = Replayed(RobustPriorOf(WindowOf(d, t - R, t), 6, 1), d, 0, t);
   EXPECT_LT((safe.parameters() - rebuilt.parameters()).norm(), 1e-12 * rebuilt.parameters().norm());
@@ -238,11 +238,12 @@ TEST(SafeStudentRegression, StartUpPriorFollowsTheRule) {
   EXPECT_LT((safe.prior().V0 - expected.V0).norm(), 1e-12 * expected.V0.norm());
   EXPECT_EQ(safe.prior().nu0, 20);
   StudentRegression plain = Replayed(safe.prior(), d, 0, 20, 3);
-  for (int t = 20; t < 200; ++t) {
+  const int n = static_cast<int>(d.y.size());  // 198 regressions from 200 samples
+  for (int t = 20; t < n; ++t) {
     const StepReport a = safe.Update(d.y[t], d.z[t]), b = plain.Update(d.y[t], d.z[t]);
     ASSERT_EQ(a.weight, b.weight) << t;
   }
-  EXPECT_EQ(safe.nu(), 20 + 200);
+  EXPECT_EQ(safe.nu(), 20 + n);
 }
 
 // The start waits while the window cannot determine every coefficient from its inliers: here the second
@@ -362,7 +363,7 @@ TEST(SafeStudentRegression, UpdateDoesNotAllocateBetweenRestartsAndTheHistoryIsB
   limited.history_limit = 150;
   SafeStudentRegression ring(4, limited);
   const Arx locked = Simulate(1000, 1500);
-  for (int t = 0; t < 1500; ++t) ring.Update(locked.y[t], locked.z[t]);
+  for (int t = 0; t < std::ssize(locked.y); ++t) ring.Update(locked.y[t], locked.z[t]);
   EXPECT_EQ(ring.history_size(), 150);
   for (const RestartEvent& e : ring.restart_events()) {
     EXPECT_EQ(e.replayed, std::min<long>(e.update, 150));
