@@ -13,17 +13,20 @@
 //      a link is then used at each row whose coordinate equals s·y of the row k earlier or, where rows were
 //      left out in between, of a nearer one (so the screen needs no time index);
 //   2. Θ_s by least trimmed squares (Rousseeuw 1984) over the rows that carry no flagged output: elemental
-//      starts (ρ rows solved exactly), two C-steps each, the best ten to convergence (Rousseeuw & Van Driessen
-//      2006); an output is flagged when its error against the prediction is beyond kGross scales (scale: the
+//      starts (ρ rows solved exactly; enough that one is free of 30 % contamination with probability
+//      1 − 1e−4, at least 30, at most 500), two C-steps each, the best five refined by up to ten more
+//      (Rousseeuw & Van Driessen 2006); an output is flagged when its error against the prediction is beyond kGross scales (scale: the
 //      h-th smallest |residual|, h = ⌊(n+ρ+1)/2⌋), the prediction taken from a regressor whose carried outputs
 //      are replaced by their predictions where those were flagged (the robust filter that
 //      models/output_cleaner.h runs on a recording);
 //   3. reports, per row, whether its output is flagged and whether its regressor carries a flagged output
 //      (poisoned: the robust start leaves such rows out, as the workflow leaves out equations that hold a
-//      cleaned output).
+//      cleaned output); an innovation outlier, which the next row predicts from the measured value within
+//      the threshold and better than from the prediction, is not flagged.
 // Without links, or when no output is flagged, nothing is left out: data without gross output outliers, and
 // static regressions, are fitted as before. Windows longer than 512 rows search for Θ_s on their last 512 and
-// refine it on all rows. Deterministic (a fixed-seed generator). Cost O(s·n·ρ + n·ρ²) with s ≤ 500 starts.
+// refine it by three C-steps on all rows. Deterministic (a fixed-seed generator). Cost O(s·m·ρ + n·ρ²) for
+// s starts on m ≤ 512 rows.
 #pragma once
 
 #include <Eigen/Core>
