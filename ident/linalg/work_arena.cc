@@ -18,7 +18,7 @@ constexpr std::size_t kHugePage = std::size_t{2} << 20;
 constexpr std::size_t kAlign = 64;
 }  // namespace
 
-WorkArena::WorkArena(std::size_t num_doubles) : capacity_(Padded(num_doubles)) {
+WorkArena::WorkArena(std::size_t num_doubles, std::size_t huge_page_limit) : capacity_(Padded(num_doubles)) {
   const std::size_t bytes = std::max<std::size_t>(capacity_, 8) * sizeof(double);
 #if defined(__linux__)
   if (bytes >= kHugePageThreshold) {
@@ -30,8 +30,9 @@ WorkArena::WorkArena(std::size_t num_doubles) : capacity_(Padded(num_doubles)) {
       mapped_bytes_ = length;
       const auto start = (reinterpret_cast<std::uintptr_t>(p) + kHugePage - 1) & ~(kHugePage - 1);
       data_ = reinterpret_cast<double*>(start);
-      madvise(data_, length - kHugePage, MADV_HUGEPAGE);  // advice only: ignored where unsupported
-      return;                                             // anonymous mappings are zero-filled
+      huge_pages_ = bytes <= huge_page_limit;
+      if (huge_pages_) madvise(data_, length - kHugePage, MADV_HUGEPAGE);  // advice only: ignored where unsupported
+      return;                                                              // anonymous mappings are zero-filled
     }
   }
 #endif

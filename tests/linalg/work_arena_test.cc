@@ -1,5 +1,5 @@
-// WorkArena: zeroed, aligned, disjoint arrays within the capacity; huge pages only for large blocks;
-// over-use is an InvalidArgument.
+// WorkArena: zeroed, aligned, disjoint arrays within the capacity; huge pages only for large blocks, up to the
+// caller's limit; over-use is an InvalidArgument.
 #include "ident/linalg/work_arena.h"
 
 #include <cstdint>
@@ -41,6 +41,19 @@ TEST(WorkArena, LargeBlocksAreZeroedAlignedAndDisjoint) {
 #if defined(__linux__)
   WorkArena arena(WorkArena::kHugePageThreshold / sizeof(double));
   EXPECT_TRUE(arena.huge_pages_requested());
+#endif
+}
+
+TEST(WorkArena, BlocksBeyondTheHugePageLimitAreMappedWithSmallPages) {
+  const std::size_t n = 3 * WorkArena::kHugePageThreshold / sizeof(double);
+  WorkArena arena(n, /*huge_page_limit=*/2 * WorkArena::kHugePageThreshold);
+  EXPECT_FALSE(arena.huge_pages_requested());
+  double* a = arena.Take(n);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(a) % 64, 0u);
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(a[i], 0.0) << i;
+#if defined(__linux__)
+  WorkArena within(n, /*huge_page_limit=*/n * sizeof(double));
+  EXPECT_TRUE(within.huge_pages_requested());
 #endif
 }
 

@@ -32,6 +32,11 @@ using models::PlqForm;
 // record takes far longer than handing it to the worker.
 constexpr int kParallelMinSteps = 1024;
 
+// The step records take huge pages only up to this many bytes, about a last-level cache (WorkArena): every pass
+// streams them in order, and beyond the cache it runs as fast on 4 KiB pages, whose first touch costs less on
+// virtual machines (bench/compare_cvxopt.py times T = 10^5 and 10^6).
+constexpr std::size_t kStepRecordsHugePageLimit = std::size_t{32} << 20;
+
 template <int kN>
 class FastSolver {
  public:
@@ -65,7 +70,8 @@ class FastSolver {
     }
     const std::size_t N = T_ + 1;
     const std::size_t state_doubles = (sizeof(StepState<kN>) + sizeof(double) - 1) / sizeof(double);
-    arena_ = std::make_unique<WorkArena>(WorkArena::Padded(N * state_doubles) + WorkArena::Padded(N * kN));
+    arena_ = std::make_unique<WorkArena>(WorkArena::Padded(N * state_doubles) + WorkArena::Padded(N * kN),
+                                         kStepRecordsHugePageLimit);
     steps_ = reinterpret_cast<StepState<kN>*>(arena_->Take(N * state_doubles));
     x_ = arena_->Take(N * kN);
     // The records' first writes, split between the two threads as the passes are: at large T the first touch
