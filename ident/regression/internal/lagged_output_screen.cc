@@ -85,18 +85,23 @@ std::optional<Link> FindLink(const Rows& r, int column) {
 // which later rows that carry it use in its place (those rows are poisoned) — unless the first row that carries
 // it is predicted from the measured value within the threshold, and better than from the prediction: then it
 // was an innovation, which the dynamics carry on, and it is unflagged (the cleaner's test, models/output_cleaner.h
-// Restore).
+// Restore). A row whose regressor carries an output from before the first row cannot have that output judged:
+// if its error is beyond the threshold and its own output is not flagged in the end, it is poisoned too (a gross
+// carried output makes it a bad leverage row; an innovation there, which reads the same, has little weight in a
+// robust fit anyway).
 struct Filtered {
   std::vector<char> flagged, poisoned;
   std::vector<double> stored;
+  std::vector<char> gross_carrying_earlier;  // error beyond the threshold, carries an output from before row 0
 };
 void Filter(const Rows& r, const std::vector<Link>& links, const double* theta, double threshold, Filtered& f) {
   for (long i = 0; i < r.n; ++i) {
     const double y = r.y[static_cast<std::size_t>(i)], measured = r.Predict(i, theta);
     double cleaned = measured;
-    bool carries = false;
+    bool carries = false, carries_earlier = false;
     for (const Link& l : links) {
       const long p = Source(r, i, l);
+      carries_earlier = carries_earlier || (p < 0 && i < l.lag);
       if (p < 0 || !f.flagged[static_cast<std::size_t>(p)]) continue;
       cleaned += theta[l.column] * (l.sign * f.stored[static_cast<std::size_t>(p)] - r.Z(i)[l.column]);
       carries = true;
@@ -116,8 +121,11 @@ void Filter(const Rows& r, const std::vector<Link>& links, const double* theta, 
     const auto k = static_cast<std::size_t>(i);
     f.poisoned[k] = carries;
     f.flagged[k] = std::abs(y - prediction) > threshold;
+    f.gross_carrying_earlier[k] = carries_earlier && f.flagged[k];
     f.stored[k] = f.flagged[k] ? prediction : y;
   }
+  for (std::size_t k = 0; k < f.flagged.size(); ++k)
+    if (f.gross_carrying_earlier[k] && !f.flagged[k]) f.poisoned[k] = 1;
 }
 
 std::optional<Eigen::VectorXd> Finite(Eigen::VectorXd theta) {
@@ -135,7 +143,7 @@ class Fit {
         links_(links),
         h_((rows.n + rows.rho + 1) / 2),
         f_{std::vector<char>(static_cast<std::size_t>(rows.n)), std::vector<char>(static_cast<std::size_t>(rows.n)),
-           std::vector<double>(static_cast<std::size_t>(rows.n))},
+           std::vector<double>(static_cast<std::size_t>(rows.n)), std::vector<char>(static_cast<std::size_t>(rows.n))},
         residual_(static_cast<std::size_t>(rows.n)),
         work_(static_cast<std::size_t>(rows.n)) {
     selected_.reserve(static_cast<std::size_t>(rows.n));

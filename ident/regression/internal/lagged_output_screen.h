@@ -22,7 +22,10 @@
 //   3. reports, per row, whether its output is flagged and whether its regressor carries a flagged output
 //      (poisoned: the robust start leaves such rows out, as the workflow leaves out equations that hold a
 //      cleaned output); an innovation outlier, which the next row predicts from the measured value within
-//      the threshold and better than from the prediction, is not flagged.
+//      the threshold and better than from the prediction, is not flagged. A first row whose regressor carries
+//      an output from before the window, which no row of the window can judge, is poisoned when its error is
+//      beyond the threshold and its own output is not flagged (a gross carried output makes it a bad
+//      leverage row; an innovation there, which reads the same, has little weight in a robust fit anyway).
 // Without links, or when no output is flagged, nothing is left out: data without gross output outliers, and
 // static regressions, are fitted as before. Windows longer than 512 rows search for Θ_s on their last 512 and
 // refine it by three C-steps on all rows. Deterministic (a fixed-seed generator). Cost O(s·m·ρ + n·ρ²) for
@@ -38,7 +41,7 @@ struct LaggedOutputScreen {
 
   bool linked = false;                             // some regressor coordinate carries earlier outputs
   Eigen::Array<bool, Eigen::Dynamic, 1> flagged;   // the row's output is a gross error
-  Eigen::Array<bool, Eigen::Dynamic, 1> poisoned;  // the row's regressor carries a flagged output
+  Eigen::Array<bool, Eigen::Dynamic, 1> poisoned;  // the row's regressor carries a flagged (or unjudged) output
 };
 
 // `window`: rows (y, z'), oldest first. Never throws for finite rows; all-false masks if nothing is found.
