@@ -49,7 +49,7 @@ class WorkArena {
  private:
   double* data_ = nullptr;
   std::size_t capacity_ = 0, used_ = 0;
-  void* mapping_ = nullptr;  // mmap'ed block (huge-page case), else nullptr
+  void* mapping_ = nullptr;  // the mmap'ed block of a large arena, else nullptr
   std::size_t mapped_bytes_ = 0;
   bool huge_pages_ = false;
 };
