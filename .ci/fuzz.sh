@@ -6,7 +6,8 @@
 #   .ci/fuzz.sh                      every target, 60 s each
 #   IDENT_FUZZ_SECONDS=10 .ci/fuzz.sh csv_fuzzer rls_fuzzer
 #
-# Environment: IDENT_FUZZ_SECONDS (default 60) per target, IDENT_FUZZ_BUILD (default build-fuzz),
+# Environment: IDENT_FUZZ_SECONDS (default 60) per target, IDENT_FUZZ_TIMEOUT (default 10: seconds one input may
+# take before it counts as a hang; a slower build needs more), IDENT_FUZZ_BUILD (default build-fuzz),
 # IDENT_FUZZ_OUT (default $IDENT_FUZZ_BUILD/runs), CXX (default clang++), IDENT_FUZZ_JOBS (default 2: build
 # parallelism and the number of targets fuzzed at the same time), IDENT_FUZZ_PARALLEL (default
 # IDENT_FUZZ_JOBS: the number of targets fuzzed at the same time, if it should differ).
@@ -14,6 +15,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${IDENT_FUZZ_SECONDS:-60}"
+timeout="${IDENT_FUZZ_TIMEOUT:-10}"
 build="${IDENT_FUZZ_BUILD:-$root/build-fuzz}"
 out="${IDENT_FUZZ_OUT:-$build/runs}"
 jobs="${IDENT_FUZZ_JOBS:-2}"
@@ -57,8 +59,8 @@ run_target() {
   local seeds="$root/fuzz/corpus/$t"
   [ -d "$seeds" ] && cp -r "$seeds"/. "$work/corpus/"
   local log="$work/log.txt" status=ok
-  # -timeout: one input taking > 10 s is a hang; -rss_limit_mb: runaway memory is a finding.
-  if ! "$build/fuzz/$t" "$work/corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+  # -timeout: one input taking longer is a hang; -rss_limit_mb: runaway memory is a finding.
+  if ! "$build/fuzz/$t" "$work/corpus" -max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb=2048 \
         -artifact_prefix="$work/" -print_final_stats=1 >"$log" 2>&1; then
     status="FAILED (see $log)"
   fi
