@@ -65,7 +65,7 @@ def file_reads(cmd, path):
     if shutil.which("strace") is None:
         return None
     with tempfile.NamedTemporaryFile(suffix=".strace") as log:
-        subprocess.run(["strace", "-f", "-e", "trace=openat,read,close", "-o", log.name] + cmd, check=True,
+        subprocess.run(["strace", "-f", "-e", "trace=openat,read,pread64,close", "-o", log.name] + cmd, check=True,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         opens, read_bytes, fds = 0, 0, set()
         name = re.escape(os.path.basename(path))
@@ -76,7 +76,7 @@ def file_reads(cmd, path):
                     opens += 1
                     fds.add(m.group(1))
                     continue
-                m = re.search(r"\bread\((\d+), .*\) = (\d+)$", line)
+                m = re.search(r"\b(?:read|pread64)\((\d+), .*\) = (\d+)$", line)
                 if m and m.group(1) in fds:
                     read_bytes += int(m.group(2))
                     continue

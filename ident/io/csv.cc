@@ -183,25 +183,9 @@ double CsvReader::ParseUncommonCell(std::string_view cell, int column) const {
 }
 
 bool CsvReader::ParsePlainRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) const {
-  // Each cell converted from where the previous one ended: the number must end at the separator (or the
-  // line's end) and be finite. Anything else (spaces, '+', an empty, bad or non-finite cell, a wrong
-  // number of fields) is left to ParseRow's general walk, which reads the same cells to the same values.
-  const char* p = text.data();
-  const char* const end = p + text.size();
-  const int n = num_columns();
-  for (int column = 0; column < n; ++column) {
-    double value = 0;
-    const auto [ptr, ec] = std::from_chars(p, end, value);
-    if (ec != std::errc() || ptr == p || !std::isfinite(value)) return false;
-    if (ptr == end) {
-      if (column + 1 != n) return false;
-    } else if (*ptr != separator_ || column + 1 == n) {
-      return false;
-    }
-    row(column) = value;
-    p = ptr + 1;
-  }
-  return true;
+  // Anything but plain cells is left to ParseRow's general walk, which reads the same cells to the same
+  // values.
+  return internal::ParsePlainFields(text.data(), text.data() + text.size(), separator_, num_columns(), row.data());
 }
 
 void CsvReader::ParseRow(std::string_view text, Eigen::Ref<Eigen::VectorXd> row) {

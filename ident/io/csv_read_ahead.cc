@@ -3,6 +3,10 @@
 #include "ident/io/csv_read_ahead.h"
 
 #include <algorithm>
+#include <filesystem>
+#include <system_error>
+
+#include <fmt/format.h>
 
 #include "common/error.h"
 
@@ -13,14 +17,35 @@ namespace {
 // Values per block at most: wide files get blocks of fewer rows.
 constexpr int kBlockValues = 1 << 16;
 
+// The delimiter's character; 0 for runs of spaces and tabs.
+char Separator(Delimiter delimiter) {
+  switch (delimiter) {
+    case Delimiter::kSemicolon:
+      return ';';
+    case Delimiter::kTab:
+      return '\t';
+    case Delimiter::kWhitespace:
+      return 0;
+    default:
+      return ',';
+  }
+}
+
 }  // namespace
 
-CsvReadAhead::CsvReadAhead(const std::string& path, const CsvOptions& options) {
+CsvReadAhead::CsvReadAhead(const std::string& path, const CsvOptions& options, int threads) : options_(options) {
   auto reader = std::make_unique<CsvReader>(path, options);
   path_ = reader->path();
   names_ = reader->names();
   generated_names_ = reader->generated_names();
   const int n = num_columns();
+  long file_size = 0;
+  threads = std::min(threads, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+  if (threads >= 1 && ReadsInSegments(path, *reader, &file_size)) {
+    segments_ = std::make_unique<internal::PlainSegments>(path, !generated_names_, file_size,
+                                                          Separator(reader->delimiter()), n, threads, kSegmentBytes);
+    return;
+  }
   block_rows_ = std::clamp(kBlockValues / n, 1, kBlockRows);
   for (Block& block : blocks_) {
     block.values.resize(static_cast<std::size_t>(block_rows_) * static_cast<std::size_t>(n));
@@ -29,7 +54,17 @@ CsvReadAhead::CsvReadAhead(const std::string& path, const CsvOptions& options) {
   thread_ = std::thread(&CsvReadAhead::Read, this, std::move(reader));
 }
 
+bool CsvReadAhead::ReadsInSegments(const std::string& path, const CsvReader& reader, long* file_size) const {
+  if (options_.on_read || reader.delimiter() == Delimiter::kWhitespace || !CanReadTwice(path)) return false;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec || size < static_cast<std::uintmax_t>(kSegmentedFileBytes)) return false;
+  *file_size = static_cast<long>(size);
+  return true;
+}
+
 CsvReadAhead::~CsvReadAhead() {
+  if (!thread_.joinable()) return;
   stop_.store(true);
   for (Block& block : blocks_) {  // wakes the reading thread if it waits for a block
     block.full.store(false);
@@ -67,8 +102,34 @@ void CsvReadAhead::Read(std::unique_ptr<CsvReader> reader) {
   }
 }
 
+bool CsvReadAhead::NextFromSegments(Eigen::Ref<Eigen::VectorXd> row) {
+  if (segments_) {
+    if (segments_->Next(row.data())) {
+      line_ = segments_->first_line() + rows_;
+      ++rows_;
+      return true;
+    }
+    const bool stopped = segments_->stopped();
+    segments_.reset();
+    if (!stopped) {
+      ended_ = true;
+      return false;
+    }
+    // A line that is not a plain row: CsvReader reads on from there, after the rows given.
+    rest_ = std::make_unique<CsvReadAhead>(path_, options_, 0);
+    Eigen::VectorXd skipped(num_columns());
+    for (long r = 0; r < rows_; ++r)
+      if (!rest_->Next(skipped)) throw DataError(fmt::format("{}: the file changed while it was read", path_));
+  }
+  const bool got = rest_->Next(row);
+  line_ = rest_->line();
+  ended_ = !got;
+  return got;
+}
+
 bool CsvReadAhead::Next(Eigen::Ref<Eigen::VectorXd> row) {
   IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(), num_columns());
+  if (segments_ || rest_) return !ended_ && NextFromSegments(row);
   while (!ended_) {
     Block& block = blocks_[static_cast<std::size_t>(block_)];
     if (!holding_) {

@@ -1,11 +1,17 @@
-// Reading a CSV file's rows while they are used: a CsvReader run on a second thread, a few blocks of rows
-// ahead of the caller.
+// Reading a CSV file's rows while they are used, a few blocks of rows ahead of the caller, on other threads.
+//
+// A large regular file whose first line is its header (or first row) is cut into segments that `threads`
+// threads parse in turn (internal/plain_segments.h), for as long as its lines are plain rows; from the first
+// line that is not, a CsvReader on one thread reads on. Any other input is read by a CsvReader on one thread.
+// More than one thread pays where the caller does little with each row (a sum, a count); where its work per
+// row is as large as the parsing, one thread keeps up.
 //
 // The rows, their line numbers and the reader's errors arrive in file order, as CsvReader::Next gives
 // them: a DataError at some row is thrown by the Next() that would have returned that row, after every
 // row before it. Parsing (most of what reading a long record costs) overlaps with the caller's work on the
-// rows before; memory stays constant (kBlocks blocks of at most kBlockRows rows). Destroying the reader early
-// stops the thread. CsvOptions::on_read, if set, is called on the reading thread.
+// rows before; memory stays constant (a few blocks of at most kBlockRows rows, and one segment per thread).
+// Destroying the reader early stops the threads. CsvOptions::on_read, if set, is called on the reading
+// thread (such a reader takes the CsvReader path).
 //
 // Example:
 //   ident::io::CsvReadAhead reader("long.csv");
@@ -24,6 +30,7 @@
 #include <Eigen/Core>
 
 #include "ident/io/csv.h"
+#include "ident/io/internal/plain_segments.h"
 
 namespace ident::io {
 
@@ -31,10 +38,14 @@ class CsvReadAhead {
  public:
   static constexpr int kBlocks = 4;
   static constexpr int kBlockRows = 2048;
+  // Files of at least this many bytes are read in segments.
+  static constexpr long kSegmentedFileBytes = 8L << 20;
+  static constexpr long kSegmentBytes = 1L << 20;
 
   // Opens the file and reads its header on the calling thread (throws DataError as CsvReader does), then
-  // starts reading rows.
-  explicit CsvReadAhead(const std::string& path, const CsvOptions& options = {});
+  // starts reading rows: segments on `threads` threads (at most the machine's cores), or, with `threads` 0 or
+  // a file that is not read in segments, a CsvReader.
+  explicit CsvReadAhead(const std::string& path, const CsvOptions& options = {}, int threads = 1);
   ~CsvReadAhead();
   CsvReadAhead(const CsvReadAhead&) = delete;
   CsvReadAhead& operator=(const CsvReadAhead&) = delete;
@@ -62,6 +73,10 @@ class CsvReadAhead {
   };
 
   void Read(std::unique_ptr<CsvReader> reader);  // the reading thread
+  // Whether the file is one to read in segments (*file_size its size): a large regular file, read without
+  // CsvOptions::on_read, whose delimiter is one character. PlainSegments checks its first line.
+  bool ReadsInSegments(const std::string& path, const CsvReader& reader, long* file_size) const;
+  bool NextFromSegments(Eigen::Ref<Eigen::VectorXd> row);
 
   // Set before the reading thread starts, read by both.
   std::string path_;
@@ -78,6 +93,12 @@ class CsvReadAhead {
   std::array<Block, kBlocks> blocks_;
   alignas(64) std::atomic<bool> stop_{false};
   std::thread thread_;
+  // The segments, the rows given from them; then the reader that goes on from the first line that is not a
+  // plain row.
+  CsvOptions options_;
+  std::unique_ptr<internal::PlainSegments> segments_;
+  long rows_ = 0;
+  std::unique_ptr<CsvReadAhead> rest_;
 };
 
 }  // namespace ident::io

@@ -33,11 +33,11 @@ namespace {
 // The rows of a CSV file as a streamed fit reads them. With `filled` (time gaps to fill, --missing) each
 // gap's missing rows come before the row that ends it, as FillTimeGaps inserts them into a table: NaN in
 // every column but the time column, whose values step on from the gap's start by its step. The file is
-// parsed ahead on a second thread while the caller works on the rows before.
+// parsed ahead on `threads` threads (io::CsvReadAhead) while the caller works on the rows before.
 class RecordRows {
  public:
-  RecordRows(const std::string& path, const io::CsvOptions& csv, const TimeCheck* filled)
-      : reader_(path, csv), filled_(filled != nullptr && !filled->gaps.empty() ? filled : nullptr) {
+  RecordRows(const std::string& path, const io::CsvOptions& csv, const TimeCheck* filled, int threads = 1)
+      : reader_(path, csv, threads), filled_(filled != nullptr && !filled->gaps.empty() ? filled : nullptr) {
     if (filled_ == nullptr) return;
     const auto& names = reader_.names();
     time_column_ = static_cast<int>(std::find(names.begin(), names.end(), filled_->column) - names.begin());
@@ -116,7 +116,8 @@ CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataS
 Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
                                const FitOptions& options, Segment estimation, const TimeCheck* filled,
                                internal::ShiftedMeanSquares* squares = nullptr) {
-  RecordRows reader(path, csv, filled);
+  // Little work per row: the parsing is the pass's cost, on two threads.
+  RecordRows reader(path, csv, filled, 2);
   Eigen::VectorXd offset = Eigen::VectorXd::Zero(reader.num_columns()), row(reader.num_columns());
   if (options.detrend == Detrend::kMean) {
     std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
@@ -272,7 +273,7 @@ FitResult StreamCsvFile(const std::string& path, const io::CsvOptions& csv, Data
 Eigen::VectorXd StreamMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                                   const CsvLayout& layout, const Eigen::VectorXd& offset, const TimeCheck* filled) {
   MeanSquares squares(source);
-  RecordRows reader(path, csv, filled);
+  RecordRows reader(path, csv, filled, 2);
   Eigen::VectorXd row(layout.columns);
   for (int r = 0; r < layout.estimation.count && reader.Next(row); ++r) {
     row -= offset;

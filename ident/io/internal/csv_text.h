@@ -3,6 +3,8 @@
 #pragma once
 
 #include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <cstddef>
 #include <string_view>
 
@@ -36,6 +38,26 @@ inline bool IsComment(std::string_view line) {
   if (!line.empty() && !IsSpace(line.front())) return line.front() == '#';
   const std::size_t first = line.find_first_not_of(" \t");
   return first != std::string_view::npos && line[first] == '#';
+}
+
+// The fast path of a row: the n cells of [p, end) converted into out[0..n), each from where the previous
+// one ended; every number must end at `separator` (the last at `end`) and be finite. False for anything
+// else (spaces, '+', an empty, bad or non-finite cell, a wrong number of fields), which the reader's
+// general walk then takes; out[] may then hold some of the row's values.
+inline bool ParsePlainFields(const char* p, const char* const end, char separator, int n, double* out) {
+  for (int column = 0; column < n; ++column) {
+    double value = 0;
+    const auto [ptr, ec] = std::from_chars(p, end, value);
+    if (ec != std::errc() || ptr == p || !std::isfinite(value)) return false;
+    if (ptr == end) {
+      if (column + 1 != n) return false;
+    } else if (*ptr != separator || column + 1 == n) {
+      return false;
+    }
+    out[column] = value;
+    p = ptr + 1;
+  }
+  return true;
 }
 
 }  // namespace ident::io::internal
