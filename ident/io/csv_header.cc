@@ -21,6 +21,7 @@ using internal::CountFields;
 using internal::IsBlank;
 using internal::IsComment;
 using internal::IsSpace;
+using internal::SeparatorOf;
 using internal::Trim;
 
 namespace {
@@ -63,19 +64,6 @@ bool AllNumbers(const std::vector<std::string_view>& fields) {
     finite = finite || (ec == std::errc() && std::isfinite(v));
   }
   return finite;
-}
-
-char SeparatorOf(Delimiter d) {
-  switch (d) {
-    case Delimiter::kSemicolon:
-      return ';';
-    case Delimiter::kTab:
-      return '\t';
-    case Delimiter::kWhitespace:
-      return 0;
-    default:
-      return ',';
-  }
 }
 
 Delimiter DelimiterOf(char separator) {
@@ -279,6 +267,19 @@ int CsvReader::ColumnIndex(std::string_view name) const {
   for (std::size_t i = 0; i < names_.size(); ++i)
     if (names_[i] == name) return static_cast<int>(i);
   ThrowUnknownColumn(path_, name, names_);
+}
+
+char internal::SeparatorOf(Delimiter d) {
+  switch (d) {
+    case Delimiter::kSemicolon:
+      return ';';
+    case Delimiter::kTab:
+      return '\t';
+    case Delimiter::kWhitespace:
+      return 0;
+    default:
+      return ',';
+  }
 }
 
 }  // namespace ident::io

@@ -1,5 +1,6 @@
 // The read-ahead CSV reader (ident/io/csv_read_ahead.h): a ring of blocks, each filled by the reading thread
-// and emptied by the caller, handed over by an atomic flag per block.
+// and emptied by the caller, handed over by an atomic flag per block; or the segments of
+// internal/plain_segments.h, then such a reader from the first line they do not take.
 #include "ident/io/csv_read_ahead.h"
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <fmt/format.h>
 
 #include "common/error.h"
+#include "ident/io/internal/csv_text.h"
 
 namespace ident::io {
 
@@ -16,20 +18,6 @@ namespace {
 
 // Values per block at most: wide files get blocks of fewer rows.
 constexpr int kBlockValues = 1 << 16;
-
-// The delimiter's character; 0 for runs of spaces and tabs.
-char Separator(Delimiter delimiter) {
-  switch (delimiter) {
-    case Delimiter::kSemicolon:
-      return ';';
-    case Delimiter::kTab:
-      return '\t';
-    case Delimiter::kWhitespace:
-      return 0;
-    default:
-      return ',';
-  }
-}
 
 }  // namespace
 
@@ -42,8 +30,8 @@ CsvReadAhead::CsvReadAhead(const std::string& path, const CsvOptions& options, i
   long file_size = 0;
   threads = std::min(threads, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
   if (threads >= 1 && ReadsInSegments(path, *reader, &file_size)) {
-    segments_ = std::make_unique<internal::PlainSegments>(path, !generated_names_, file_size,
-                                                          Separator(reader->delimiter()), n, threads, kSegmentBytes);
+    segments_ = std::make_unique<internal::PlainSegments>(
+        path, !generated_names_, file_size, internal::SeparatorOf(reader->delimiter()), n, threads, kSegmentBytes);
     return;
   }
   block_rows_ = std::clamp(kBlockValues / n, 1, kBlockRows);

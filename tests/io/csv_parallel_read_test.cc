@@ -12,33 +12,13 @@
 #include "ident/io/csv.h"
 #include "ident/io/csv_read_ahead.h"
 #include "ident/io/internal/plain_segments.h"
+#include "tests/io/read_rows.h"
 #include "tests/support/cli.h"
 
 namespace ident::io {
 namespace {
 
 using ::ident::testing::WriteFile;
-
-struct ReadRows {
-  std::vector<double> values;
-  std::vector<long> lines;
-  std::string error;  // the DataError that ended the reading, if any
-};
-
-template <class Reader>
-ReadRows ReadEvery(Reader& reader) {
-  ReadRows out;
-  Eigen::VectorXd row(reader.num_columns());
-  try {
-    while (reader.Next(row)) {
-      out.values.insert(out.values.end(), row.data(), row.data() + row.size());
-      out.lines.push_back(reader.line());
-    }
-  } catch (const DataError& e) {
-    out.error = e.what();
-  }
-  return out;
-}
 
 // The data lines of a record a little over CsvReadAhead::kSegmentedFileBytes: "k,u,y" with u and y random doubles
 // of up to 17 significant digits (so that every digit of the conversion counts), some of them integers or

@@ -10,6 +10,7 @@
 
 #include "common/error.h"
 #include "ident/io/csv.h"
+#include "tests/io/read_rows.h"
 #include "tests/support/cli.h"
 
 namespace ident::io {
@@ -31,35 +32,14 @@ std::string Record(int rows, int bad_row = 0) {
   return text;
 }
 
-struct Rows {
-  std::vector<double> values;
-  std::vector<long> lines;
-  std::string error;  // the DataError that ended the reading, if any
-};
-
-template <class Reader>
-Rows ReadAll(Reader& reader) {
-  Rows out;
-  Eigen::VectorXd row(reader.num_columns());
-  try {
-    while (reader.Next(row)) {
-      out.values.insert(out.values.end(), row.data(), row.data() + row.size());
-      out.lines.push_back(reader.line());
-    }
-  } catch (const DataError& e) {
-    out.error = e.what();
-  }
-  return out;
-}
-
 TEST(CsvReadAhead, GivesCsvReadersRowsAndLinesOverManyBlocks) {
   const int rows = 5 * CsvReadAhead::kBlocks * CsvReadAhead::kBlockRows + 17;
   const std::string path = WriteFile("read_ahead.csv", Record(rows));
   CsvReadAhead ahead(path);
   EXPECT_EQ(ahead.names(), (std::vector<std::string>{"t", "u", "y"}));
-  const Rows got = ReadAll(ahead);
+  const ReadRows got = ReadEvery(ahead);
   CsvReader plain(path);
-  const Rows want = ReadAll(plain);
+  const ReadRows want = ReadEvery(plain);
   EXPECT_EQ(got.error, "");
   ASSERT_EQ(got.lines.size(), static_cast<std::size_t>(rows));
   EXPECT_EQ(got.values, want.values);
@@ -75,9 +55,9 @@ TEST(CsvReadAhead, ThrowsCsvReadersErrorAfterTheRowsBeforeIt) {
   const int bad = 3 * CsvReadAhead::kBlockRows + 5;
   const std::string path = WriteFile("read_ahead_bad.csv", Record(4 * CsvReadAhead::kBlockRows, bad));
   CsvReadAhead ahead(path);
-  const Rows got = ReadAll(ahead);
+  const ReadRows got = ReadEvery(ahead);
   CsvReader plain(path);
-  const Rows want = ReadAll(plain);
+  const ReadRows want = ReadEvery(plain);
   EXPECT_EQ(got.lines.size(), static_cast<std::size_t>(bad - 1));
   EXPECT_EQ(got.values, want.values);
   EXPECT_NE(want.error.find("'x' is not a number"), std::string::npos) << want.error;

@@ -8,7 +8,14 @@
 #include <cstddef>
 #include <string_view>
 
+namespace ident::io {
+enum class Delimiter;  // csv.h
+}  // namespace ident::io
+
 namespace ident::io::internal {
+
+// The delimiter's character; 0 for runs of spaces and tabs.
+char SeparatorOf(Delimiter delimiter);
 
 inline std::string_view Trim(std::string_view s) {
   while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
