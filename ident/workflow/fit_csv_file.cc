@@ -114,12 +114,14 @@ CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataS
 // values are kept for SpikeRobustMean (memory O(N), as the robust estimators' own sample history). With
 // `squares` (Detrend::kMean only) the same rows go to it too.
 Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                               const FitOptions& options, Segment estimation, const TimeCheck* filled,
+                               const FitOptions& options, const CsvLayout& layout, const TimeCheck* filled,
                                internal::ShiftedMeanSquares* squares = nullptr) {
-  // Little work per row: the parsing is the pass's cost, on two threads.
-  RecordRows reader(path, csv, filled, 2);
-  Eigen::VectorXd offset = Eigen::VectorXd::Zero(reader.num_columns()), row(reader.num_columns());
-  if (options.detrend == Detrend::kMean) {
+  Eigen::VectorXd offset = Eigen::VectorXd::Zero(layout.columns);
+  if (options.detrend == Detrend::kMean) {  // with Detrend::kNone the file is not opened
+    const Segment estimation = layout.estimation;
+    // Little work per row: the parsing is the pass's cost, on two threads.
+    RecordRows reader(path, csv, filled, 2);
+    Eigen::VectorXd row(reader.num_columns());
     std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
     const std::vector<int> used = source.used_columns();
     const int robust = internal::RobustOffsetColumn(options, source);
@@ -288,7 +290,7 @@ Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvO
                                          const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] {
     const CsvLayout layout = LayOut(path, csv, source, options);
-    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation, nullptr);
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout, nullptr);
     return StreamMeanSquares(path, csv, source, layout, offset, nullptr);
   });
 }
@@ -297,7 +299,7 @@ FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSou
                      AnyRegressionEstimator& estimator, const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] {
     const CsvLayout layout = LayOut(path, csv, source, options);
-    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout.estimation, nullptr);
+    const Eigen::VectorXd offset = DetrendOffsets(path, csv, source, options, layout, nullptr);
     return StreamCsvFile(path, csv, source, estimator, options, layout, offset, nullptr);
   });
 }
@@ -334,7 +336,7 @@ FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSou
     if (plan.scaled_prior && plan.options.detrend == Detrend::kMean && source.affine_in_rows())
       squares.emplace(source, layout.columns);
     const Eigen::VectorXd offset =
-        DetrendOffsets(path, csv, source, plan.options, layout.estimation, filled, squares ? &*squares : nullptr);
+        DetrendOffsets(path, csv, source, plan.options, layout, filled, squares ? &*squares : nullptr);
     if (plan.scaled_prior)
       plan.UseScaledPrior(squares ? squares->Get(offset)
                                   : StreamMeanSquares(path, csv, source, layout, offset, filled));

@@ -41,8 +41,9 @@ std::string SimulatedRecord(int rows) {
   return text;
 }
 
-workflow::FitRequest Arx221(const std::string& estimator, double split) {
+workflow::FitRequest Arx221(const std::string& estimator, double split, const char* detrend = "mean") {
   workflow::FitRequest request;
+  request.detrend = detrend;
   request.model.output = "y";
   request.model.inputs = {"u"};
   request.model.na = 2;
@@ -81,19 +82,22 @@ workflow::FitResult InMemory(const std::string& path, const workflow::FitRequest
 }
 
 // Opens: the row count, the header, the means pass over the estimation part (which gathers the mean squares
-// for RLS's data-scaled prior too), the estimation and scoring pass, and with split = 1 a scoring pass.
+// for the data-scaled prior too; with no detrending there are no means to take, and the prior's mean
+// squares take that pass instead), the estimation and scoring pass, and with split = 1 a scoring pass.
 TEST(StreamedReads, OpensTheFileOncePerPassAndEqualsTheInMemoryFit) {
   const std::string path = testing::WriteFile("streamed_reads.csv", SimulatedRecord(5'000));
   struct Case {
     const char* estimator;
     double split;
     long opens;
+    const char* detrend = "mean";
   };
-  for (const Case c : {Case{"rls", 0.5, 4}, Case{"cauchy", 0.5, 4}, Case{"rls", 1.0, 5}}) {
-    const workflow::FitRequest request = Arx221(c.estimator, c.split);
+  for (const Case c : {Case{"rls", 0.5, 4}, Case{"cauchy", 0.5, 4}, Case{"rls", 1.0, 5}, Case{"rls", 0.5, 4, "none"},
+                       Case{"cauchy", 0.5, 4, "none"}}) {
+    const workflow::FitRequest request = Arx221(c.estimator, c.split, c.detrend);
     const StreamedFit streamed = Streamed(path, request);
     const workflow::FitResult memory = InMemory(path, request);
-    EXPECT_EQ(streamed.opened, c.opens) << c.estimator << " split " << c.split;
+    EXPECT_EQ(streamed.opened, c.opens) << c.estimator << " split " << c.split << " detrend " << c.detrend;
     ASSERT_EQ(streamed.result.theta.size(), 4);
     EXPECT_EQ(streamed.result.samples_estimation, memory.samples_estimation);
     EXPECT_EQ(streamed.result.updates, memory.updates);
