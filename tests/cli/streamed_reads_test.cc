@@ -85,7 +85,7 @@ workflow::FitResult InMemory(const std::string& path, const workflow::FitRequest
 // for the data-scaled prior too; with no detrending there are no means to take, and the prior's mean
 // squares take that pass instead), the estimation and scoring pass, and with split = 1 a scoring pass.
 TEST(StreamedReads, OpensTheFileOncePerPassAndEqualsTheInMemoryFit) {
-  const std::string path = testing::WriteFile("streamed_reads.csv", SimulatedRecord(5'000));
+  const std::string path = testing::WriteFile("streamed_reads.csv", SimulatedRecord(2'000));
   struct Case {
     const char* estimator;
     double split;
@@ -233,7 +233,7 @@ std::string WithoutRows(const std::string& text, const std::vector<std::pair<int
 // the filled table.
 TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
   const std::string path =
-      testing::WriteFile("streamed_gaps.csv", WithoutRows(SimulatedRecord(5'000), {{1'200, 1'210}, {3'000, 3'003}}));
+      testing::WriteFile("streamed_gaps.csv", WithoutRows(SimulatedRecord(2'000), {{500, 510}, {1'500, 1'503}}));
   const workflow::FitRequest request = Arx221("cauchy", 0.5);
   for (bool fill : {false, true}) {
     SCOPED_TRACE(fill ? "filled" : "reported");
@@ -263,7 +263,7 @@ TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
     EXPECT_EQ(streamed.time->column, "t");
     ASSERT_EQ(streamed.time->gaps.size(), 2u);
     const long missing[] = {10, 3};
-    const int rows[] = {1'201, 2'991};  // the data row that ends each gap
+    const int rows[] = {501, 1'491};  // the data row that ends each gap
     for (int g = 0; g < 2; ++g) {
       const workflow::TimeGap& s = streamed.time->gaps[static_cast<std::size_t>(g)];
       const workflow::TimeGap& m = memory_time->gaps[static_cast<std::size_t>(g)];
@@ -289,8 +289,8 @@ TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
   std::unique_ptr<workflow::DataSource> source = request.model.MakeSource({"t", "u", "y"}, path);
   std::optional<workflow::TimeCheck> time = workflow::ScanCsvTime(path, missing, source->used_columns());
   ASSERT_TRUE(time.has_value());
-  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, &*time).rows, 5'000);
-  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, nullptr).rows, 4'987);
+  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, &*time).rows, 2'000);
+  EXPECT_EQ(workflow::CheckCsvLayout(path, missing, *source, {}, -1, nullptr).rows, 1'987);
 }
 
 // A time that does not increase stops the streamed fit with the in-memory check's message.
