@@ -9,7 +9,7 @@
 
     PYTHONPATH=build/python /usr/bin/python3 bench/python_bindings.py [--rows N] [--json OUT]
 
-Needs a Release build in build/ (build/python, build/bench/kh_benchmark) and python3-statsmodels.
+Needs a Release build in build/ (build/python; it builds build/bench/kh_benchmark) and python3-statsmodels.
 """
 import argparse
 import json
@@ -30,6 +30,8 @@ def cpp_ns_per_update(rhos):
     """Median CPU ns per update of BM_LdRls/rho over 5 repetitions."""
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
         filt = "BM_LdRls/(" + "|".join(str(r) for r in rhos) + ")$"
+        subprocess.run(["cmake", "--build", os.path.join(ROOT, "build"), "--target", "kh_benchmark"], check=True,
+                       stdout=subprocess.DEVNULL)  # not in the default build (bench/CMakeLists.txt)
         subprocess.run([os.path.join(ROOT, "build", "bench", "kh_benchmark"), f"--benchmark_filter={filt}",
                         "--benchmark_repetitions=5", "--benchmark_min_time=0.2", f"--benchmark_out={out.name}",
                         "--benchmark_out_format=json"], check=True, stdout=subprocess.DEVNULL)
