@@ -168,7 +168,9 @@ TEST(LockInCli, RestartsOfFurtherPassesNameTheirPass) {
   for (std::size_t i = 0; i < events.size(); ++i) {
     const int pass = events[i]["pass"].get<int>();
     EXPECT_TRUE(pass == 1 || pass == 2) << i;
-    if (i > 0) EXPECT_GE(pass, events[i - 1]["pass"].get<int>()) << i;  // in the order they happened
+    if (i > 0) {
+      EXPECT_GE(pass, events[i - 1]["pass"].get<int>()) << i;  // in the order they happened
+    }
     if (pass == 2 && second == events.size()) second = i;
   }
   ASSERT_GT(second, 0u);             // the first pass restarts (heavy tails)
