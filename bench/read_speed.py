@@ -67,20 +67,32 @@ def file_reads(cmd, path):
     with tempfile.NamedTemporaryFile(suffix=".strace") as log:
         subprocess.run(["strace", "-f", "-e", "trace=openat,read,pread64,close", "-o", log.name] + cmd, check=True,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        opens, read_bytes, fds = 0, 0, set()
+        # With -f, a call that another thread interrupts is logged in two lines, "<unfinished ...>" and then
+        # "<... read resumed>": the fd is taken from the first, by the thread's pid.
+        opens, read_bytes, fds, pending = 0, 0, set(), {}
         name = re.escape(os.path.basename(path))
         with open(log.name, encoding="utf-8", errors="replace") as f:
             for line in f:
-                m = re.search(r'openat\(AT_FDCWD, "[^"]*' + name + r'", [^)]*\) = (\d+)', line)
+                pid, _, call = line.partition(" ")
+                m = re.search(r'openat\(AT_FDCWD, "[^"]*' + name + r'", [^)]*\) = (\d+)', call)
                 if m:
                     opens += 1
                     fds.add(m.group(1))
                     continue
-                m = re.search(r"\b(?:read|pread64)\((\d+), .*\) = (\d+)$", line)
+                m = re.search(r"\b(?:read|pread64)\((\d+), .*<unfinished \.\.\.>$", call)
+                if m:
+                    pending[pid] = m.group(1)
+                    continue
+                m = re.search(r"<\.\.\. (?:read|pread64) resumed>.*\) = (\d+)$", call)
+                if m:
+                    if pending.pop(pid, None) in fds:
+                        read_bytes += int(m.group(1))
+                    continue
+                m = re.search(r"\b(?:read|pread64)\((\d+), .*\) = (\d+)$", call)
                 if m and m.group(1) in fds:
                     read_bytes += int(m.group(2))
                     continue
-                m = re.search(r"\bclose\((\d+)\)", line)
+                m = re.search(r"\bclose\((\d+)\)", call)
                 if m:
                     fds.discard(m.group(1))
     return {"opens": opens, "bytes_read": read_bytes, "file_sizes_read": round(read_bytes / os.path.getsize(path), 3)}

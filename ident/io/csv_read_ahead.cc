@@ -90,34 +90,27 @@ void CsvReadAhead::Read(std::unique_ptr<CsvReader> reader) {
   }
 }
 
-bool CsvReadAhead::NextFromSegments(Eigen::Ref<Eigen::VectorXd> row) {
-  if (segments_) {
-    if (segments_->Next(row.data())) {
-      line_ = segments_->first_line() + rows_;
-      ++rows_;
-      return true;
-    }
+const double* CsvReadAhead::NextRowOtherwise() {
+  if (ended_) return nullptr;
+  if (segments_) {  // their rows have ended
     const bool stopped = segments_->stopped();
+    line_ = line();
     segments_.reset();
     if (!stopped) {
       ended_ = true;
-      return false;
+      return nullptr;
     }
     // A line that is not a plain row: CsvReader reads on from there, after the rows given.
     rest_ = std::make_unique<CsvReadAhead>(path_, options_, 0);
-    Eigen::VectorXd skipped(num_columns());
     for (long r = 0; r < rows_; ++r)
-      if (!rest_->Next(skipped)) throw DataError(fmt::format("{}: the file changed while it was read", path_));
+      if (rest_->NextRow() == nullptr) throw DataError(fmt::format("{}: the file changed while it was read", path_));
   }
-  const bool got = rest_->Next(row);
-  line_ = rest_->line();
-  ended_ = !got;
-  return got;
-}
-
-bool CsvReadAhead::Next(Eigen::Ref<Eigen::VectorXd> row) {
-  IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(), num_columns());
-  if (segments_ || rest_) return !ended_ && NextFromSegments(row);
+  if (rest_) {
+    const double* const row = rest_->NextRow();
+    line_ = rest_->line();
+    ended_ = row == nullptr;
+    return row;
+  }
   while (!ended_) {
     Block& block = blocks_[static_cast<std::size_t>(block_)];
     if (!holding_) {
@@ -126,23 +119,28 @@ bool CsvReadAhead::Next(Eigen::Ref<Eigen::VectorXd> row) {
       row_ = 0;
     }
     if (row_ < block.rows) {
-      const int n = num_columns();
-      row = Eigen::Map<const Eigen::VectorXd>(block.values.data() + static_cast<std::ptrdiff_t>(row_) * n, n);
       line_ = block.lines[static_cast<std::size_t>(row_)];
-      ++row_;
-      return true;
+      return block.values.data() + static_cast<std::ptrdiff_t>(row_++) * num_columns();
     }
     if (block.last) {
       ended_ = true;
       if (block.error) std::rethrow_exception(block.error);
-      return false;
+      return nullptr;
     }
     holding_ = false;
     block.full.store(false, std::memory_order_release);
     block.full.notify_one();
     block_ = (block_ + 1) % kBlocks;
   }
-  return false;
+  return nullptr;
+}
+
+bool CsvReadAhead::Next(Eigen::Ref<Eigen::VectorXd> row) {
+  IDENT_REQUIRE(row.size() == num_columns(), "row has {} entries; the file has {} columns", row.size(), num_columns());
+  const double* const next = NextRow();
+  if (next == nullptr) return false;
+  row = Eigen::Map<const Eigen::VectorXd>(next, row.size());
+  return true;
 }
 
 }  // namespace ident::io

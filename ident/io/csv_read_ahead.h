@@ -57,8 +57,19 @@ class CsvReadAhead {
   // As CsvReader::Next: the next row into `row` (size num_columns()), false at the end; throws the
   // reader's DataError at the row where it arose.
   bool Next(Eigen::Ref<Eigen::VectorXd> row);
-  // 1-based line number of the row last returned by Next().
-  long line() const { return line_; }
+  // The same row in place: num_columns() values, valid until the next call; null at the end. Throws as Next().
+  // Inline while the segments' current block has rows.
+  const double* NextRow() {
+    if (segments_) [[likely]] {
+      if (const double* const row = segments_->NextRow()) [[likely]] {
+        ++rows_;
+        return row;
+      }
+    }
+    return NextRowOtherwise();
+  }
+  // 1-based line number of the row last returned by Next() or NextRow().
+  long line() const { return segments_ ? segments_->first_line() + rows_ - 1 : line_; }
 
  private:
   // Rows [0, rows) of a block; then, if `last`, the end of the file or `error`. A cache line of its own:
@@ -76,15 +87,17 @@ class CsvReadAhead {
   // Whether the file is one to read in segments (*file_size its size): a large regular file, read without
   // CsvOptions::on_read, whose delimiter is one character. PlainSegments checks its first line.
   bool ReadsInSegments(const std::string& path, const CsvReader& reader, long* file_size) const;
-  bool NextFromSegments(Eigen::Ref<Eigen::VectorXd> row);
+  // NextRow() where the segments give no row: after their last, from the reader that goes on from there, or
+  // from the reading thread's blocks.
+  const double* NextRowOtherwise();
 
   // Set before the reading thread starts, read by both.
   std::string path_;
   std::vector<std::string> names_;
   bool generated_names_ = false;
   int block_rows_ = kBlockRows;  // rows per block: fewer for wide files (at most 65 536 values a block)
-  // The caller's: its block, the next row in it, whether it has waited for the block to be filled. A cache
-  // line of its own, written at every row.
+  // The caller's: its block, the next row in it, whether it has waited for the block to be filled, the line of
+  // the last row (while not in segments). A cache line of its own, written at every row.
   alignas(64) int block_ = 0;
   int row_ = 0;
   bool holding_ = false;

@@ -1,10 +1,16 @@
 // The row count of ident/workflow/fit.h: CountCsvDataRows, line by line, or a block's lines at once where
-// the block allows.
+// the block allows; a large file in two halves at once.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <cstddef>
 #include <cstring>
-#include <fstream>
+#include <exception>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include <fmt/format.h>
@@ -15,6 +21,9 @@
 
 namespace ident::workflow {
 namespace {
+
+// Files of at least this many bytes are counted on two threads.
+constexpr long kTwoThreadBytes = 2L << 20;
 
 // The LFs in [p, end) and whether two of them are adjacent (an empty line between): plain loops over the
 // bytes, which the compiler vectorises, summing 255 bytes at a time in a byte.
@@ -60,27 +69,38 @@ const char* CountPlainLines(const char* p, const char* const end, long* lines) {
   return p + last;
 }
 
-}  // namespace
+// A line's state so far, as the count walks it.
+enum class LineState { kBlank, kContent, kComment };
 
-long CountCsvDataRows(const std::string& path) {
-  std::ifstream in(path, std::ios::in | std::ios::binary);
-  if (!in) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
-  io::internal::CountCsvFileOpened();
-  // A line ends at LF or CR (CRLF: an empty line between them, not counted) and counts if it has a
-  // character other than ' ' and '\t' and the first such is not '#' (the reader skips the others: blank
-  // lines and comments). Past a line's first such character, memchr finds its end; a block whose lines
-  // are all plain data lines is counted at once (CountPlainLines), tried once a block.
-  std::vector<char> block(1 << 20);
+// The lines of bytes [begin, end) of `fd` as CountCsvDataRows counts them (begin starts a line: the file's
+// start, or just after an LF), and the state of the last line if the range ends inside it. A line ends at LF
+// or CR (CRLF: an empty line between them, not counted) and counts if it has a character other than ' ' and
+// '\t' and the first such is not '#' (the reader skips the others: blank lines and comments). Past a line's
+// first such character, memchr finds its end; a block whose lines are all plain data lines is counted at once
+// (CountPlainLines), tried once a block. Throws DataError if the file cannot be read.
+struct RangeCount {
   long lines = 0;
-  enum { kBlank, kContent, kComment } state = kBlank;  // of the current line so far
-  while (in) {
-    in.read(block.data(), static_cast<std::streamsize>(block.size()));
+  LineState state = LineState::kBlank;
+};
+// With `end` < 0 the file is read with read(2) to its end (a pipe, a device) instead of at offsets.
+RangeCount CountRange(int fd, long begin, const long end, const std::string& path) {
+  std::vector<char> block(1 << 20);
+  RangeCount count;
+  LineState& state = count.state;
+  while (end < 0 || begin < end) {
+    const std::size_t want =
+        static_cast<std::size_t>(end < 0 ? std::ssize(block) : std::min<long>(std::ssize(block), end - begin));
+    const ssize_t got = end < 0 ? ::read(fd, block.data(), want) : ::pread(fd, block.data(), want, begin);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
+    if (got == 0) break;  // the file is shorter than it was
+    begin += got;
     const char* p = block.data();
-    const char* const end = p + in.gcount();
-    const char* next_cr = nullptr;  // the first CR at or after p (end: none); null: not searched yet
+    const char* const stop = p + got;
+    const char* next_cr = nullptr;  // the first CR at or after p (stop: none); null: not searched yet
     bool tried = false;             // CountPlainLines on this block
-    while (p < end) {
-      if (state == kBlank) {
+    while (p < stop) {
+      if (state == LineState::kBlank) {
         const char c = *p;
         if (c == ' ' || c == '\t' || c == '\n' || c == '\r') {
           ++p;
@@ -88,27 +108,82 @@ long CountCsvDataRows(const std::string& path) {
         }
         if (c != '#' && !tried) {
           tried = true;
-          if (const char* last = CountPlainLines(p, end, &lines)) {
+          if (const char* last = CountPlainLines(p, stop, &count.lines)) {
             p = last + 1;
             continue;
           }
         }
-        state = c == '#' ? kComment : kContent;
+        state = c == '#' ? LineState::kComment : LineState::kContent;
       }
       if (next_cr == nullptr || next_cr < p) {
-        next_cr = static_cast<const char*>(std::memchr(p, '\r', static_cast<std::size_t>(end - p)));
-        if (next_cr == nullptr) next_cr = end;
+        next_cr = static_cast<const char*>(std::memchr(p, '\r', static_cast<std::size_t>(stop - p)));
+        if (next_cr == nullptr) next_cr = stop;
       }
       const char* lf = static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(next_cr - p)));
       const char* const line_end = lf ? lf : next_cr;
-      if (line_end == end) break;  // the line goes on in the next block
-      lines += state == kContent;
-      state = kBlank;
+      if (line_end == stop) break;  // the line goes on in the next block
+      count.lines += state == LineState::kContent;
+      state = LineState::kBlank;
       p = line_end + 1;
     }
   }
-  if (in.bad()) throw DataError(fmt::format("cannot read '{}': {}", path, std::strerror(errno)));
-  lines += state == kContent;
+  return count;
+}
+
+// Where a file of `size` bytes is cut for two counting threads: just after the first LF at or past its middle
+// (a line starts there, so the two halves count apart exactly what the whole counts); 0 for none within a
+// line's length limit of the middle.
+long CountingCut(int fd, long size) {
+  const long middle = size / 2;
+  std::vector<char> window(1 << 16);
+  for (long at = middle; at < size && at < middle + static_cast<long>(io::kMaxCsvLineBytes);) {
+    const ssize_t got =
+        ::pread(fd, window.data(), static_cast<std::size_t>(std::min<long>(std::ssize(window), size - at)), at);
+    if (got < 0 && errno == EINTR) continue;
+    if (got <= 0) return 0;
+    if (const void* lf = std::memchr(window.data(), '\n', static_cast<std::size_t>(got)))
+      return at + (static_cast<const char*>(lf) - window.data()) + 1;
+    at += got;
+  }
+  return 0;
+}
+
+}  // namespace
+
+long CountCsvDataRows(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+  io::internal::CountCsvFileOpened();
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat info {};
+  const long size = ::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) ? static_cast<long>(info.st_size) : -1;
+  // A regular file of kTwoThreadBytes or more is counted in two halves at once; anything else in one go.
+  const long cut = size >= kTwoThreadBytes ? CountingCut(fd, size) : 0;
+  RangeCount first, second;
+  if (cut > 0) {
+    std::exception_ptr error;
+    std::thread other([&] {
+      try {
+        second = CountRange(fd, cut, size, path);
+      } catch (...) {
+        error = std::current_exception();
+      }
+    });
+    try {
+      first = CountRange(fd, 0, cut, path);
+    } catch (...) {
+      other.join();
+      throw;
+    }
+    other.join();
+    if (error) std::rethrow_exception(error);
+  } else {
+    second = CountRange(fd, 0, size, path);
+  }
+  const long lines = first.lines + second.lines + (second.state == LineState::kContent);
   return lines > 0 ? lines - 1 : 0;  // minus the header
 }
 

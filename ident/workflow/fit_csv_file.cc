@@ -49,7 +49,12 @@ class RecordRows {
   long line() const { return reader_.line(); }  // of the last row read from the file
 
   bool Next(Eigen::Ref<Eigen::VectorXd> row) {
-    if (filled_ == nullptr) return reader_.Next(row);
+    if (filled_ == nullptr) {
+      const double* const next = reader_.NextRow();
+      if (next == nullptr) return false;
+      row = Eigen::Map<const Eigen::VectorXd>(next, row.size());
+      return true;
+    }
     if (pending_ > 0) {  // the next missing row of gap gap_
       const TimeGap& g = filled_->gaps[gap_];
       row.setConstant(std::numeric_limits<double>::quiet_NaN());

@@ -147,22 +147,23 @@ PlainSegments::Ending PlainSegments::ParseSegment(long segment, Ring& ring, std:
   return ending;
 }
 
-bool PlainSegments::Next(double* row) {
+const double* PlainSegments::NextBlockRow() {
   while (!ended_) {
     const std::size_t r = static_cast<std::size_t>(ring_);
     Block& block = rings_[r]->blocks[static_cast<std::size_t>(taken_[r])];
     if (!holding_) {
       block.full.wait(false, std::memory_order_acquire);  // until the worker has filled it
       holding_ = true;
+      held_ = block.values.data();
+      held_rows_ = block.rows;
       row_ = 0;
+      if (row_ < held_rows_) return held_ + static_cast<std::ptrdiff_t>(row_++) * columns_;
     }
-    if (row_ < block.rows) {
-      std::copy_n(block.values.data() + static_cast<std::ptrdiff_t>(row_) * columns_, columns_, row);
-      ++row_;
-      return true;
-    }
+    // The block held is used up: back to its worker.
     const Ending ending = block.ending;
     holding_ = false;
+    held_ = nullptr;
+    row_ = held_rows_ = 0;
     block.full.store(false, std::memory_order_release);
     block.full.notify_one();
     taken_[r] = (taken_[r] + 1) % kBlocks;
@@ -170,7 +171,7 @@ bool PlainSegments::Next(double* row) {
     if (ending == Ending::kFile) ended_ = true;
     if (ending == Ending::kStop) ended_ = stopped_ = true;
   }
-  return false;
+  return nullptr;
 }
 
 }  // namespace ident::io::internal

@@ -11,8 +11,10 @@
 // DataError). Memory: per worker one segment buffer and kBlocks blocks.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <atomic>
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <thread>
@@ -35,8 +37,20 @@ class PlainSegments {
   PlainSegments(const PlainSegments&) = delete;
   PlainSegments& operator=(const PlainSegments&) = delete;
 
-  // The next row into row[0..columns); false at the end of the file or where the plain lines stop.
-  bool Next(double* row);
+  // The next row: `columns` values, valid until the next call; null at the end of the file or where the plain
+  // lines stop. Inline while the current block has rows.
+  const double* NextRow() {
+    if (row_ < held_rows_) [[likely]]
+      return held_ + static_cast<std::ptrdiff_t>(row_++) * columns_;
+    return NextBlockRow();
+  }
+  // The same copied into row[0..columns); false at the end of the file or where the plain lines stop.
+  bool Next(double* row) {
+    const double* const next = NextRow();
+    if (next == nullptr) return false;
+    std::copy_n(next, columns_, row);
+    return true;
+  }
   bool stopped() const { return stopped_; }
   // The line number of the first row: 2 after a header, else 1.
   long first_line() const { return data_start_ > 0 ? 2 : 1; }
@@ -58,6 +72,7 @@ class PlainSegments {
   void Work(int worker);              // a worker thread
   Ending ParseSegment(long segment, Ring& ring, std::vector<char>& buffer);
   Block* Acquire(Ring& ring);  // the ring's next block once it is empty; null when stopping
+  const double* NextBlockRow();  // NextRow() past the end of the block held (or before the first)
   void Publish(Ring& ring, Block& block, Ending ending);
 
   // Set before the workers start, read by all.
@@ -66,10 +81,11 @@ class PlainSegments {
   char separator_;
   int columns_, block_rows_;
   std::vector<std::unique_ptr<Ring>> rings_;
-  // Next()'s, written at every row: a cache line of its own. The ring of the current segment, the next row in
-  // its block, per ring the block Next() reads.
+  // NextRow()'s, written at every row: a cache line of its own. The ring of the current segment, the block held
+  // (its values and rows; no rows while none is held) and the next row in it, per ring the block NextRow() reads.
   alignas(64) int ring_ = 0;
-  int row_ = 0;
+  int row_ = 0, held_rows_ = 0;
+  const double* held_ = nullptr;
   bool holding_ = false, ended_ = false, stopped_ = false;
   std::vector<int> taken_;
   alignas(64) std::atomic<bool> stop_{false};
