@@ -50,6 +50,8 @@ class RecordRows {
 
   bool Next(Eigen::Ref<Eigen::VectorXd> row) {
     if (filled_ == nullptr) {
+      if (row.size() != reader_.num_columns()) [[unlikely]]
+        return reader_.Next(row);  // throws: the row has the wrong size (the file changed between passes?)
       const double* const next = reader_.NextRow();
       if (next == nullptr) return false;
       row = Eigen::Map<const Eigen::VectorXd>(next, row.size());

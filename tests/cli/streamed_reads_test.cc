@@ -113,6 +113,32 @@ TEST(StreamedReads, OpensTheFileOncePerPassAndEqualsTheInMemoryFit) {
   }
 }
 
+// A file that gains a column between the layout and the passes (as if rewritten while it is fitted) is
+// refused with one line naming the row's size, not read with rows of the wrong width.
+TEST(StreamedReads, AFileWhoseColumnsChangeBetweenPassesIsRefused) {
+  const std::string path = testing::WriteFile("changing_columns.csv", SimulatedRecord(2'000));
+  const workflow::FitRequest request = Arx221("rls", 0.5);
+  std::unique_ptr<workflow::DataSource> source = request.model.MakeSource({"t", "u", "y"}, path);
+  workflow::FitOptions length_check;
+  length_check.split = request.split;
+  const workflow::CsvLayout layout = workflow::CheckCsvLayout(path, {}, *source, length_check, 2'000);
+  workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), layout.estimation.count);
+  std::string wider = "t,u,y,x\n";
+  const std::string rows = SimulatedRecord(2'000);
+  for (std::size_t at = rows.find('\n') + 1; at < rows.size();) {
+    const std::size_t end = rows.find('\n', at);
+    wider += rows.substr(at, end - at) + ",1\n";
+    at = end + 1;
+  }
+  testing::WriteFile("changing_columns.csv", wider);
+  try {
+    workflow::FitCsvFile(path, {}, *source, plan, layout);
+    ADD_FAILURE() << "a file of 4 columns was fitted with rows of 3";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("row has 3 entries; the file has 4 columns"), std::string::npos) << e.what();
+  }
+}
+
 // The lines that are neither blank nor comments, less the header, found the plain way: every LF or CR ends a
 // line (CRLF: an empty line between).
 long PlainDataRows(const std::string& text) {
