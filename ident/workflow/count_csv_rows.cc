@@ -18,12 +18,10 @@
 #include "common/error.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/fit.h"
+#include "ident/workflow/internal/row_count.h"
 
 namespace ident::workflow {
 namespace {
-
-// Files of at least this many bytes are counted on two threads.
-constexpr long kTwoThreadBytes = 2L << 20;
 
 // The LFs in [p, end) and whether two of them are adjacent (an empty line between): plain loops over the
 // bytes, which the compiler vectorises, summing 255 bytes at a time in a byte.
@@ -151,6 +149,10 @@ long CountingCut(int fd, long size) {
 }  // namespace
 
 long CountCsvDataRows(const std::string& path) {
+  return internal::CountCsvDataRows(path, internal::kTwoThreadRowCountBytes);
+}
+
+long internal::CountCsvDataRows(const std::string& path, long two_thread_bytes) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
   io::internal::CountCsvFileOpened();
@@ -160,8 +162,8 @@ long CountCsvDataRows(const std::string& path) {
   } closer{fd};
   struct stat info {};
   const long size = ::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) ? static_cast<long>(info.st_size) : -1;
-  // A regular file of kTwoThreadBytes or more is counted in two halves at once; anything else in one go.
-  const long cut = size >= kTwoThreadBytes ? CountingCut(fd, size) : 0;
+  // A regular file of two_thread_bytes or more is counted in two halves at once; anything else in one go.
+  const long cut = size >= two_thread_bytes ? CountingCut(fd, size) : 0;
   RangeCount first, second;
   if (cut > 0) {
     std::exception_ptr error;

@@ -19,6 +19,7 @@
 #include "ident/workflow/fit.h"
 #include "ident/workflow/fit_record.h"
 #include "ident/workflow/internal/fit_steps.h"
+#include "ident/workflow/internal/row_count.h"
 #include "ident/workflow/internal/shifted_mean_squares.h"
 #include "ident/workflow/time_column.h"
 #include "tests/support/cli.h"
@@ -172,25 +173,33 @@ TEST(StreamedReads, RowCountEqualsALineByLineCount) {
   }
 }
 
-// A file of 2 MiB or more is counted in two halves at once, cut just after the first LF at or past its middle.
-// Files of about 2.1 MiB whose middle falls, as a closing comment's length moves it byte by byte, on and next to
-// a CRLF, an empty line, a comment, a CR-only line end and a line without a line end before the next; and a
-// file with CR-only line ends throughout (no LF to cut at: one thread). Each against the plain count.
+// A regular file of 2 MiB or more is counted in two halves at once, cut just after the first LF at or past its
+// middle (here from 4 KiB on: internal::CountCsvDataRows). Files whose middle falls, as a closing comment's length
+// moves it byte by byte, on and next to a CRLF, an empty line, a comment, a CR-only line end and a line without a
+// line end before the next; a file with CR-only line ends throughout (no LF to cut at: one thread); and one
+// 2 MiB file at the default threshold. Each against the plain count.
 TEST(StreamedReads, RowCountOfAFileCutInTwoEqualsALineByLineCount) {
+  constexpr long kSmall = 4 << 10;
   std::string rows;
-  for (int k = 0; rows.size() < (1u << 20) + (1u << 16); ++k) rows += fmt::format("{},{:.17g},1\n", k, 1.0 / (k + 1));
+  for (int k = 0; rows.size() < 3u << 10; ++k) rows += fmt::format("{},{:.17g},1\n", k, 1.0 / (k + 1));
   for (const std::string odd : {"\r\n", "\n\n", "# a comment\n", "7,8\r9,10", " \t\n#\r"}) {
     // The middle is (pad − 8)/2 bytes past the odd text's start: from 1 before it to 1 past its end.
     const std::string lead = "#" + std::string(odd.size() + 2, 'x') + "\nt,u,y\n";
     for (int pad = 6; pad <= 2 * static_cast<int>(odd.size()) + 10; pad += 2) {
       const std::string text = lead + rows + odd + rows + "#" + std::string(pad, 'x') + "\n";
       const std::string path = testing::WriteFile("row_count_cut.csv", text);
-      EXPECT_EQ(workflow::CountCsvDataRows(path), PlainDataRows(text)) << "odd " << odd.size() << " pad " << pad;
+      EXPECT_EQ(workflow::internal::CountCsvDataRows(path, kSmall), PlainDataRows(text))
+          << "odd " << odd.size() << " pad " << pad;
     }
   }
   std::string cr_only = "t,u,y\r";
-  for (int k = 0; cr_only.size() < (5u << 19); ++k) cr_only += fmt::format("{},{},1\r", k, k % 7);
-  EXPECT_EQ(workflow::CountCsvDataRows(testing::WriteFile("row_count_cr.csv", cr_only)), PlainDataRows(cr_only));
+  for (int k = 0; cr_only.size() < 8u << 10; ++k) cr_only += fmt::format("{},{},1\r", k, k % 7);
+  EXPECT_EQ(workflow::internal::CountCsvDataRows(testing::WriteFile("row_count_cr.csv", cr_only), kSmall),
+            PlainDataRows(cr_only));
+  std::string large = "t,u,y\n";
+  for (int k = 0; large.size() < (2u << 20) + 100; ++k)
+    large += fmt::format("{},{},1\n{}", k, k % 7, k % 97 ? "" : "#\n");
+  EXPECT_EQ(workflow::CountCsvDataRows(testing::WriteFile("row_count_large.csv", large)), PlainDataRows(large));
 }
 
 // The data-scaled prior's mean squares gathered in the means pass about a provisional centre
