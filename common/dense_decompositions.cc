@@ -8,10 +8,6 @@ Eigen::LDLT<Eigen::MatrixXd> Ldlt(const Eigen::MatrixXd& a) { return Eigen::LDLT
 
 Eigen::FullPivLU<Eigen::MatrixXd> FullPivLu(const Eigen::MatrixXd& a) { return Eigen::FullPivLU<Eigen::MatrixXd>(a); }
 
-Eigen::HouseholderQR<Eigen::MatrixXd> HouseholderQr(const Eigen::MatrixXd& a) {
-  return Eigen::HouseholderQR<Eigen::MatrixXd>(a);
-}
-
 Eigen::ColPivHouseholderQR<Eigen::MatrixXd> ColPivQr(const Eigen::MatrixXd& a) {
   return Eigen::ColPivHouseholderQR<Eigen::MatrixXd>(a);
 }
@@ -31,8 +27,6 @@ Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> SymmetricTridiagonalEigen(const E
   eig.computeFromTridiagonal(diagonal, subdiagonal, options);
   return eig;
 }
-
-Eigen::VectorXcd Eigenvalues(const Eigen::MatrixXd& a) { return a.eigenvalues(); }
 
 Eigen::MatrixXd Inverse(const Eigen::LLT<Eigen::MatrixXd>& llt) {
   return llt.solve(Eigen::MatrixXd::Identity(llt.rows(), llt.cols()));

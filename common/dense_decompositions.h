@@ -28,8 +28,6 @@ Eigen::LLT<Eigen::MatrixXd> Llt(const Eigen::MatrixXd& a);
 Eigen::LDLT<Eigen::MatrixXd> Ldlt(const Eigen::MatrixXd& a);
 // PAQ = LU with complete pivoting (Eigen::FullPivLU: rank(), isInvertible(), solve(), inverse()).
 Eigen::FullPivLU<Eigen::MatrixXd> FullPivLu(const Eigen::MatrixXd& a);
-// A = QR (Eigen::HouseholderQR: least squares by solve()).
-Eigen::HouseholderQR<Eigen::MatrixXd> HouseholderQr(const Eigen::MatrixXd& a);
 // AP = QR with column pivoting (Eigen::ColPivHouseholderQR).
 Eigen::ColPivHouseholderQR<Eigen::MatrixXd> ColPivQr(const Eigen::MatrixXd& a);
 // The eigen-decomposition of a symmetric A (lower triangle read; Eigen::SelfAdjointEigenSolver, eigenvalues in
@@ -43,8 +41,6 @@ Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> SymmetricEigen2x2(const Eigen::Ma
 Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> SymmetricTridiagonalEigen(const Eigen::VectorXd& diagonal,
                                                                          const Eigen::VectorXd& subdiagonal,
                                                                          int options = Eigen::ComputeEigenvectors);
-// The eigenvalues of a general square A (Eigen::EigenSolver, eigenvalues only; A.eigenvalues()).
-Eigen::VectorXcd Eigenvalues(const Eigen::MatrixXd& a);
 
 // Read-outs that solve for a whole matrix (the blocked triangular solves and Householder products).
 // A⁻¹ from A's Cholesky factor: llt.solve(I).

@@ -2,11 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include "common/dense_decompositions.h"
 #include "common/error.h"
 
 namespace ident::models {
@@ -81,12 +82,25 @@ bool MonicStable(const double* p, int n, double* work) {
 }
 
 double LargestRootModulus(const double* p, int n) {
-  if (n <= 0) return 0;
-  // z^n + p1 z^(n−1) + … + p_n: companion matrix with −p in the first row.
-  Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(n, n);
-  for (int j = 0; j < n; ++j) companion(0, j) = -p[j];
-  for (int i = 1; i < n; ++i) companion(i, i - 1) = 1;
-  return dense::Eigenvalues(companion).cwiseAbs().maxCoeff();
+  while (n > 0 && p[n - 1] == 0) --n;  // roots at 0
+  if (n == 0) return 0;
+  double max_abs = 0;
+  for (int j = 0; j < n; ++j) {
+    if (!std::isfinite(p[j])) return std::numeric_limits<double>::quiet_NaN();
+    max_abs = std::max(max_abs, std::abs(p[j]));
+  }
+  // The roots of 1 + Σ p_j r^−j q^−j are those of p divided by r: R is the least r for which MonicStable passes
+  // them. Bisected (geometric midpoints) between |p_n|^(1/n), the geometric mean of the roots' moduli (not above
+  // R), and Cauchy's bound 1 + max|p_j| (above R).
+  std::vector<double> scaled(static_cast<std::size_t>(n)), work(static_cast<std::size_t>(n));
+  double lo = std::pow(std::abs(p[n - 1]), 1.0 / n), hi = 1 + max_abs;
+  for (int step = 0; step < 200 && hi > lo * (1 + 0x1p-50); ++step) {
+    const double r = std::sqrt(lo) * std::sqrt(hi);
+    double s = 1;
+    for (int j = 0; j < n; ++j) scaled[static_cast<std::size_t>(j)] = p[j] * (s /= r);
+    (MonicStable(scaled.data(), n, work.data()) ? hi : lo) = r;
+  }
+  return hi;
 }
 
 }  // namespace ident::models

@@ -68,8 +68,9 @@ class PolynomialStructure {
 // complement C5.1). `work` holds at least n doubles; no allocation. O(n²).
 bool MonicStable(const double* p, int n, double* work);
 
-// The largest modulus of the roots of 1 + p1 q⁻¹ + … + p_n q⁻ⁿ (the eigenvalues of its companion matrix; 0 for
-// n = 0). Allocates; for reports, not for the recursion.
+// The largest modulus of the roots of 1 + p1 q⁻¹ + … + p_n q⁻ⁿ (the eigenvalues of its companion matrix), to a
+// relative 2⁻⁵⁰, by bisection with MonicStable; 0 for n = 0, NaN if a coefficient is not finite. Allocates;
+// O(n²) per bisection step; for reports, not for the recursion.
 double LargestRootModulus(const double* p, int n);
 
 }  // namespace ident::models

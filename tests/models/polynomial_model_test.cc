@@ -1,15 +1,16 @@
+#include <algorithm>
 #include <cmath>
-#include <complex>
+#include <cstdio>
 #include <random>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
-#include "common/dense_decompositions.h"
 #include "common/error.h"
 #include "models/polynomial_structure.h"
 #include "models/pseudo_linear_regressor.h"
+#include "tests/support/reference_linear_algebra.h"
 
 namespace ident::models {
 namespace {
@@ -51,16 +52,38 @@ TEST(MonicStable, AgreesWithCompanionMatrixRoots) {
     const int n = 1 + trial % 5;
     std::vector<double> p(static_cast<std::size_t>(n)), work(static_cast<std::size_t>(n));
     for (double& c : p) c = coefficient(rng);
-    Eigen::MatrixXd companion = Eigen::MatrixXd::Zero(n, n);
-    for (int j = 0; j < n; ++j) companion(0, j) = -p[static_cast<std::size_t>(j)];
-    for (int i = 1; i < n; ++i) companion(i, i - 1) = 1;
-    const double radius = dense::Eigenvalues(companion).cwiseAbs().maxCoeff();
+    const double radius = testing::CompanionRootModulus(p.data(), n);
     if (std::abs(radius - 1) < 1e-9) continue;  // on the circle: either answer is within rounding
     EXPECT_EQ(MonicStable(p.data(), n, work.data()), radius < 1) << "trial " << trial << " radius " << radius;
     stable += radius < 1;
   }
   EXPECT_GT(stable, 200);  // both answers are exercised
   EXPECT_TRUE(MonicStable(nullptr, 0, nullptr));
+}
+
+// The largest root modulus by bisection on the Schur–Cohn test against the companion matrix's eigenvalues, on
+// random polynomials of orders 1 to 8 whose roots have moduli from 1e-3 to 1e3, and on ones with a root at 0.
+TEST(LargestRootModulus, AgreesWithCompanionMatrixRoots) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> unit(-1, 1), exponent(-3, 3);
+  double worst = 0;
+  for (int trial = 0; trial < 1000; ++trial) {
+    const int n = 1 + trial % 8;
+    const double scale = std::pow(10.0, exponent(rng));
+    std::vector<double> p(static_cast<std::size_t>(n));
+    for (int j = 0; j < n; ++j) p[static_cast<std::size_t>(j)] = unit(rng) * std::pow(scale, j + 1);
+    if (trial % 10 == 0) p.back() = 0;  // a root at 0
+    const double reference = testing::CompanionRootModulus(p.data(), n);
+    const double modulus = LargestRootModulus(p.data(), n);
+    worst = std::max(worst, std::abs(modulus - reference) / reference);
+    EXPECT_NEAR(modulus, reference, 1e-12 * reference)
+        << "trial " << trial << " order " << n << " p "
+        << Eigen::Map<const Eigen::VectorXd>(p.data(), n).transpose().format(Eigen::IOFormat(17));
+  }
+  std::printf("[ measured ] largest root modulus vs companion eigenvalues: worst relative difference %.3g\n", worst);
+  const double zero[] = {0.0, 0.0}, nan[] = {0.5, std::nan("")};
+  EXPECT_EQ(LargestRootModulus(zero, 2), 0.0);
+  EXPECT_TRUE(std::isnan(LargestRootModulus(nan, 2)));
 }
 
 struct Record {

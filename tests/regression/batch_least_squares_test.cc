@@ -1,15 +1,14 @@
 // RLS with the flat prior against batch least squares (Eigen's Householder QR on the stacked
 // regressors) on the bundled real records, with the regressor matrix built here by direct indexing
 // (independently of models::ArxRegressor), and against the datasets README's numpy baselines.
-#include <Eigen/LU>
-#include <Eigen/QR>
 #include <cmath>
 #include <cstdio>
 
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 
-#include "common/dense_decompositions.h"
 #include "ident/regression/rls.h"
+#include "tests/support/reference_linear_algebra.h"
 #include "tests/support/test_data.h"
 
 namespace ident {
@@ -47,7 +46,7 @@ TEST_P(BatchLeastSquares, FlatPriorRlsEqualsQrSolutionAndReadmeBaseline) {
   Eigen::MatrixXd Z;
   Eigen::VectorXd Y;
   BuildRegression(c, Z, Y);
-  const Eigen::VectorXd batch = dense::HouseholderQr(Z).solve(Y);
+  const Eigen::VectorXd batch = testing::LeastSquaresByQr(Z, Y);
   RecursiveLeastSquares rls(static_cast<int>(Z.cols()));
   for (Eigen::Index t = 0; t < Z.rows(); ++t) ASSERT_TRUE(rls.Update(Y(t), Z.row(t).transpose()).updated());
   const Eigen::VectorXd theta = rls.parameters();
@@ -73,7 +72,7 @@ TEST(BatchLeastSquaresSmallUnits, ScaledFlatPriorKeepsRlsOnTheQrSolution) {
   BuildRegression(ArxCase{"dryer.csv", 2, 2, 3, {}, 0}, Z, Y);
   Z *= 1e-5;
   Y *= 1e-5;
-  const Eigen::VectorXd batch = dense::HouseholderQr(Z).solve(Y);
+  const Eigen::VectorXd batch = testing::LeastSquaresByQr(Z, Y);
   Eigen::VectorXd mean_squares(Z.cols() + 1);
   mean_squares(0) = Y.squaredNorm() / static_cast<double>(Y.size());
   mean_squares.tail(Z.cols()) = Z.colwise().squaredNorm().transpose() / static_cast<double>(Z.rows());

@@ -7,7 +7,6 @@
 // task, 5 significant digits, compared within half a unit of the last printed digit.
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
-#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +24,7 @@
 #include "ident/regression/batch_regression.h"
 #include "ident/regression/regression_estimator.h"
 #include "tests/support/alloc_counter.h"
+#include "tests/support/reference_linear_algebra.h"
 #include "tests/support/sanitizer.h"
 #include "tests/support/test_data.h"
 
@@ -260,7 +260,7 @@ double IndependentEmNll(const Record& d, Eigen::VectorXd theta, double gamma, in
     const Eigen::ArrayXd r = (d.y - d.Z * theta).array();
     const Eigen::ArrayXd w = 2 / (1 + r.square() / (gamma * gamma));
     const Eigen::ArrayXd sw = w.sqrt();
-    theta = dense::HouseholderQr((d.Z.array().colwise() * sw).matrix()).solve((d.y.array() * sw).matrix());
+    theta = testing::LeastSquaresByQr((d.Z.array().colwise() * sw).matrix(), (d.y.array() * sw).matrix());
     gamma = std::sqrt((w * (d.y - d.Z * theta).array().square()).sum() / static_cast<double>(n));
   }
   const Eigen::ArrayXd r = (d.y - d.Z * theta).array();
@@ -277,7 +277,7 @@ TEST(CauchyMlRegression, LeastSquaresStartAloneEndsAtTheLocalOptimumOfStarsCyg) 
   EXPECT_NEAR(local.scale, 0.3572055876, 1e-7);
   EXPECT_NEAR(local.objective, 50.67460473, 1e-7);
   // Plain EM (this file's own, below) from the least-squares fit ends there too.
-  const Eigen::VectorXd ls = dense::HouseholderQr(d.Z).solve(d.y);
+  const Eigen::VectorXd ls = testing::LeastSquaresByQr(d.Z, d.y);
   EXPECT_NEAR(IndependentEmNll(d, ls, (d.y - d.Z * ls).cwiseAbs().mean(), 3000), 50.67460473, 1e-7);
   const BatchRegressionResult global = CauchyMlRegression(d.Z, d.y);
   EXPECT_LT(global.objective, local.objective - 1);
