@@ -278,15 +278,35 @@ bool GridObserver::Moments(const std::vector<double>& v, double& sum, Eigen::Vec
 }
 
 StepReport GridObserver::Commit() {
-  double sum = 0, cell = 1;
+  double cell = 1;
   for (int i = 0; i < dim_; ++i) cell *= spacing_[i];
-  bool ok = std::isfinite(cell) && cell >= std::numeric_limits<double>::min() && Moments(q_, sum, mean_new_, cov_new_);
-  double scale = 0, max_q = 0;
+  double max_q = 0;
+  bool ok = std::isfinite(cell) && cell >= std::numeric_limits<double>::min();
+  if (ok) {
+    for (double v : q_) max_q = std::max(max_q, v);
+    ok = std::isfinite(max_q) && max_q > 0;
+  }
+  // q ← q · 2^−e with max q ∈ [1/2, 1) first, exact in binary: a likelihood can leave q subnormal, where
+  // each product in the moments keeps only a few significant bits (the mean could leave the grid).
+  double sum = 0;
+  if (ok) {
+    int e = 0;
+    std::frexp(max_q, &e);
+    if (e > -1022) {  // 2^−e is a double: one exact multiplication per node
+      const double factor = std::ldexp(1.0, -e);
+      for (double& v : q_) v *= factor;
+    } else {
+      for (double& v : q_) v = std::ldexp(v, -e);
+    }
+    ok = Moments(q_, sum, mean_new_, cov_new_);
+  }
+  double scale = 0;
   if (ok) {
     scale = 1.0 / (sum * cell);
     ok = scale > 0 && std::isfinite(scale);
   }
   if (ok) {
+    max_q = 0;
     for (double& v : q_) {
       v *= scale;
       max_q = std::max(max_q, v);

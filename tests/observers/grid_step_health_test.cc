@@ -141,5 +141,29 @@ TEST(GridObserverStepHealth, CorrectWithANanLikelihoodFailsAndKeepsTheDensity) {
   EXPECT_NEAR(grid.covariance()(0, 0), 0.5, 1e-9);
 }
 
+TEST(GridObserverStepHealth, AReadingLeavingOneSubnormalNodeGivesThatNodesMoments) {
+  // Prior N(0, 1) on 8 nodes over ±s sd, s ∈ [38, 38.5]: the end node's density, about 1e5 · e^(−s²/2), is
+  // subnormal (1e−307 down to a few hundred units of 2^−1074). A threshold reading x ≥ 34 keeps that node
+  // alone (its cell starts at 6s/7 ≤ 33), so the posterior is all at x = s: mean s, variance 0, whatever
+  // the precision of the node's value. Taken on the subnormal values themselves, the moments round each
+  // product to a multiple of 2^−1074 (a variance of 2e−13 at s = 38; found by grid_observer_fuzzer as a
+  // mean outside the grid), and the normalisation 1 / (Σ p · cell) overflows (the reading is refused).
+  for (double s = 38.0; s <= 38.5; s += 0.025) {
+    GridObserverOptions options;
+    options.points = {8};
+    options.initial_sigmas = s;
+    GridObserver grid(Eigen::VectorXd::Zero(1), Eigen::MatrixXd::Identity(1, 1), options);
+    const double end = grid.axis(0, 7);
+    ASSERT_GT(grid.density()[7], 0.0) << "s = " << s;
+    ASSERT_LT(grid.density()[7], std::numeric_limits<double>::min()) << "s = " << s;
+    models::ThresholdSensor above(Eigen::VectorXd::Ones(1), 34.0);
+    ASSERT_TRUE(grid.Correct(above, 1.0).updated()) << "s = " << s;
+    EXPECT_NEAR(Mass(grid), 1.0, 1e-12) << "s = " << s;
+    EXPECT_NEAR(grid.mean()(0), end, 1e-13 * end) << "s = " << s;
+    EXPECT_LE(grid.covariance()(0, 0), 1e-24) << "s = " << s;
+    for (int j = 0; j < 7; ++j) EXPECT_EQ(grid.density()[j], 0.0) << "s = " << s << ", node " << j;
+  }
+}
+
 }  // namespace
 }  // namespace ident
