@@ -394,6 +394,24 @@ TEST(StudentRegression, SurvivesExtremeScalingAfterOutliersOnATinyScale) {  // s
   EXPECT_TRUE(est.parameters().allFinite());
 }
 
+TEST(PropagatedVariance, TheSeedsInfluenceDecaysToZeroWithoutLingeringSubnormal) {
+  // ξ_z = 0, no elasticity, ρ = 1: c = β, so A(t) = (1 − β)^t and s(t) = (1 − β)²s(t−1) + β²ê², whose fixed
+  // point is β²ê² / (1 − (1 − β)²). With β = 0.01, A(t) leaves the normal range after about 70 600 steps;
+  // it must then be exactly 0, never a subnormal (which a·(1 − c) would keep for good, on a slow path).
+  const double beta = 0.01, e = 0.5;
+  PropagatedVariance v;
+  v.Seed(1.0);
+  int subnormal_steps = 0;
+  for (int t = 1; t <= 200000; ++t) {
+    v.Add(beta, 0.0, 0.0, e, 1);
+    if (std::fpclassify(v.a) == FP_SUBNORMAL) ++subnormal_steps;
+    if (t == 50000) EXPECT_NEAR(v.a / std::exp(t * std::log1p(-beta)), 1.0, 1e-9);
+  }
+  EXPECT_EQ(subnormal_steps, 0);
+  EXPECT_EQ(v.a, 0.0);
+  EXPECT_NEAR(v.s / (beta * beta * e * e / (1 - (1 - beta) * (1 - beta))), 1.0, 1e-12);
+}
+
 TEST(EstimatorRegistry, BuildsCauchyAndStudentAndRejectsOptionsThatDoNotApply) {
   EstimatorSettings s = ParseEstimatorSpec("cauchy");
   EXPECT_EQ(MakeRegressionEstimator(s, 3)->name(), "cauchy");
