@@ -178,8 +178,8 @@ struct PropagatedVariance {
     if (!(std::isfinite(c) && std::isfinite(ge))) return;
     a *= 1 - c;
     // A(t) shrinks geometrically under forgetting. Below the normal range it would stay subnormal for good
-    // (a·(1 − c) rounds back to a), and each operation on a subnormal takes a slow microcode path (some
-    // 30 ns of a 100 ns update at ρ = 2); its term 2·a·x is then far below g·ê.
+    // (a·(1 − c) rounds back to a), and each operation on a subnormal takes the processor's slow path; its
+    // term 2·a·x is then far below g·ê.
     if (!(std::abs(a) >= std::numeric_limits<double>::min())) a = 0;
     s = std::max(((1 - c) * (1 - c) + (rho - 1) * c * c) * s + q_rho * ge * (ge + 2 * a * influence), 0.0);
   }
