@@ -405,7 +405,9 @@ TEST(PropagatedVariance, TheSeedsInfluenceDecaysToZeroWithoutLingeringSubnormal)
   for (int t = 1; t <= 200000; ++t) {
     v.Add(beta, 0.0, 0.0, e, 1);
     if (std::fpclassify(v.a) == FP_SUBNORMAL) ++subnormal_steps;
-    if (t == 50000) EXPECT_NEAR(v.a / std::exp(t * std::log1p(-beta)), 1.0, 1e-9);
+    if (t == 50000) {
+      EXPECT_NEAR(v.a / std::exp(t * std::log1p(-beta)), 1.0, 1e-9);
+    }
   }
   EXPECT_EQ(subnormal_steps, 0);
   EXPECT_EQ(v.a, 0.0);
