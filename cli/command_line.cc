@@ -10,8 +10,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "common/error.h"
 #include "cli/commands.h"
+#include "common/error.h"
 
 namespace ident::cli {
 

@@ -7,8 +7,8 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
-#include <limits>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -62,7 +62,9 @@ PlotPanel CompareScorePanel(const workflow::CompareResult& r, std::string title,
   PlotPanel panel{std::move(title), "", std::move(ylabel), {}};
   const double n = static_cast<double>(r.scores.size());
   panel.xrange = PlotRange{0.4, n + 0.6};
-  if (reference) panel.series.push_back({reference_title, {0.4, n + 0.6}, {*reference, *reference}, "lines lw 1.5 dt 2 lc rgb 'black'"});
+  if (reference)
+    panel.series.push_back(
+        {reference_title, {0.4, n + 0.6}, {*reference, *reference}, "lines lw 1.5 dt 2 lc rgb 'black'"});
   bool first_box = true;
   double low = reference.value_or(std::numeric_limits<double>::infinity());
   double high = reference.value_or(-std::numeric_limits<double>::infinity());
@@ -83,8 +85,8 @@ PlotPanel CompareScorePanel(const workflow::CompareResult& r, std::string title,
     }
     if (points.y.empty()) continue;
     if (points.y.size() >= 5) {
-      panel.series.push_back({first_box ? "box: quartiles, median" : "",
-                              std::vector<double>(points.y.size(), x0), points.y, "boxplot lw 1.2 lc rgb 'black'"});
+      panel.series.push_back({first_box ? "box: quartiles, median" : "", std::vector<double>(points.y.size(), x0),
+                              points.y, "boxplot lw 1.2 lc rgb 'black'"});
       first_box = false;
     }
     panel.series.push_back(std::move(points));
@@ -97,16 +99,16 @@ PlotPanel CompareScorePanel(const workflow::CompareResult& r, std::string title,
 }
 
 void PlotCompare(OutputFile& out, const workflow::CompareResult& r, const workflow::OutlierSpec& spec, int trials) {
-  const std::string setting =
-      r.outliers_per_trial > 0
-          ? fmt::format("{} outliers of ±{:g}σ, {} trial{}", r.outliers_per_trial, spec.size, trials, trials == 1 ? "" : "s")
-          : fmt::format("no outliers, {} trial{}", trials, trials == 1 ? "" : "s");
+  const std::string setting = r.outliers_per_trial > 0
+                                  ? fmt::format("{} outliers of ±{:g}σ, {} trial{}", r.outliers_per_trial, spec.size,
+                                                trials, trials == 1 ? "" : "s")
+                                  : fmt::format("no outliers, {} trial{}", trials, trials == 1 ? "" : "s");
   const PlotPanel fit = CompareScorePanel(
       r, fmt::format("{}: one-step validation fit per trial ({})", r.structure, setting), "one-step fit %",
       &workflow::EstimatorScore::one_step_per_trial, r.reference.one_step, "clean-data LS");
-  const PlotPanel distance = CompareScorePanel(
-      r, "distance to the clean-data least-squares estimate, ||θ̂ − θ_LS|| / ||θ_LS||, per trial", "θ distance",
-      &workflow::EstimatorScore::theta_distance_per_trial, 0.0, "0 = clean-data LS");
+  const PlotPanel distance =
+      CompareScorePanel(r, "distance to the clean-data least-squares estimate, ||θ̂ − θ_LS|| / ||θ_LS||, per trial",
+                        "θ distance", &workflow::EstimatorScore::theta_distance_per_trial, 0.0, "0 = clean-data LS");
   RenderPlot(out, {fit, distance}, PlotSize{.width = 1000, .height_per_panel = 360});
 }
 
@@ -234,8 +236,8 @@ void RunCompare(CompareCommandOptions& o) {
   request.progress = isatty(STDERR_FILENO) ? std::function<void(int, int)>(ProgressBar) : ProgressLines();
   // Several experiments (several files, an experiment column) in one table, as ident fit reads them; the time
   // column of a single record is checked (its gaps filled with --missing).
-  ExperimentRecords records = ReadExperimentRecords(
-      paths, o.experiment_column, {.missing_as_nan = o.missing, .delimiter = o.read.delimiter});
+  ExperimentRecords records =
+      ReadExperimentRecords(paths, o.experiment_column, {.missing_as_nan = o.missing, .delimiter = o.read.delimiter});
   const std::string path = records.several ? records.name : paths.front();
   std::optional<workflow::TimeCheck> time;
   if (!records.several)
@@ -284,7 +286,9 @@ void AddCompareCommand(CLI::App& app) {
   cmd->add_option("--split", o->split, "Fraction of rows used for estimation (default: the dataset's, else 0.5)");
   cmd->add_option("--detrend", o->detrend, "Subtract the estimation-part means (mean) or not (none)")
       ->check(CLI::IsMember({"mean", "none"}));
-  cmd->add_option("--plot", o->plot, "Draw the one-step fit % and θ distance of every trial per estimator into FILE.svg or FILE.png (needs gnuplot)");
+  cmd->add_option(
+      "--plot", o->plot,
+      "Draw the one-step fit % and θ distance of every trial per estimator into FILE.svg or FILE.png (needs gnuplot)");
   auto* json = cmd->add_flag("--json", o->json, "Print one JSON object (schema in docs/reference/cli.md)");
   cmd->add_flag("--csv", o->csv, "Print one CSV row per estimator")->excludes(json);
   AddDelimiterOption(*cmd, o->read);

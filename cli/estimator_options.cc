@@ -17,10 +17,12 @@ namespace ident::cli {
 
 void EstimatorCliOptions::AddTo(CLI::App& app, bool with_estimator) {
   if (with_estimator)
-    app.add_option("--estimator", estimator,
-                   fmt::format("Estimator: {} (dof as 'student:3'; lc with a noise law: lc:laplace, lc:huber:1.345, lc:logistic, "
-                               "lc:gengauss:1.5, lc:gaussian)",
-                               fmt::join(RegressionEstimatorNames(), ", ")))
+    app.add_option(
+           "--estimator", estimator,
+           fmt::format(
+               "Estimator: {} (dof as 'student:3'; lc with a noise law: lc:laplace, lc:huber:1.345, lc:logistic, "
+               "lc:gengauss:1.5, lc:gaussian)",
+               fmt::join(RegressionEstimatorNames(), ", ")))
         ->capture_default_str();
   app.add_option("--dof", dof, "Student-t degrees of freedom k (estimator student)");
   app.add_option("--delta", delta, "cauchy/student: Kárný–Hangos ω-exponent convention δ (0 or 1; default 1)");

@@ -84,7 +84,8 @@ workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow:
   // Standard input is gone; several files have no one checksum (each file's is in data_files).
   auto checksum = [](const std::string& file) { return io::CanReadTwice(file) ? workflow::FileChecksum(file) : ""; };
   m.data_checksum = files.size() == 1 ? checksum(files.front().path) : "";
-  for (const ExperimentFile& f : files) m.data_files.push_back({.path = f.path, .checksum = checksum(f.path), .rows = f.rows});
+  for (const ExperimentFile& f : files)
+    m.data_files.push_back({.path = f.path, .checksum = checksum(f.path), .rows = f.rows});
   m.split = request.split;
   m.validation = fit.validation;
   m.validation_scores = fit.result.validation;
@@ -185,11 +186,12 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
             e.left_out ? fmt::format(" (and {} whose regressor carries a gross output outlier left out)", e.left_out)
                        : "");
       else
-        fmt::print("    restart at update {}{}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
-                 e.update, e.pass > 1 ? fmt::format(" of pass {}", e.pass) : "", e.replayed,
-                 e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
-                 100 * e.low_weight_before, 100 * e.low_weight_after,
-                 e.resolved ? "" : " (not a lock-in: the noise is heavier-tailed than the model; next restart waits)");
+        fmt::print(
+            "    restart at update {}{}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
+            e.update, e.pass > 1 ? fmt::format(" of pass {}", e.pass) : "", e.replayed,
+            e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
+            100 * e.low_weight_before, 100 * e.low_weight_after,
+            e.resolved ? "" : " (not a lock-in: the noise is heavier-tailed than the model; next restart waits)");
   }
   // Fit % is undefined (0/0) when the validation output is constant; the JSON has null there.
   auto percent = [](double p) { return std::isfinite(p) ? fmt::format("{:.2f} %", p) : std::string("undefined"); };
@@ -235,7 +237,7 @@ void RunFit(const FitCommandOptions& o) {
   if (!streamed && !once) once = io::ReadDataFile(path, csv);
   std::optional<workflow::TimeCheck> time;
   if (!experiments) files = {{path, once ? once->num_rows() : 0}};  // as read, before gaps are filled
-  if (once && !experiments)  // a time column restarts in each experiment
+  if (once && !experiments)                                         // a time column restarts in each experiment
     time = workflow::CheckRecordTime(*once, source->used_columns(), o.missing);
   // Streamed: the gaps to fill are found in a pass of their own; otherwise the estimation pass checks the time.
   if (streamed && o.missing) time = workflow::ScanCsvTime(path, csv, source->used_columns());

@@ -38,9 +38,9 @@ PlotPanel OutputPanel(const workflow::RecordFit& fit, workflow::DataSource& sour
   const bool dynamic = source.dynamic();
   panel.series.push_back({"measured", rows, physical(p.measured),
                           dynamic ? "lines lw 3.5 lc rgb '#8c8c8c'" : "points pt 7 ps 1.4 lc rgb '#606060'"});
-  panel.series.push_back({fmt::format("one-step (fit {})", FitPercent(fit.result.validation.one_step)),
-                          rows, physical(p.one_step),
-                          dynamic ? "lines lw 1.2 lc rgb '#0050c0'" : "linespoints lw 1.2 pt 6 ps 1.2 lc rgb '#0050c0'"});
+  panel.series.push_back(
+      {fmt::format("one-step (fit {})", FitPercent(fit.result.validation.one_step)), rows, physical(p.one_step),
+       dynamic ? "lines lw 1.2 lc rgb '#0050c0'" : "linespoints lw 1.2 pt 6 ps 1.2 lc rgb '#0050c0'"});
   if (dynamic) {
     const auto& v = fit.result.validation;
     panel.series.push_back({fmt::format("simulation (fit {})", v.simulation ? FitPercent(*v.simulation) : "undefined"),
@@ -53,8 +53,11 @@ PlotPanel ParameterPanel(const workflow::RecordFit& fit, workflow::DataSource& s
   const int rho = source.num_parameters();
   const std::size_t updates = h.t.size();
   const std::size_t start = StartUpUpdates(fit, updates, rho);
-  PlotPanel panel{fmt::format("estimation: parameter trajectories θ̂(t), y range after the start-up ({} updates)", start), "row",
-                  "estimate", {}};
+  PlotPanel panel{
+      fmt::format("estimation: parameter trajectories θ̂(t), y range after the start-up ({} updates)", start),
+      "row",
+      "estimate",
+      {}};
   if (updates > 0) panel.xrange = PlotRange{h.t.front() - 0.5, h.t.back() + 0.5};
   const std::vector<std::string> names = source.parameter_names();
   double low = std::numeric_limits<double>::infinity(), high = -low;
@@ -101,8 +104,8 @@ std::optional<PlotPanel> WeightPanel(const workflow::RecordFit& fit, const Param
 }
 
 PlotPanel ResidualPanel(const workflow::ResidualAnalysis& a) {
-  PlotPanel panel{fmt::format("validation one-step residuals: correlations (N = {})", a.samples), "lag τ",
-                  "correlation", {}};
+  PlotPanel panel{
+      fmt::format("validation one-step residuals: correlations (N = {})", a.samples), "lag τ", "correlation", {}};
   const int lags = static_cast<int>(a.autocorrelation.size());
   panel.xrange = PlotRange{-0.5, lags + 0.5};
   double top = a.band;
@@ -112,16 +115,19 @@ PlotPanel ResidualPanel(const workflow::ResidualAnalysis& a) {
   panel.yrange = PlotRange{-1.15 * top, 1.15 * top};
   std::vector<double> tau;
   for (int k = 1; k <= lags; ++k) tau.push_back(k);
-  panel.series.push_back({fmt::format("99 % band ±{:.3f}", a.band), {-0.5, lags + 0.5}, {a.band, a.band},
+  panel.series.push_back({fmt::format("99 % band ±{:.3f}", a.band),
+                          {-0.5, lags + 0.5},
+                          {a.band, a.band},
                           "lines lw 1.2 dt 2 lc rgb 'black'"});
   panel.series.push_back({"", {-0.5, lags + 0.5}, {-a.band, -a.band}, "lines lw 1.2 dt 2 lc rgb 'black'"});
   panel.series.push_back({"r_ee(τ), τ ≥ 1", tau, a.autocorrelation, "impulses lw 3 lc rgb '#0050c0'"});
   for (std::size_t i = 0; i < a.input_names.size(); ++i) {
     std::vector<double> x;
     for (std::size_t k = 0; k < a.cross_correlation[i].size(); ++k)
-      x.push_back(static_cast<double>(k) + 0.2 * static_cast<double>(i + 1) / static_cast<double>(a.input_names.size()));
-    panel.series.push_back(
-        {fmt::format("r_e,{}(τ), τ ≥ 0", a.input_names[i]), x, a.cross_correlation[i], fmt::format("points pt 7 ps 0.7 lc {}", i + 3)});
+      x.push_back(static_cast<double>(k) +
+                  0.2 * static_cast<double>(i + 1) / static_cast<double>(a.input_names.size()));
+    panel.series.push_back({fmt::format("r_e,{}(τ), τ ≥ 0", a.input_names[i]), x, a.cross_correlation[i],
+                            fmt::format("points pt 7 ps 0.7 lc {}", i + 3)});
   }
   return panel;
 }

@@ -8,8 +8,8 @@
 
 #include <fmt/format.h>
 
-#include "common/error.h"
 #include "cli/output_file.h"
+#include "common/error.h"
 
 namespace ident::cli {
 namespace {

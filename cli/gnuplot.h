@@ -43,7 +43,7 @@ struct PlotPanel {
   std::string xlabel;
   std::string ylabel;
   std::vector<PlotSeries> series;
-  std::optional<PlotRange> xrange = {}, yrange = {};  // empty: gnuplot's autoscale
+  std::optional<PlotRange> xrange = {}, yrange = {};       // empty: gnuplot's autoscale
   std::vector<std::pair<double, std::string>> xtics = {};  // labelled x positions (categories); empty: numbers
 };
 

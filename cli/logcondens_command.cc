@@ -50,8 +50,8 @@ void RunLogcondens(const LogcondensOptions& o) {
   Progress progress("logcondens");  // on stderr after 2 s: the reading, then the active-set rounds
   const std::vector<double> samples = ReadSamples(o, progress);
   approx::LogConcaveMleOptions options;
-  options.on_iteration = DecadesProgress(progress, options.tolerance,
-                                         "decades of the largest D_j down to the tolerance");
+  options.on_iteration =
+      DecadesProgress(progress, options.tolerance, "decades of the largest D_j down to the tolerance");
   const std::clock_t start = std::clock();  // process CPU time of the fit alone (no CSV reading, no start-up)
   const approx::LogConcaveMle mle = approx::FitLogConcaveMle(samples, options);
   const double fit_cpu_seconds = static_cast<double>(std::clock() - start) / CLOCKS_PER_SEC;

@@ -68,7 +68,8 @@ void RunMems(const MemsCommandOptions& o) {
     s.ep_window = o.ep_window;
     s.record_trace = i == 0 && (!o.trace.empty() || !o.plot.empty());
     const std::string problem = s.Validate();
-    IDENT_REQUIRE(problem.empty(), "{} (from --t-mean/--steps/--grid-points/--grid-tolerance/--h/--ep-window)", problem);
+    IDENT_REQUIRE(problem.empty(), "{} (from --t-mean/--steps/--grid-points/--grid-tolerance/--h/--ep-window)",
+                  problem);
     return s;
   };
   for (size_t i = 0; i < o.t_targets.size(); ++i) study_options(i);
@@ -92,8 +93,8 @@ void RunMems(const MemsCommandOptions& o) {
   // Fig. 9 analogue.
   std::ostringstream report;
   std::string grid_sizes;
-  for (const auto& r : results) grid_sizes += fmt::format("{}{}x{}", grid_sizes.empty() ? "" : ",", r.grid_points,
-                                                          r.grid_points);
+  for (const auto& r : results)
+    grid_sizes += fmt::format("{}{}x{}", grid_sizes.empty() ? "" : ",", r.grid_points, r.grid_points);
   report << fmt::format("MEMS accelerometer (h = {}, sigma^2 = 1, threshold 1, {} steps, {} grid)\n", o.h, o.steps,
                         grid_sizes);
   report << "RMS velocity error (calibration = predicted variance / mean squared error)\n";
@@ -124,14 +125,15 @@ void RunMems(const MemsCommandOptions& o) {
       "no sigma_o\n",
       results.front().sigma_o);
   // The reference grid per rate: its size and the refinement check against the coarser grid.
-  report << fmt::format("grid reference: points per axis, mean var(x2), relative moment difference to the coarser "
-                        "grid (tolerance {})\n",
-                        o.grid_tolerance);
+  report << fmt::format(
+      "grid reference: points per axis, mean var(x2), relative moment difference to the coarser "
+      "grid (tolerance {})\n",
+      o.grid_tolerance);
   report << fmt::format("{:>8} {:>7} {:>12} {:>8} {:>11} {:>10}\n", "t_mean", "points", "mean_var_x2", "coarser",
                         "difference", "converged");
   for (const auto& r : results)
-    report << fmt::format("{:8.3f} {:7d} {:12.6f} {:8} {:11} {:>10}\n", r.t_mean, r.grid_points,
-                          r.grid_mean_variance, r.grid_coarse_points > 0 ? std::to_string(r.grid_coarse_points) : "-",
+    report << fmt::format("{:8.3f} {:7d} {:12.6f} {:8} {:11} {:>10}\n", r.t_mean, r.grid_points, r.grid_mean_variance,
+                          r.grid_coarse_points > 0 ? std::to_string(r.grid_coarse_points) : "-",
                           r.grid_coarse_points > 0 ? fmt::format("{:.4f}", r.grid_difference) : "-",
                           r.grid_coarse_points > 0 ? (r.grid_converged ? "yes" : "no") : "-");
   long truncated_failures = 0, truncated_projection_failures = 0;

@@ -88,8 +88,10 @@ void RunOrders(const OrdersOptions& o) {
   const bool with_noise_model = polynomial.nc_max > 0 || polynomial.nd_max > 0 || polynomial.nf_max > 0;
   IDENT_REQUIRE(o.passes >= 1 && o.passes <= 100, "--passes {}; need 1..100", o.passes);
   const std::optional<double> dof = workflow::OrderCriterionDof(o.estimator);  // a robust estimator's k
-  IDENT_REQUIRE(!dof || o.criterion != "fpe", "--criterion fpe is not likelihood-based; with --estimator {} use aic, "
-                "bic, mdl or validation", o.estimator.estimator);
+  IDENT_REQUIRE(!dof || o.criterion != "fpe",
+                "--criterion fpe is not likelihood-based; with --estimator {} use aic, "
+                "bic, mdl or validation",
+                o.estimator.estimator);
   const EstimatorSettings spec = ParseEstimatorSpec(o.estimator.estimator);
   if (!dof && !with_noise_model) {  // the ARX grid's least squares are batch solves: no recursion to set up
     const std::string setting = !spec.first_regression_setting().empty() ? spec.first_regression_setting()
@@ -131,12 +133,14 @@ void RunOrders(const OrdersOptions& o) {
     request.split = o.split;
     request.passes = o.passes;
     request.detrend = o.detrend;
-    r = workflow::SelectPolynomialOrders(*raw, path, polynomial, request, o.criterion,
-                                         [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
+    r = workflow::SelectPolynomialOrders(
+        *raw, path, polynomial, request, o.criterion,
+        [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
   } else {
-    r = workflow::SelectOrders(table, estimation, o.split < 1 ? validation : workflow::Segment{},
-                               table.ColumnIndex(o.output), table.ColumnIndex(o.input), grid, o.criterion,
-                               [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
+    r = workflow::SelectOrders(
+        table, estimation, o.split < 1 ? validation : workflow::Segment{}, table.ColumnIndex(o.output),
+        table.ColumnIndex(o.input), grid, o.criterion,
+        [&progress](long done, long total, const char* unit) { progress.Report(done, total, unit); });
   }
   if (o.json) {
     nlohmann::ordered_json j;
@@ -152,23 +156,24 @@ void RunOrders(const OrdersOptions& o) {
     for (const auto& s : r.structures) list.push_back(ScoreJson(s, dof.has_value()));
     auto& left_out = j["left_out"] = nlohmann::ordered_json::array();
     for (const auto& [s, why] : r.left_out)
-      left_out.push_back({{"na", s.na}, {"nb", s.nb}, {"nk", s.nk}, {"nc", s.nc}, {"nd", s.nd}, {"nf", s.nf},
-                          {"reason", why}});
+      left_out.push_back(
+          {{"na", s.na}, {"nb", s.nb}, {"nk", s.nk}, {"nc", s.nc}, {"nd", s.nd}, {"nf", s.nf}, {"reason", why}});
     std::cout << j.dump(2) << "\n";
     return;
   }
   if (dof)
-    fmt::print("{}: {} structures (na {}, nb {}, nk {}{}) fitted by {} in {} passes, scored by the Student-t likelihood "
-               "(k = {:g}) on the same {} samples{}\n",
-               path, r.structures.size(), o.na, o.nb, o.nk,
-               with_noise_model ? fmt::format(", nc {}, nd {}, nf {}", o.nc, o.nd, o.nf) : "", estimator_name,
-               o.passes, *dof, r.samples,
-               r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
+    fmt::print(
+        "{}: {} structures (na {}, nb {}, nk {}{}) fitted by {} in {} passes, scored by the Student-t likelihood "
+        "(k = {:g}) on the same {} samples{}\n",
+        path, r.structures.size(), o.na, o.nb, o.nk,
+        with_noise_model ? fmt::format(", nc {}, nd {}, nf {}", o.nc, o.nd, o.nf) : "", estimator_name, o.passes, *dof,
+        r.samples, r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
   else if (with_noise_model)
-    fmt::print("{}: {} structures (na {}, nb {}, nk {}, nc {}, nd {}, nf {}) fitted by {} in {} passes, scored on the same "
-               "{} samples{}\n",
-               path, r.structures.size(), o.na, o.nb, o.nk, o.nc, o.nd, o.nf, o.recursion, o.passes, r.samples,
-               r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
+    fmt::print(
+        "{}: {} structures (na {}, nb {}, nk {}, nc {}, nd {}, nf {}) fitted by {} in {} passes, scored on the same "
+        "{} samples{}\n",
+        path, r.structures.size(), o.na, o.nb, o.nk, o.nc, o.nd, o.nf, o.recursion, o.passes, r.samples,
+        r.validation_samples ? fmt::format(", validated on {}", r.validation_samples) : "");
   else
     fmt::print("{}: {} ARX structures (na {}, nb {}, nk {}) fitted by least squares on the same {} samples{}\n", path,
                r.structures.size(), o.na, o.nb, o.nk, r.samples,
@@ -195,26 +200,25 @@ void RunOrders(const OrdersOptions& o) {
     }
   } else {
     fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12} {:>12} {:>12} {:>12} {:>12}{}\n", "na", "nb", "nk",
-               with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", "nc", "nd", "nf") : "", "d", "loss", "AIC", "BIC", "FPE",
-               "MDL", r.validation_samples ? fmt::format(" {:>12}", "validation") : "");
+               with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", "nc", "nd", "nf") : "", "d", "loss", "AIC", "BIC",
+               "FPE", "MDL", r.validation_samples ? fmt::format(" {:>12}", "validation") : "");
     for (std::size_t i = 0; i < shown; ++i) {
       const auto& s = r.structures[i];
       fmt::print("  {:>3} {:>3} {:>3}{} {:>4} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g} {:>12.6g}{}\n", s.na, s.nb, s.nk,
                  with_noise_model ? fmt::format(" {:>3} {:>3} {:>3}", s.nc, s.nd, s.nf) : "", s.n_parameters, s.loss,
-                 s.aic, s.bic, s.fpe, s.mdl,
-                 s.validation_loss ? fmt::format(" {:>12.6g}", *s.validation_loss) : "");
+                 s.aic, s.bic, s.fpe, s.mdl, s.validation_loss ? fmt::format(" {:>12.6g}", *s.validation_loss) : "");
     }
   }
   if (shown < r.structures.size()) fmt::print("  … {} more (--top, --json)\n", r.structures.size() - shown);
   if (!r.left_out.empty()) {
     const auto& [s, why] = r.left_out.front();
-    fmt::print("  {} structure{} left out, unusable (--json lists them), e.g. na {} nb {} nk {} nc {} nd {} nf {}: {}\n",
-               r.left_out.size(), r.left_out.size() == 1 ? "" : "s", s.na, s.nb, s.nk, s.nc, s.nd, s.nf, why);
+    fmt::print(
+        "  {} structure{} left out, unusable (--json lists them), e.g. na {} nb {} nk {} nc {} nd {} nf {}: {}\n",
+        r.left_out.size(), r.left_out.size() == 1 ? "" : "s", s.na, s.nb, s.nk, s.nc, s.nd, s.nf, why);
   }
   const auto& best = r.structures.front();
-  const std::string fit_data =
-      fmt::format("{}", fmt::join(o.data, " ")) +
-      (o.experiment_column.empty() ? "" : " --experiment-column " + o.experiment_column);
+  const std::string fit_data = fmt::format("{}", fmt::join(o.data, " ")) +
+                               (o.experiment_column.empty() ? "" : " --experiment-column " + o.experiment_column);
   const std::string fit_estimator = dof ? " --estimator " + o.estimator.estimator +
                                               (o.estimator.dof ? fmt::format(" --dof {:g}", *o.estimator.dof) : "")
                                         : "";
@@ -245,12 +249,14 @@ void AddOrdersCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--nd", o->nd, "Range of the Box-Jenkins noise denominator order nd (with nf >= 1)")
       ->capture_default_str();
-  cmd->add_option("--nf", o->nf, "Range of the output-error/BJ denominator order nf (structures with nf > 0 have na = 0)")
+  cmd->add_option("--nf", o->nf,
+                  "Range of the output-error/BJ denominator order nf (structures with nf > 0 have na = 0)")
       ->capture_default_str();
   cmd->add_option("--recursion", o->recursion, "ARMAX/OE/BJ grids: rplr or rpem")
       ->check(CLI::IsMember({"rplr", "rpem"}))
       ->capture_default_str();
-  cmd->add_option("--passes", o->passes, "ARMAX/OE/BJ grids and robust estimators: passes of the recursion per structure")
+  cmd->add_option("--passes", o->passes,
+                  "ARMAX/OE/BJ grids and robust estimators: passes of the recursion per structure")
       ->capture_default_str();
   cmd->add_option("--criterion", o->criterion, "Rank by aic, bic, fpe, mdl or validation (loss on the validation part)")
       ->check(CLI::IsMember({"aic", "bic", "fpe", "mdl", "validation"}))

@@ -62,9 +62,10 @@ std::function<void(int, double)> DecadesProgress(Progress& progress, double tole
       total = std::isfinite(decades) ? std::clamp(static_cast<long>(std::ceil(decades)), 1L, 1000L) : 1L;
     }
     const double fallen = std::log10(first / measure);
-    const long done = measure <= tolerance     ? total
-                      : std::isfinite(fallen) ? std::clamp(static_cast<long>(std::clamp(fallen, 0.0, 1e3)), 0L, total - 1)
-                                              : 0L;
+    const long done = measure <= tolerance ? total
+                      : std::isfinite(fallen)
+                          ? std::clamp(static_cast<long>(std::clamp(fallen, 0.0, 1e3)), 0L, total - 1)
+                          : 0L;
     progress.Report(done, total, unit);
   };
 }

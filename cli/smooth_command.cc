@@ -78,7 +78,8 @@ void RunSmooth(const SmoothOptions& o) {
   Progress progress("smooth");
   MapSmootherOptions options;
   // The interior-point method's relative KKT residual falls about geometrically (superlinearly near the end).
-  options.on_iteration = DecadesProgress(progress, options.tolerance, "decades of the KKT residual down to the tolerance");
+  options.on_iteration =
+      DecadesProgress(progress, options.tolerance, "decades of the KKT residual down to the tolerance");
   const auto start = std::chrono::steady_clock::now();
   const std::clock_t cpu_start = std::clock();
   const MapSmootherResult r = SolveMapSmoother(p, options);

@@ -32,10 +32,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/command_line.h"
 #include "common/error.h"
 #include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
-#include "cli/command_line.h"
 
 namespace ident::fuzz {
 
@@ -277,8 +277,8 @@ inline std::string CliProperty(const std::uint8_t* data, std::size_t size) {
         for (Eigen::Index r = 0; r < table.values.rows(); ++r)
           for (Eigen::Index c = 0; c < table.values.cols(); ++c) {
             const std::string& name = table.names[static_cast<std::size_t>(c)];
-            const bool unchecked = coarse >= 0 && table.values(r, coarse) == 0 &&
-                                   (name == "grid_difference" || name == "grid_converged");
+            const bool unchecked =
+                coarse >= 0 && table.values(r, coarse) == 0 && (name == "grid_difference" || name == "grid_converged");
             if (!std::isfinite(table.values(r, c)) && !unchecked)
               return "mems output " + file + ": column '" + name + "' of data row " + std::to_string(r + 1) +
                      " is not a number:" + call;

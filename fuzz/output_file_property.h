@@ -38,11 +38,11 @@
 
 #include <Eigen/Core>
 
+#include "cli/output_file.h"
 #include "common/error.h"
 #include "fuzz/fuzz_util.h"
 #include "ident/io/csv.h"
 #include "ident/workflow/fit.h"
-#include "cli/output_file.h"
 
 namespace ident::fuzz {
 

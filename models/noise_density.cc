@@ -9,10 +9,10 @@
 #include <limits>
 #include <numbers>
 
+#include <fmt/format.h>
 #include <boost/math/quadrature/gauss.hpp>
 #include <boost/math/special_functions/erf.hpp>
 #include <boost/math/special_functions/gamma.hpp>
-#include <fmt/format.h>
 
 #include "common/error.h"
 #include "models/internal/half_line_rules.h"
@@ -99,8 +99,8 @@ double MedianAbsByQuadrature(LogConcaveNoise::Family family, double shape, doubl
     double sum = 0;
     const int panels = std::max(1, static_cast<int>(std::ceil((hi - lo) / 0.25)));
     for (int i = 0; i < panels; ++i)
-      sum += Gauss::integrate([&](double u) { return std::exp(-Rho(family, shape, u)); },
-                              lo + (hi - lo) * i / panels, lo + (hi - lo) * (i + 1) / panels);
+      sum += Gauss::integrate([&](double u) { return std::exp(-Rho(family, shape, u)); }, lo + (hi - lo) * i / panels,
+                              lo + (hi - lo) * (i + 1) / panels);
     return sum;
   };
   // ∫_0^m e^{−ρ}, split at the Huber corner, where ρ has a kink.
@@ -202,8 +202,8 @@ LogConcaveNoise LogConcaveNoise::Parse(std::string_view spec) {
     IDENT_REQUIRE(shape.has_value(), "noise '{}': gengauss needs its exponent p >= 1 (e.g. gengauss:1.5)", spec);
     return LogConcaveNoise(Family::kGeneralizedGaussian, *shape);
   }
-  throw InvalidArgument(fmt::format(
-      "unknown noise '{}' (known: gaussian, laplace, huber[:k], logistic, gengauss:p)", spec));
+  throw InvalidArgument(
+      fmt::format("unknown noise '{}' (known: gaussian, laplace, huber[:k], logistic, gengauss:p)", spec));
 }
 
 std::string LogConcaveNoise::ToString() const {
@@ -272,8 +272,7 @@ TiltedMoments LogConcaveNoise::ResidualMoments(double a, double v) const noexcep
       const double c_mid = -log_norm_ - 0.5 * a * a / s - 0.5 * std::log(s);
       const double l_mid = (-corner - m_mid) / sd_mid, u_mid = (corner - m_mid) / sd_mid;
       std::array<double, 3> bound = {c_lo + LogUpperTailBound(x_lo), c_hi + LogUpperTailBound(x_hi),
-                                     huber ? c_mid + (l_mid > 0 ? LogUpperTailBound(l_mid)
-                                                                : LogUpperTailBound(-u_mid))
+                                     huber ? c_mid + (l_mid > 0 ? LogUpperTailBound(l_mid) : LogUpperTailBound(-u_mid))
                                            : -std::numeric_limits<double>::infinity()};
       std::array<int, 3> order = {0, 1, 2};
       std::sort(order.begin(), order.end(), [&](int i, int j) { return bound[i] > bound[j]; });

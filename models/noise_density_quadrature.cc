@@ -69,7 +69,8 @@ const std::array<HermiteRule, 9>& HermiteRules() {
 // g(y, s) = f(y − s) as a projected measurement on a scalar state (the quadrature reference).
 class ResidualMeasurement final : public ProjectedMeasurement {
  public:
-  explicit ResidualMeasurement(const LogConcaveNoise& noise) : ProjectedMeasurement(Eigen::VectorXd::Ones(1)), noise_(noise) {}
+  explicit ResidualMeasurement(const LogConcaveNoise& noise)
+      : ProjectedMeasurement(Eigen::VectorXd::Ones(1)), noise_(noise) {}
   std::string name() const override { return noise_.ToString(); }
   double LogLikelihoodScalar(double y, double s) const override { return noise_.LogDensity(y - s); }
   double ScalarStrength(double) const override { return 0.0; }
@@ -183,7 +184,10 @@ TiltedMoments LogConcaveNoise::RuleMoments(double a, double v) const noexcept {
   // millionth of the width is close enough.
   for (int i = 0; i < 200; ++i) {
     const double g = -Score(r) - (r - a) / v;  // decreasing in r
-    if (g > 0) lo = r; else hi = r;
+    if (g > 0)
+      lo = r;
+    else
+      hi = r;
     const double hessian = curvature(r) + 1 / v;
     double next = r + g / hessian;
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);

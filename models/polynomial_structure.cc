@@ -19,8 +19,7 @@ ArxStructure CheckedArx(int na, std::vector<int> nb, std::vector<int> nk, int nc
   IDENT_REQUIRE(nf >= 0, "nf = {}; need nf >= 0", nf);
   IDENT_REQUIRE(nc + nd + nf >= 1, "nc = nd = nf = 0 is an ARX model, not ARMAX/OE/BJ");
   IDENT_REQUIRE(nf == 0 || na == 0,
-                "na = {} with nf = {}: an output-error or Box-Jenkins model has no A polynomial (give na = 0)", na,
-                nf);
+                "na = {} with nf = {}: an output-error or Box-Jenkins model has no A polynomial (give na = 0)", na, nf);
   IDENT_REQUIRE(nd == 0 || nf >= 1, "nd = {} needs nf >= 1 (Box-Jenkins); ARMAX has C only", nd);
   IDENT_REQUIRE(nf == 0 || nb.size() == 1,
                 "nf = {} with {} inputs: the recursive OE and Box-Jenkins estimators take one input (ARX and ARMAX "

@@ -33,9 +33,7 @@ class PolynomialStructure {
     return {na, std::move(nb), std::move(nk), nc, 0, 0};
   }
   static PolynomialStructure OutputError(int nb, int nf, int nk) { return {0, {nb}, {nk}, 0, 0, nf}; }
-  static PolynomialStructure BoxJenkins(int nb, int nc, int nd, int nf, int nk) {
-    return {0, {nb}, {nk}, nc, nd, nf};
-  }
+  static PolynomialStructure BoxJenkins(int nb, int nc, int nd, int nf, int nk) { return {0, {nb}, {nk}, nc, nd, nf}; }
 
   // The y/u part: ARX(na, nb, nk) with na = 0 for OE and BJ.
   const ArxStructure& arx() const { return arx_; }

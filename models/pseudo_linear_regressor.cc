@@ -131,9 +131,7 @@ void PseudoLinearRegressor::BoxJenkinsGradient() {
   FilterRange(theta + c, nc, nullptr, 0, c, f, phi_.data(), pre, psi);  // ψ = p in C and D
 }
 
-double PseudoLinearRegressor::LinearisedOutput(double y) const {
-  return gradient_ ? y + theta_.dot(psi_ - phi_) : y;
-}
+double PseudoLinearRegressor::LinearisedOutput(double y) const { return gradient_ ? y + theta_.dot(psi_ - phi_) : y; }
 
 void PseudoLinearRegressor::SetEstimate(const Eigen::Ref<const Eigen::VectorXd>& theta) {
   IDENT_REQUIRE(theta.size() == theta_.size(), "the estimate has {} entries; {} has {} parameters", theta.size(),
@@ -150,10 +148,9 @@ bool PseudoLinearRegressor::TrackEstimate(const Eigen::Ref<const Eigen::VectorXd
   ++tracked_;
   IDENT_REQUIRE(theta.size() == theta_.size(), "the estimate has {} entries; {} has {} parameters", theta.size(),
                 structure_.ToString(), theta_.size());
-  const bool stable =
-      theta.allFinite() &&
-      MonicStable(theta.data() + structure_.c_offset(), structure_.nc(), work_.data()) &&
-      MonicStable(theta.data() + structure_.f_offset(), structure_.nf(), work_.data());
+  const bool stable = theta.allFinite() &&
+                      MonicStable(theta.data() + structure_.c_offset(), structure_.nc(), work_.data()) &&
+                      MonicStable(theta.data() + structure_.f_offset(), structure_.nf(), work_.data());
   if (!stable && known_) {
     ++projections_;
     return false;

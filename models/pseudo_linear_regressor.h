@@ -82,7 +82,7 @@ class PseudoLinearRegressor {
   long projections() const { return projections_; }  // estimates refused by TrackEstimate
 
  private:
-  void Store(double y);  // after the ARX part has stored y: the residual, noise and noise-free output
+  void Store(double y);       // after the ARX part has stored y: the residual, noise and noise-free output
   void BoxJenkinsGradient();  // pre_ and psi_ for the current φ (RPEM, Box–Jenkins)
   // For each entry i in [begin, end): pre[i] = in[i] − Σ_{k<ng} g[k]·(the filter's value of entry i, k + 1
   // samples back), then (psi non-null) psi[i] = pre[i] + Σ_{k<nh} h[k]·(the same, k + 1 back). The taps
@@ -99,22 +99,22 @@ class PseudoLinearRegressor {
   // φ(t): the ARX part from arx_; the C, D and F parts ε(t−1−k), −v(t−1−k), −w(t−1−k) are kept here
   // from sample to sample (Store shifts them), also before t0.
   Eigen::VectorXd phi_;
-  Eigen::VectorXd work_;                      // the stability test's buffer
+  Eigen::VectorXd work_;  // the stability test's buffer
   Recursion recursion_;
-  Eigen::VectorXd psi_;                       // ψ(t) (RPEM)
+  Eigen::VectorXd psi_;  // ψ(t) (RPEM)
   // The filter's past: column newest_ + k holds ψ(t−1−k) for ARMAX and OE, p(t−1−k) for Box–Jenkins
   // (BoxJenkinsGradient), k < taps_ = nc (ARMAX), nf (OE) or max(nc + nf, nd) (Box–Jenkins). Each value is
   // stored twice (Store), in columns r and r + taps_, so that the taps' columns never wrap around.
   Eigen::MatrixXd history_;
   int taps_ = 0;
   Eigen::Index newest_ = 0;
-  Eigen::VectorXd pre_, cf_;                  // Box–Jenkins: p(t); C(q)F(q)'s coefficients
-  bool box_jenkins_ = false;                  // RPEM with F and C or D
-  bool gradient_ = false;                     // z = ψ(t) for the current sample
-  bool known_ = false;                        // an estimate has been given
-  bool measured_w_ = false;                   // w = y (TrackEstimate's measured_noise_free)
-  bool fixed_ = false;                        // SetEstimate's θ holds
-  bool formed_ = false;                       // φ(t) was formed for the current sample
+  Eigen::VectorXd pre_, cf_;  // Box–Jenkins: p(t); C(q)F(q)'s coefficients
+  bool box_jenkins_ = false;  // RPEM with F and C or D
+  bool gradient_ = false;     // z = ψ(t) for the current sample
+  bool known_ = false;        // an estimate has been given
+  bool measured_w_ = false;   // w = y (TrackEstimate's measured_noise_free)
+  bool fixed_ = false;        // SetEstimate's θ holds
+  bool formed_ = false;       // φ(t) was formed for the current sample
   long samples_ = 0;
   long projections_ = 0;
   long tracked_ = 0;  // TrackEstimate calls since ClearEstimate

@@ -142,7 +142,7 @@ class CsvReader {
   std::vector<char> chunk_;
   std::size_t chunk_pos_ = 0, chunk_end_ = 0;
   std::size_t next_cr_ = 0;  // offset in chunk_ of the next CR at or after chunk_pos_ (chunk_end_: none)
-  bool skip_lf_ = false;  // the last line ended in CR: a following LF belongs to it
+  bool skip_lf_ = false;     // the last line ended in CR: a following LF belongs to it
   long line_ = 0;
   long rows_ = 0;
   long blank_line_ = 0;  // first blank line after a data row (an error if another row follows)

@@ -357,8 +357,8 @@ class LdFactor {
 
   // One step j, for g_j ≠ 0, of the plan's recurrence (PlanPrefixSum): u_j = u_{j+1} + g_j²/d'_j,
   // dn_j = d'_j u_j / u_{j+1}, b_j = g_j / (d'_j u_j), with u_{j+1} and its reciprocal carried from step j+1.
-  [[gnu::always_inline]] static void AgeeTurnerStep(double dj, double gj, double& u_next, double& ru_next,
-                                                    double& dn, double& b) noexcept {
+  [[gnu::always_inline]] static void AgeeTurnerStep(double dj, double gj, double& u_next, double& ru_next, double& dn,
+                                                    double& b) noexcept {
     const double w = 1 / dj;
     const double u = u_next + gj * gj * w;
     const double ru = 1 / u;
@@ -466,14 +466,14 @@ class LdFactor {
   }
 
   Matrix L_;
-  Matrix L_saved_;  // strict lower triangle: PlanFused's old rows of L, SolveTransposedKeep's partial sums
-  Vector d_, d_next_;                // d_next_: a plan's new d, or PlanFused's old d
-  Vector b_;                         // PlanUpdate -> CommitUpdate workspace
-  Vector a_work_;                    // PlanFused's fallback: a copy of a
-  Eigen::Index sweep_end_ = 0;       // rows below this keep their L (the sweep's c reached 0)
-  Plan plan_;                        // the last PlanUpdate()
-  mutable double l_bound_ = kStale;  // ≥ max |L_ij| off the diagonal; NaN = recompute
-  double l_bound_before_ = kStale;   // PlanFused: l_bound_ before the update
+  Matrix L_saved_;              // strict lower triangle: PlanFused's old rows of L, SolveTransposedKeep's partial sums
+  Vector d_, d_next_;           // d_next_: a plan's new d, or PlanFused's old d
+  Vector b_;                    // PlanUpdate -> CommitUpdate workspace
+  Vector a_work_;               // PlanFused's fallback: a copy of a
+  Eigen::Index sweep_end_ = 0;  // rows below this keep their L (the sweep's c reached 0)
+  Plan plan_;                   // the last PlanUpdate()
+  mutable double l_bound_ = kStale;                 // ≥ max |L_ij| off the diagonal; NaN = recompute
+  double l_bound_before_ = kStale;                  // PlanFused: l_bound_ before the update
   double fused_c_ = kStale, fused_inv_c_ = kStale;  // PlanFused's last c and 1/c
 };
 

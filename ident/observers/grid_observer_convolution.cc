@@ -101,7 +101,8 @@ bool GridObserver::FactorisedTaps(const Eigen::MatrixXd& noise_cov, double max_t
   const int a = dim_ - 1, na = np_[a];
   const double qa = noise_cov(a, a);
   const double beta = dim_ == 2 && qa > 0 ? noise_cov(0, 1) / qa : 0;
-  const double v = dim_ == 2 ? std::max(0.0, noise_cov(0, 0) - beta * noise_cov(0, 1)) / (spacing_[0] * spacing_[0]) : 0;
+  const double v =
+      dim_ == 2 ? std::max(0.0, noise_cov(0, 0) - beta * noise_cov(0, 1)) / (spacing_[0] * spacing_[0]) : 0;
   if (!(qa >= 0) || !(v <= 0.25) || !std::isfinite(beta)) return false;
   // g: inverse DFT of the lattice characteristic function exp(−2 P_N,aa sin²(π k/np)/Δ_a²).
   for (int k = 0; k < na; ++k) {
@@ -174,8 +175,9 @@ void GridObserver::BuildGaussianKernel(const Eigen::MatrixXd& noise_cov) {
     tap_offset_[taps_] = off;
     tap_weight_[taps_++] = v;
   }
-  if (taps_ < 0) taps_ = 0;  // the FFT
-  else if (taps_ == 0) {     // no tap (not reached: the kernel sums to 1): the identity
+  if (taps_ < 0)
+    taps_ = 0;            // the FFT
+  else if (taps_ == 0) {  // no tap (not reached: the kernel sums to 1): the identity
     tap_offset_[0] = {0, 0, 0};
     tap_weight_[0] = 1;
     taps_ = 1;

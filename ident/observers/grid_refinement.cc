@@ -19,8 +19,10 @@ GridTrace RunGridObserver(const models::LinearStateSpace& model, const models::M
   trace.mean.reserve(y.size());
   trace.variance.reserve(y.size());
   for (size_t k = 0; k < y.size(); ++k) {
-    if (!grid.Predict(model, u[k]).updated()) ++trace.failed_steps;
-    else if (!grid.Correct(measurement, y[k]).updated()) ++trace.failed_steps;
+    if (!grid.Predict(model, u[k]).updated())
+      ++trace.failed_steps;
+    else if (!grid.Correct(measurement, y[k]).updated())
+      ++trace.failed_steps;
     trace.mean.push_back(grid.mean());
     trace.variance.push_back(grid.covariance().diagonal());
   }
@@ -28,8 +30,8 @@ GridTrace RunGridObserver(const models::LinearStateSpace& model, const models::M
 }
 
 double GridTraceDifference(const GridTrace& a, const GridTrace& b, int first_step) {
-  IDENT_REQUIRE(a.mean.size() == b.mean.size() && !a.mean.empty(), "grid traces of {} and {} steps",
-                a.mean.size(), b.mean.size());
+  IDENT_REQUIRE(a.mean.size() == b.mean.size() && !a.mean.empty(), "grid traces of {} and {} steps", a.mean.size(),
+                b.mean.size());
   const size_t first = std::min(static_cast<size_t>(std::max(first_step, 0)), a.mean.size() - 1);
   const Eigen::Index dim = a.mean.front().size();
   double worst = 0;

@@ -45,10 +45,10 @@ struct GridRefinementOptions {
 };
 
 struct GridRefinementResult {
-  int points = 0;           // the finer grid of the last comparison, whose moments are `trace`
-  int coarse_points = 0;    // the coarser grid it was compared with
-  double difference = 0;    // largest relative moment difference between them (header comment)
-  bool converged = false;   // difference ≤ tolerance (false: max_points reached first)
+  int points = 0;          // the finer grid of the last comparison, whose moments are `trace`
+  int coarse_points = 0;   // the coarser grid it was compared with
+  double difference = 0;   // largest relative moment difference between them (header comment)
+  bool converged = false;  // difference ≤ tolerance (false: max_points reached first)
   GridTrace trace;
 };
 

@@ -173,7 +173,7 @@ StepReport BasicLcGaussianFilter<N>::Predict(const models::LinearStateSpace& mod
   tmp_.noalias() = model.A * P_;
   P_new_.noalias() = tmp_ * model.A.transpose();
   P_new_ += model.process_noise;  // eq. (2): P_N adds
-  for (int i = 0; i < n; ++i)      // exactly symmetric, as ScaleAndApplyTilt needs to keep it so
+  for (int i = 0; i < n; ++i)     // exactly symmetric, as ScaleAndApplyTilt needs to keep it so
     for (int j = 0; j < i; ++j) P_new_(i, j) = P_new_(j, i) = 0.5 * (P_new_(i, j) + P_new_(j, i));
   if (!m_new_.allFinite() || !P_new_.allFinite()) return {StepStatus::kNumericalFailure};
   m_ = m_new_;
@@ -206,7 +206,8 @@ StepReport BasicLcGaussianFilter<N>::ScaleAndApplyTilt(double factor, const Eige
   k_.noalias() = (factor / s2) * Pc;
   // Bounds by norms (|x_i| ≤ ‖x‖, max P_ii ≤ trace P for P ≥ 0): finite bounds keep every entry finite.
   const double k2 = k_.squaredNorm();
-  if (!std::isfinite(k2) || !std::isfinite(innovation) || !std::isfinite(m_.norm() + std::sqrt(k2) * std::abs(innovation)) ||
+  if (!std::isfinite(k2) || !std::isfinite(innovation) ||
+      !std::isfinite(m_.norm() + std::sqrt(k2) * std::abs(innovation)) ||
       !std::isfinite(factor * P_.trace() + shrink * k2)) {
     return {StepStatus::kNumericalFailure};
   }

@@ -96,8 +96,9 @@ std::unique_ptr<AnyRegressionEstimator> MakeBatch(const EstimatorSettings& s, in
 
 // The log-concave Gaussian filter as a regression estimator (ident/observers/lc_regression.h): "lc:<noise>".
 std::unique_ptr<AnyRegressionEstimator> MakeLc(const EstimatorSettings& s, int rho) {
-  IDENT_REQUIRE(!s.noise.empty(),
-                "estimator 'lc' needs a noise law: lc:laplace, lc:huber[:k], lc:logistic, lc:gengauss:p or lc:gaussian");
+  IDENT_REQUIRE(
+      !s.noise.empty(),
+      "estimator 'lc' needs a noise law: lc:laplace, lc:huber[:k], lc:logistic, lc:gengauss:p or lc:gaussian");
   const std::string name = "lc:" + s.noise;
   IDENT_REQUIRE(!s.dof, "dof = {} does not apply to estimator '{}' (a Huber corner goes in the name: lc:huber:1.5)",
                 s.dof.value_or(0), name);
@@ -183,9 +184,9 @@ std::unique_ptr<AnyEstimator> MakeEstimator(const EstimatorSettings& settings, c
 
 std::unique_ptr<AnyEstimator> MakeEstimator(const EstimatorSettings& settings, const ObserverProblem& problem) {
   if (Find(settings.name) != nullptr)
-    throw InvalidArgument(fmt::format(
-        "'{}' is a regression estimator: it takes a regression problem (items y, z), not a state-space one",
-        settings.name));
+    throw InvalidArgument(
+        fmt::format("'{}' is a regression estimator: it takes a regression problem (items y, z), not a state-space one",
+                    settings.name));
   return MakeStateObserver(settings, problem);
 }
 

@@ -31,9 +31,9 @@
 #include <vector>
 
 #include "common/estimator.h"
-#include "ident/regression/regression_estimator.h"
 #include "ident/registry/estimator_settings.h"
 #include "ident/registry/observer_registry.h"
+#include "ident/regression/regression_estimator.h"
 
 namespace ident {
 

@@ -76,8 +76,8 @@ EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings ba
     double value = 0;
     const auto [ptr, ec] = std::from_chars(rest.data(), rest.data() + rest.size(), value);
     IDENT_REQUIRE(ec == std::errc() && ptr == rest.data() + rest.size(),
-                  "estimator '{}': '{}' is not a number or key=value (use e.g. student:3 or grid:points=64)",
-                  spec, rest);
+                  "estimator '{}': '{}' is not a number or key=value (use e.g. student:3 or grid:points=64)", spec,
+                  rest);
     base.dof = value;
     return base;
   }
@@ -87,8 +87,7 @@ EstimatorSettings ParseEstimatorSpec(std::string_view spec, EstimatorSettings ba
     const std::string_view item = rest.substr(0, comma);
     const auto eq = item.find('=');
     IDENT_REQUIRE(eq != std::string_view::npos && eq > 0,
-                  "estimator '{}': '{}' is not key=value (use e.g. rls:forgetting=0.99 or grid:points=64)", spec,
-                  item);
+                  "estimator '{}': '{}' is not key=value (use e.g. rls:forgetting=0.99 or grid:points=64)", spec, item);
     const std::string key(item.substr(0, eq));
     IDENT_REQUIRE(seen.insert(key == "k" ? "dof" : key).second, "estimator '{}': option {} given twice", spec, key);
     SetTypedKey(base, key, item.substr(eq + 1));

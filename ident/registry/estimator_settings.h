@@ -45,11 +45,11 @@ struct EstimatorSettings {
   std::optional<RegressionPrior> prior;  // explicit (ν(0), V(0)); otherwise the estimator's default
   // cauchy/student without `prior`: V(0) of the start-up's provisional estimate (SafeStudentOptions)
   std::optional<Eigen::MatrixXd> provisional_v0;
-  std::optional<double> dof;             // Student-t degrees of freedom k
-  std::string noise;                     // "lc": the noise law ("laplace", "huber:1.345", …)
-  std::optional<int> delta;              // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos; unset: 1)
-  bool exact = false;                    // switch off every safeguard beyond the spec's recursion
-  LockInSettings lock_in;                // refused (if any() is set) for "rls" and together with `exact`
+  std::optional<double> dof;                   // Student-t degrees of freedom k
+  std::string noise;                           // "lc": the noise law ("laplace", "huber:1.345", …)
+  std::optional<int> delta;                    // ω-exponent convention δ ∈ {0, 1} (Kárný–Hangos; unset: 1)
+  bool exact = false;                          // switch off every safeguard beyond the spec's recursion
+  LockInSettings lock_in;                      // refused (if any() is set) for "rls" and together with `exact`
   std::map<std::string, std::string> options;  // the estimator's own options, key → value (text)
 
   // The first typed field that differs from its default, by its spec key ("dof", "forgetting", …), or empty:

@@ -16,7 +16,8 @@
 namespace ident {
 namespace {
 
-using ObserverFactory = std::function<std::unique_ptr<AnyStateObserver>(const EstimatorSettings&, const ObserverProblem&)>;
+using ObserverFactory =
+    std::function<std::unique_ptr<AnyStateObserver>(const EstimatorSettings&, const ObserverProblem&)>;
 
 void RequireNoObserverOptions(const EstimatorSettings& s) {
   if (s.options.empty()) return;
@@ -39,8 +40,8 @@ std::unique_ptr<AnyStateObserver> MakeKalman(const EstimatorSettings& s, const O
   IDENT_REQUIRE(gaussian != nullptr,
                 "observer 'kalman' needs a linear-Gaussian measurement; '{}' is not (use lc_gaussian or grid)",
                 p.measurement->name());
-  return std::make_unique<StateObserverModel<KalmanFilter>>("kalman", p.model, projected->c(), p.model, *gaussian,
-                                                           p.x0, p.P0);
+  return std::make_unique<StateObserverModel<KalmanFilter>>("kalman", p.model, projected->c(), p.model, *gaussian, p.x0,
+                                                            p.P0);
 }
 
 std::unique_ptr<AnyStateObserver> MakeLcGaussian(const EstimatorSettings& s, const ObserverProblem& p) {
@@ -60,9 +61,8 @@ std::unique_ptr<AnyStateObserver> MakeLcTruncated(const EstimatorSettings& s, co
   IDENT_REQUIRE(p.x0.size() == 2 && p.P0.rows() == 2 && p.P0.cols() == 2,
                 "observer 'lc_truncated': x0 has {} entries and P0 is {}×{}; need 2 and 2×2", p.x0.size(), p.P0.rows(),
                 p.P0.cols());
-  return std::make_unique<StateObserverModel<TruncatedGaussianFilter>>("lc_truncated", p.model, threshold->c(),
-                                                                       p.model, *threshold,
-                                                                       Eigen::Vector2d(p.x0), Eigen::Matrix2d(p.P0));
+  return std::make_unique<StateObserverModel<TruncatedGaussianFilter>>(
+      "lc_truncated", p.model, threshold->c(), p.model, *threshold, Eigen::Vector2d(p.x0), Eigen::Matrix2d(p.P0));
 }
 
 std::unique_ptr<AnyStateObserver> MakeGrid(const EstimatorSettings& s, const ObserverProblem& p) {
@@ -105,8 +105,9 @@ std::unique_ptr<AnyStateObserver> MakeGrid(const EstimatorSettings& s, const Obs
   const std::string problem = o.Validate();
   IDENT_REQUIRE(problem.empty(), "observer 'grid': option {}", problem);
   const auto* projected = dynamic_cast<const models::ProjectedMeasurement*>(p.measurement.get());
-  return std::make_unique<StateObserverModel<GridObserver>>(
-      "grid", p.model, projected != nullptr ? projected->c() : Eigen::VectorXd(), p.model, p.measurement, p.x0, p.P0, o);
+  return std::make_unique<StateObserverModel<GridObserver>>("grid", p.model,
+                                                            projected != nullptr ? projected->c() : Eigen::VectorXd(),
+                                                            p.model, p.measurement, p.x0, p.P0, o);
 }
 
 const std::vector<std::pair<std::string, ObserverFactory>>& ObserverEntries() {

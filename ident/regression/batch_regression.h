@@ -79,7 +79,7 @@ struct BatchRegressionResult {
 };
 
 struct HuberOptions {
-  double k = 1.345;           // ψ's corner, in units of s
+  double k = 1.345;  // ψ's corner, in units of s
   double tolerance = 1e-12;  // on ‖r_new − r_old‖/min(‖r_old‖, √n·s); MASS::rlm: 1e-4 on ‖r_new − r_old‖/‖r_old‖
   int max_iterations = 1000;  // MASS::rlm: 20
 

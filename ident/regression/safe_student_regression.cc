@@ -329,7 +329,8 @@ bool SafeStudentRegression::CompeteWithRobustRestart() noexcept {
       // The restart's replay weighs each sample once against the estimate of its time, as the first pass
       // did; further passes from its estimate (BeginPass) let it settle, as --passes does.
       for (int pass = 1; pass < kCompetingPasses && candidate.BeginPass(); ++pass)
-        for (long i = 0; i < samples.cols(); ++i) candidate.Update(samples(0, i), samples.col(i).tail(num_parameters()));
+        for (long i = 0; i < samples.cols(); ++i)
+          candidate.Update(samples(0, i), samples.col(i).tail(num_parameters()));
       const double nll = candidate.ProfileNegativeLogLikelihood(candidate.parameters(), {});
       if (nll < best_nll) best_nll = nll, best = std::move(candidate);
     }

@@ -100,7 +100,8 @@ class SafeStudentRegression {
     Store(y, z);
     if (in_startup()) {
       // Every W samples until the regressors of the last (up to 5W) samples are identifiable.
-      if (updates_ % startup_window_ == 0) Restart(std::min<long>(stored_, 5L * startup_window_), RestartKind::kStartup);
+      if (updates_ % startup_window_ == 0)
+        Restart(std::min<long>(stored_, 5L * startup_window_), RestartKind::kStartup);
     } else if (monitor_.Add(report.nu * report.weight)) {
       ++lock_ins_;
       if (options_.restart_on_lock_in && updates_ >= next_restart_) Restart(RecentWindow(), RestartKind::kLockIn);

@@ -296,8 +296,7 @@ class BasicStudentRegression {
     if (s.report.updated()) {
       last_beta_ = s.report.weight;
       sandwich_.Add(options_.dof, details_.xi_z - details_.xi, s.report.prediction_error, s.lambda);
-      propagated_.Add(s.report.weight, details_.elasticity, details_.xi_z, s.report.prediction_error,
-                      num_parameters());
+      propagated_.Add(s.report.weight, details_.elasticity, details_.xi_z, s.report.prediction_error, num_parameters());
     }
     return s.report;
   }

@@ -105,14 +105,14 @@ struct MapSmootherResult {
   // At the returned iterate: the largest of the complementarity per constraint, the total complementarity
   // over the objective's size, and |R3|, |R4| over their scales or round-off floors (the stopping test).
   double kkt_residual = 0;
-  Eigen::MatrixXd x;                // n x (T+1) MAP states
-  Eigen::MatrixXd w;                // n x (T+1) process noise w_t = x_t - F_{t-1} x_{t-1}, w_0 = x_0
-  Eigen::MatrixXd u;                // nz x (T+1) dual controls of (D)
-  Eigen::MatrixXd y;                // n x (T+1) dual states, from u by the dynamics of (D)
-  double primal = 0;                // (P) at x
-  double dual = 0;                  // (D) at (u, y)
-  double gap = 0;                   // primal - dual (>= 0 up to rounding)
-  double relative_gap = 0;          // gap / max(1, |primal|)
+  Eigen::MatrixXd x;        // n x (T+1) MAP states
+  Eigen::MatrixXd w;        // n x (T+1) process noise w_t = x_t - F_{t-1} x_{t-1}, w_0 = x_0
+  Eigen::MatrixXd u;        // nz x (T+1) dual controls of (D)
+  Eigen::MatrixXd y;        // n x (T+1) dual states, from u by the dynamics of (D)
+  double primal = 0;        // (P) at x
+  double dual = 0;          // (D) at (u, y)
+  double gap = 0;           // primal - dual (>= 0 up to rounding)
+  double relative_gap = 0;  // gap / max(1, |primal|)
   // The duality certificate: the gap is summed as per-term Fenchel-Young gaps f(w)+f*(y)-y'w and
   // g(r)+g*(u)-u'r at the exactly dual-feasible (u, y(u)) (y in double-double), so that its round-off does
   // not grow with T; gap_error_bound bounds that round-off (a first-order running error bound).

@@ -281,8 +281,8 @@ struct Tally {
 // The output's detrending offset that `ident fit` would subtract from the corrupted record, in the
 // coordinates of the clean record's detrending (0 without detrending): the mean of the corrupted estimation
 // outputs, or for a robust estimator on a dynamic structure their mean after the Hampel filter.
-double CorruptedOutputOffset(const io::DataTable& corrupted, const DataSource& source, const EstimatorSettings& settings,
-                             const FitOptions& fit, Segment estimation) {
+double CorruptedOutputOffset(const io::DataTable& corrupted, const DataSource& source,
+                             const EstimatorSettings& settings, const FitOptions& fit, Segment estimation) {
   if (fit.detrend != Detrend::kMean) return 0;
   FitOptions own = fit;
   own.robust_offset = RegressionEstimatorTraits(settings.name).robust;

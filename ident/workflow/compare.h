@@ -80,8 +80,8 @@ struct EstimatorScore {
   // The output's detrending offset subtracted for this estimator (mean over trials; data units; 0 without
   // detrending): the model is θ around it.
   double output_offset = 0;
-  int failed_trials = 0;     // trials whose estimate failed or was unusable (left out of the spreads)
-  std::string failure;       // the first such trial's reason, "" if none
+  int failed_trials = 0;  // trials whose estimate failed or was unusable (left out of the spreads)
+  std::string failure;    // the first such trial's reason, "" if none
 };
 
 struct CompareResult {

@@ -102,7 +102,8 @@ class PolynomialSource final : public DynamicSource<models::PseudoLinearRegresso
     const models::PolynomialStructure& s = regressor().structure();
     std::vector<double> work(static_cast<std::size_t>(std::max(s.nc(), s.nf())));
     const bool rpem = regressor().recursion() == models::Recursion::kPredictionError;
-    for (const auto& [name, offset, n] : {std::tuple{'C', s.c_offset(), s.nc()}, std::tuple{'F', s.f_offset(), s.nf()}}) {
+    for (const auto& [name, offset, n] :
+         {std::tuple{'C', s.c_offset(), s.nc()}, std::tuple{'F', s.f_offset(), s.nf()}}) {
       if (n == 0 || models::MonicStable(theta.data() + offset, n, work.data())) continue;
       return fmt::format(
           "the estimated {0}(q) has a root of modulus {1:.4g}, on or outside the unit circle, so the one-step "

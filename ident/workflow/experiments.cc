@@ -82,7 +82,8 @@ std::vector<Experiment> TableExperiments(const io::DataTable& table) {
 
 nlohmann::ordered_json ExperimentsJson(const std::vector<Experiment>& experiments) {
   nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (const Experiment& e : experiments) list.push_back({{"name", e.name}, {"rows", {e.first + 1, e.first + e.count}}});
+  for (const Experiment& e : experiments)
+    list.push_back({{"name", e.name}, {"rows", {e.first + 1, e.first + e.count}}});
   return list;
 }
 

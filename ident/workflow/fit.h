@@ -101,11 +101,11 @@ struct FitResult {
   double noise_std = 0;
   double nu = 0, Dy = 0;
   int samples_estimation = 0, samples_validation = 0;
-  std::string validation_data;          // a separate validation record (ident fit --validate); "" for the record's own
-  std::string kind;                     // "recursive" or "batch"
-  int passes = 1;                       // passes over the estimation part that ran
-  int updates = 0, rejected = 0;        // estimator steps taken / rejected (missing or invalid samples), last pass
-  long cleaned = 0;                     // outputs cleaned (--clean-regressors on); the equations that hold them are left out
+  std::string validation_data;    // a separate validation record (ident fit --validate); "" for the record's own
+  std::string kind;               // "recursive" or "batch"
+  int passes = 1;                 // passes over the estimation part that ran
+  int updates = 0, rejected = 0;  // estimator steps taken / rejected (missing or invalid samples), last pass
+  long cleaned = 0;               // outputs cleaned (--clean-regressors on); the equations that hold them are left out
   std::optional<LockInStatus> lock_in;  // the robust estimators' lock-in safeguard at the end of estimation
   FitScores validation;
   // The record's time column (workflow/time_column.h); null when there is none or it was not checked.

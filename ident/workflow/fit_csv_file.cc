@@ -193,8 +193,8 @@ void RunEarlierCsvPasses(const std::string& path, const io::CsvOptions& csv, Dat
 
 // The time column's check as the rows arrive: the gaps found before (`filled`, then *time_column = −1), or
 // an empty check of the used columns' time column at index *time_column; none without one.
-std::optional<TimeCheck> ArrivingTimeColumn(const RecordRows& reader, const DataSource& source,
-                                            const TimeCheck* filled, int* time_column) {
+std::optional<TimeCheck> ArrivingTimeColumn(const RecordRows& reader, const DataSource& source, const TimeCheck* filled,
+                                            int* time_column) {
   std::optional<TimeCheck> time;
   *time_column = -1;
   if (filled != nullptr) {

@@ -32,9 +32,9 @@ std::unique_ptr<DataSource> ModelSpec::MakeSource(const std::vector<std::string>
   IDENT_REQUIRE(recursion == "rplr" || polynomial(), "--recursion rpem needs an ARMAX (--nc), OE (--nf) or BJ model");
   if (polynomial()) {
     const models::PolynomialStructure structure(na, per_input(nb, "nb"), per_input(nk, "nk"), nc, nd, nf);
-    return MakePolynomialSource(columns, output, inputs, structure, source, clean,
-                                recursion == "rpem" ? models::Recursion::kPredictionError
-                                                    : models::Recursion::kPseudoLinear);
+    return MakePolynomialSource(
+        columns, output, inputs, structure, source, clean,
+        recursion == "rpem" ? models::Recursion::kPredictionError : models::Recursion::kPseudoLinear);
   }
   models::ArxStructure arx(na, per_input(nb, "nb"), per_input(nk, "nk"));
   return MakeArxSource(columns, output, inputs, arx, source, clean);

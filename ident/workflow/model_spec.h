@@ -22,8 +22,8 @@ struct ModelSpec {
   int na = 2;
   std::vector<int> nb{2};  // one value, or one per input
   std::vector<int> nk{1};
-  int nc = 0, nd = 0, nf = 0;  // ARMAX (nc), OE (nf, na = 0), Box-Jenkins (nc, nd, nf, na = 0); all 0: ARX
-  std::string recursion = "rplr";  // ARMAX/OE/BJ: "rplr" (pseudo-linear regression) or "rpem" 
+  int nc = 0, nd = 0, nf = 0;           // ARMAX (nc), OE (nf, na = 0), Box-Jenkins (nc, nd, nf, na = 0); all 0: ARX
+  std::string recursion = "rplr";       // ARMAX/OE/BJ: "rplr" (pseudo-linear regression) or "rpem"
   std::vector<std::string> regressors;  // static regression (excludes inputs)
   bool intercept = false;
   std::string clean_regressors = "on";     // "on" | "off" (on: safe by bench/cleaning_study.py)

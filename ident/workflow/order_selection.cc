@@ -82,9 +82,8 @@ Eigen::MatrixXd RegressionGram(const io::DataTable& prepared, Segment segment, i
 
 // ARX(na, nb, nk) fitted by least squares from the estimation Gram matrix G (samples n) and its criteria;
 // its validation loss from H when the validation part has samples. Throws if its regressors are collinear.
-StructureScore ScoreArxStructure(const Eigen::MatrixXd& G, const Eigen::MatrixXd& H, const Layout& layout,
-                                 int samples, int validation_samples, int na, int nb, int nk,
-                                 const std::string& source) {
+StructureScore ScoreArxStructure(const Eigen::MatrixXd& G, const Eigen::MatrixXd& H, const Layout& layout, int samples,
+                                 int validation_samples, int na, int nb, int nk, const std::string& source) {
   const double n = samples;
   const std::vector<int> idx = StructureIndices(layout, na, nb, nk);
   const int d = static_cast<int>(idx.size());
@@ -95,8 +94,8 @@ StructureScore ScoreArxStructure(const Eigen::MatrixXd& G, const Eigen::MatrixXd
     for (int j = 0; j < d; ++j) Gzz(i, j) = G(idx[i], idx[j]);
   }
   const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(Gzz);
-  IDENT_REQUIRE(llt.info() == Eigen::Success && llt.matrixL().toDenseMatrix().diagonal().minCoeff() >
-                                                    1e-10 * std::sqrt(Gzz.diagonal().maxCoeff()),
+  IDENT_REQUIRE(llt.info() == Eigen::Success &&
+                    llt.matrixL().toDenseMatrix().diagonal().minCoeff() > 1e-10 * std::sqrt(Gzz.diagonal().maxCoeff()),
                 "{}: ARX({},{},{}) is not determined by the data (its regressors are collinear)", source, na, nb, nk);
   StructureScore s;
   s.na = na;
@@ -169,8 +168,8 @@ OrderSelection SelectOrders(const io::DataTable& prepared, Segment estimation, S
   // there is H_yy − 2θ'H_zy + θ'H_zz θ, whatever the number of samples.
   const Eigen::MatrixXd G =
       RegressionGram(prepared, estimation, t0, output, input, layout, progress, 0, rows, &result.samples);
-  const Eigen::MatrixXd H = RegressionGram(prepared, validation, t0, output, input, layout, progress,
-                                           estimation.count, rows, &result.validation_samples);
+  const Eigen::MatrixXd H = RegressionGram(prepared, validation, t0, output, input, layout, progress, estimation.count,
+                                           rows, &result.validation_samples);
 
   const int d_max = grid.na_max + grid.nb_max;
   IDENT_REQUIRE(result.samples > d_max + 1,

@@ -22,7 +22,8 @@ std::vector<double> OneStepResiduals(const SegmentPredictions& p, const io::Data
   for (std::size_t i = 0; i < p.measured.size(); ++i) {
     if (i > 0 && data.StartsExperiment(p.rows[i] - 1)) first = i;
     if (i - first < static_cast<std::size_t>(t0)) continue;
-    if (std::isfinite(p.one_step[i]) && std::isfinite(p.measured[i])) residuals.push_back(p.measured[i] - p.one_step[i]);
+    if (std::isfinite(p.one_step[i]) && std::isfinite(p.measured[i]))
+      residuals.push_back(p.measured[i] - p.one_step[i]);
   }
   return residuals;
 }
@@ -41,8 +42,10 @@ std::optional<double> CheckPolynomialGrid(const PolynomialOrderGrid& grid, const
       criterion == "aic" || criterion == "bic" || criterion == "fpe" || criterion == "mdl" || criterion == "validation",
       "--criterion '{}': need aic, bic, fpe, mdl or validation", criterion);
   const std::optional<double> dof = OrderCriterionDof(request.estimator);
-  IDENT_REQUIRE(!dof || criterion != "fpe", "--criterion fpe is not likelihood-based; with --estimator {} use aic, bic, mdl "
-                "or validation", request.estimator.estimator);
+  IDENT_REQUIRE(!dof || criterion != "fpe",
+                "--criterion fpe is not likelihood-based; with --estimator {} use aic, bic, mdl "
+                "or validation",
+                request.estimator.estimator);
   IDENT_REQUIRE(criterion != "validation" || request.split < 1,
                 "--criterion validation needs a validation part (--split below 1)");
   IDENT_REQUIRE(grid.nc_min >= 0 && grid.nd_min >= 0 && grid.nf_min >= 0,
@@ -100,9 +103,8 @@ StructureScore OrdersOf(const ModelSpec& spec) {
 
 // The structure request.model fitted by FitRecord and scored on its one-step residuals from row t0 on: loss,
 // criteria (Student-t likelihood ones with `dof`), validation loss; the sample counts go to *result.
-StructureScore ScorePolynomialStructure(const io::DataTable& table, const std::string& name,
-                                        const FitRequest& request, int t0, const std::optional<double>& dof,
-                                        OrderSelection* result) {
+StructureScore ScorePolynomialStructure(const io::DataTable& table, const std::string& name, const FitRequest& request,
+                                        int t0, const std::optional<double>& dof, OrderSelection* result) {
   const ModelSpec& spec = request.model;
   const RecordFit fit = FitRecord(table, name, request);
   std::unique_ptr<DataSource> source = spec.MakeSource(fit.prepared.names, name);
@@ -139,8 +141,8 @@ StructureScore ScorePolynomialStructure(const io::DataTable& table, const std::s
     s.mdl = loss * (1 + d * log_n / n);
   }
   if (fit.validation.count > t0) {
-    const std::vector<double> validation = OneStepResiduals(
-        PredictSegment(fit.prepared, fit.validation, *source, fit.result.theta), fit.prepared, t0);
+    const std::vector<double> validation =
+        OneStepResiduals(PredictSegment(fit.prepared, fit.validation, *source, fit.result.theta), fit.prepared, t0);
     s.validation_loss = MeanSquare(validation);
     if (dof) s.validation_nll = StudentNegLogLikelihood(validation, *dof, *s.scale);
     result->validation_samples = static_cast<int>(validation.size());
@@ -156,9 +158,10 @@ std::optional<double> OrderCriterionDof(const EstimatorSpec& estimator) {
     IDENT_REQUIRE(!estimator.dof, "dof = {} does not apply to estimator 'rls'", estimator.dof.value_or(0));
     return std::nullopt;
   }
-  IDENT_REQUIRE(s.name == "cauchy" || s.name == "student",
-                "orders --estimator '{}': need rls, cauchy or student:K (the robust criteria are Student-t likelihoods)",
-                estimator.estimator);
+  IDENT_REQUIRE(
+      s.name == "cauchy" || s.name == "student",
+      "orders --estimator '{}': need rls, cauchy or student:K (the robust criteria are Student-t likelihoods)",
+      estimator.estimator);
   if (s.name == "cauchy") return 1.0;
   const std::optional<double> dof = estimator.dof ? estimator.dof : s.dof;
   IDENT_REQUIRE(dof && std::isfinite(*dof) && *dof > 0,
@@ -167,8 +170,7 @@ std::optional<double> OrderCriterionDof(const EstimatorSpec& estimator) {
 }
 
 OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::string& name,
-                                      const PolynomialOrderGrid& grid, FitRequest request,
-                                      const std::string& criterion,
+                                      const PolynomialOrderGrid& grid, FitRequest request, const std::string& criterion,
                                       const std::function<void(long done, long total, const char* unit)>& progress) {
   const std::optional<double> dof = CheckPolynomialGrid(grid, request, criterion);
   request.residual_lags = 0;
@@ -189,8 +191,8 @@ OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::str
                "structures");
   }
   if (result.structures.empty())
-    throw DataError(fmt::format("{}: no structure of the grid gave a usable fit (e.g. {})", name,
-                                result.left_out.front().second));
+    throw DataError(
+        fmt::format("{}: no structure of the grid gave a usable fit (e.g. {})", name, result.left_out.front().second));
   std::stable_sort(result.structures.begin(), result.structures.end(),
                    [&criterion](const StructureScore& a, const StructureScore& b) {
                      const double x = CriterionValue(a, criterion), y = CriterionValue(b, criterion);

@@ -44,9 +44,8 @@ std::optional<double> OrderCriterionDof(const EstimatorSpec& estimator);
 // replaced by each structure's. `name` names the record in messages. Throws InvalidArgument for a bad grid or
 // criterion, or when no combination of the grid is a model.
 // `progress`, if set, is told (done, total, "structures") after each fit.
-OrderSelection SelectPolynomialOrders(const io::DataTable& table, const std::string& name,
-                                      const PolynomialOrderGrid& grid, FitRequest request,
-                                      const std::string& criterion,
-                                      const std::function<void(long done, long total, const char* unit)>& progress = {});
+OrderSelection SelectPolynomialOrders(
+    const io::DataTable& table, const std::string& name, const PolynomialOrderGrid& grid, FitRequest request,
+    const std::string& criterion, const std::function<void(long done, long total, const char* unit)>& progress = {});
 
 }  // namespace ident::workflow

@@ -21,8 +21,8 @@ int TimeColumnIndex(const std::vector<std::string>& names, const std::vector<int
   return -1;
 }
 
-std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::string& column,
-                                               const std::string& source, long line) {
+std::optional<TimeGap> ArrivingTimeCheck::Next(double t, long row, const std::string& column, const std::string& source,
+                                               long line) {
   const auto where = [&] { return line < 0 ? source : fmt::format("{}:{}", source, line); };
   if (std::isnan(t)) return std::nullopt;  // a missing sample, passed over as CheckTimeColumn does
   if (!started_) {

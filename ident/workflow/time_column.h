@@ -71,7 +71,7 @@ class ArrivingTimeCheck {
 
  private:
   std::array<double, kSteps> steps_{};  // in arrival order (a ring)
-  int count_ = 0;  // steps held (up to kSteps); the next goes to steps_[count_ % kSteps] once full
+  int count_ = 0;                       // steps held (up to kSteps); the next goes to steps_[count_ % kSteps] once full
   long taken_ = 0;
   double previous_ = 0;
   // At most the smallest step held (none: +inf): lowered by each step, brought up to it by WindowMin()

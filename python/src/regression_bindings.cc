@@ -195,10 +195,10 @@ void RegisterRegression(py::module_& m) {
                        double forgetting, bool stabilised, std::optional<double> nu0, std::optional<Eigen::MatrixXd> V0,
                        bool exact, std::optional<int> lock_in_window, std::optional<double> lock_in_threshold,
                        bool lock_in_restart, std::optional<long> history_limit) {
-             return std::make_unique<Estimator>(name, n,
-                                                SpecFrom(dof, delta, forgetting, stabilised, nu0, std::move(V0), exact,
-                                                         lock_in_window, lock_in_threshold, lock_in_restart,
-                                                         history_limit));
+             return std::make_unique<Estimator>(
+                 name, n,
+                 SpecFrom(dof, delta, forgetting, stabilised, nu0, std::move(V0), exact, lock_in_window,
+                          lock_in_threshold, lock_in_restart, history_limit));
            }),
            py::arg("name"), py::arg("n"), py::kw_only(), py::arg("dof") = py::none(), py::arg("delta") = py::none(),
            py::arg("forgetting") = 1.0, py::arg("stabilised") = false, py::arg("nu0") = py::none(),

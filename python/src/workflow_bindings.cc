@@ -280,7 +280,8 @@ py::dict Smooth(const std::string& model_json, const Eigen::MatrixXd& z) {
   d["status"] = ToString(r.status);
   d["kkt_residual"] = r.kkt_residual;
   d["gap_error_bound"] = r.gap_error_bound;
-  d["relative_gap_bound"] = std::isfinite(r.relative_gap_bound) ? py::object(py::float_(r.relative_gap_bound)) : py::none();
+  d["relative_gap_bound"] =
+      std::isfinite(r.relative_gap_bound) ? py::object(py::float_(r.relative_gap_bound)) : py::none();
   return d;
 }
 

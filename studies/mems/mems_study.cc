@@ -288,9 +288,7 @@ MemsStudyResult RunMemsStudy(const MemsStudyOptions& o) {
       t.var_bound.push_back(bound.covariance()(1, 1));
     }
   }
-  auto run_grid = [&](int points) {
-    return RunGridObserver(model, *sensor, m0, P0, grid_u, grid_y, {points, points});
-  };
+  auto run_grid = [&](int points) { return RunGridObserver(model, *sensor, m0, P0, grid_u, grid_y, {points, points}); };
   GridTrace grid;
   if (o.grid_tolerance > 0) {
     GridRefinementOptions ropt;

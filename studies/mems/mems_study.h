@@ -64,8 +64,8 @@ struct MemsStudyOptions {
   int steps = 10000;             // simulated steps
   int burn_in = 500;             // steps excluded from the statistics
   unsigned seed = 1;
-  int grid_points = 128;       // per axis of the 2-D grid observer (the first grid when grid_tolerance > 0)
-  double grid_tolerance = 0;   // > 0: refine the grid until its moments agree with a finer one to this
+  int grid_points = 128;      // per axis of the 2-D grid observer (the first grid when grid_tolerance > 0)
+  double grid_tolerance = 0;  // > 0: refine the grid until its moments agree with a finer one to this
   double sigma_m2 = 0.0;      // σ_M² of the modified event measurement; 0 = (2 h v_ref)²/3
   bool record_trace = false;  // keep per-step variances (Fig. 8)
   int ep_window = 16;         // lc_window's EP window W (readings refined jointly)
@@ -96,11 +96,11 @@ struct MemsStudyResult {
   int window_unconverged = 0;     // lc_window steps whose EP sweeps hit the limit
   long truncated_failures = 0;    // lc_truncated steps whose rectangle had no mass (fallback)
   long truncated_projection_failures = 0;  // lc_truncated projections without a parent (see its header)
-  int grid_points = 0;             // points per axis of the grid whose moments are reported
-  int grid_coarse_points = 0;      // the coarser grid of the refinement check (0: no check)
+  int grid_points = 0;                     // points per axis of the grid whose moments are reported
+  int grid_coarse_points = 0;              // the coarser grid of the refinement check (0: no check)
   double grid_difference = std::numeric_limits<double>::quiet_NaN();  // their relative moment difference
-  bool grid_converged = false;     // grid_difference ≤ grid_tolerance
-  double grid_mean_variance = 0;   // mean predicted var(x2) of the grid after burn-in
+  bool grid_converged = false;                                        // grid_difference ≤ grid_tolerance
+  double grid_mean_variance = 0;  // mean predicted var(x2) of the grid after burn-in
   MemsTrace trace;
   const MemsObserverResult& Get(const std::string& name) const;
 };

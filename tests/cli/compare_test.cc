@@ -8,10 +8,10 @@
 #include <nlohmann/json.hpp>
 
 #include "common/error.h"
+#include "ident/io/mat_file.h"
 #include "ident/registry/estimator_registry.h"
 #include "ident/workflow/compare.h"
 #include "ident/workflow/compare_record.h"
-#include "ident/io/mat_file.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
 

@@ -7,9 +7,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "cli/dataset_index.h"
 #include "tests/support/cli.h"
 #include "tests/support/test_data.h"
-#include "cli/dataset_index.h"
 
 namespace ident::testing {
 namespace {
@@ -53,8 +53,7 @@ TEST(Datasets, IndexCoversEveryFileAndItsSuggestedColumnsExist) {
   EXPECT_EQ(files.size(), 11u);
   EXPECT_EQ(index.size(), 11u);
   ASSERT_TRUE(cli::FindDataset("dryer"));
-  EXPECT_EQ(cli::StructureArguments(cli::FindDataset("dryer")->structure),
-            "--output y --input u --na 2 --nb 2 --nk 3");
+  EXPECT_EQ(cli::StructureArguments(cli::FindDataset("dryer")->structure), "--output y --input u --na 2 --nb 2 --nk 3");
   EXPECT_FALSE(cli::FindDataset("nonesuch"));
 }
 

@@ -90,8 +90,7 @@ TEST(LockInCli, DefaultRestartsOutOfTheLockInAndReportsIt) {
 // dropped, as the library estimator's with the same history_limit do, and a limit below the lock-in window is
 // refused by the estimator's own check.
 TEST(LockInCli, HistoryLimitBoundsWhatARestartReplays) {
-  const nlohmann::json j =
-      FitJson(LockInRecord().path + kModel + kPrior + " --estimator cauchy --history-limit 300");
+  const nlohmann::json j = FitJson(LockInRecord().path + kModel + kPrior + " --estimator cauchy --history-limit 300");
   SafeStudentOptions o;
   o.history_limit = 300;
   const SafeStudentRegression lib = RunLibrary(o);
@@ -105,7 +104,8 @@ TEST(LockInCli, HistoryLimitBoundsWhatARestartReplays) {
     EXPECT_EQ(events[i]["replayed"].get<long>(), lib.restart_events()[i].replayed) << i;
   }
   ExpectSameTheta(j, lib);
-  const CliResult small = RunCli("fit " + LockInRecord().path + kModel + kPrior + " --estimator cauchy --history-limit 50");
+  const CliResult small =
+      RunCli("fit " + LockInRecord().path + kModel + kPrior + " --estimator cauchy --history-limit 50");
   EXPECT_EQ(small.exit_code, 1);
   EXPECT_NE(small.err.find("history_limit = 50; need 0 (keep every sample) or at least the lock-in window 100"),
             std::string::npos)

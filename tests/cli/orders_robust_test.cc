@@ -110,10 +110,12 @@ TEST(OrdersRobust, NllScaleAndCriteriaEqualAnIndependentComputation) {
   constexpr int kRows = 300;
   const Record r = SimulateArx221(kRows, 0.05, 7, "robust_scores.csv");
   const int estimation_rows = kRows / 2, t0 = 2;  // --split 0.5; t0 = max(na_max, nk_max + nb_max − 1)
-  for (const auto& [estimator, k] : std::vector<std::pair<std::string, double>>{
-           {"cauchy", 1.0}, {"student --dof 3", 3.0}, {"student:7.5", 7.5}}) {
-    const CliResult out = RunCli("orders " + r.path + " --output y --input u --na 1:2 --nb 1:2 --nk 1 --detrend none "
-                                 "--criterion aic --json --estimator " + estimator);
+  for (const auto& [estimator, k] :
+       std::vector<std::pair<std::string, double>>{{"cauchy", 1.0}, {"student --dof 3", 3.0}, {"student:7.5", 7.5}}) {
+    const CliResult out = RunCli("orders " + r.path +
+                                 " --output y --input u --na 1:2 --nb 1:2 --nk 1 --detrend none "
+                                 "--criterion aic --json --estimator " +
+                                 estimator);
     ASSERT_EQ(out.exit_code, 0) << out.err;
     const nlohmann::json j = nlohmann::json::parse(out.out);
     EXPECT_EQ(j["estimator"], k == 1 ? "cauchy" : fmt::format("student:{:g}", k));
@@ -121,8 +123,8 @@ TEST(OrdersRobust, NllScaleAndCriteriaEqualAnIndependentComputation) {
     EXPECT_EQ(j["samples"], estimation_rows - t0);
     EXPECT_EQ(j["validation_samples"], kRows - estimation_rows - t0);
     for (const auto& s : j["structures"]) {
-      const std::string name = fmt::format("{} ARX({},{},{})", estimator, s["na"].get<int>(), s["nb"].get<int>(),
-                                           s["nk"].get<int>());
+      const std::string name =
+          fmt::format("{} ARX({},{},{})", estimator, s["na"].get<int>(), s["nb"].get<int>(), s["nk"].get<int>());
       const std::vector<double> e = Residuals(r, s, t0, estimation_rows);
       const std::vector<double> v = Residuals(r, s, estimation_rows + t0, kRows);
       const auto [nll, gamma] = MinimiseOverScale(e, k);
@@ -167,8 +169,7 @@ TEST(OrdersRobust, FpeWithARobustEstimatorIsRefused) {
                  "--criterion fpe is not likelihood-based");
   ExpectCliError("orders dryer --output y --input u --na 1:2 --nb 1 --nk 1 --estimator huber",
                  "need rls, cauchy or student:K");
-  ExpectCliError("orders dryer --output y --input u --na 1:2 --nb 1 --nk 1 --estimator student",
-                 "needs dof k > 0");
+  ExpectCliError("orders dryer --output y --input u --na 1:2 --nb 1 --nk 1 --estimator student", "needs dof k > 0");
 }
 
 }  // namespace

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/QR>
 #include <gtest/gtest.h>
+#include <Eigen/QR>
 #include <nlohmann/json.hpp>
 
 #include "common/dense_decompositions.h"
@@ -64,8 +64,8 @@ TEST(SelectOrders, EveryLossIsItsOwnLeastSquaresFitOnTheSameSamples) {
     Regression(p, p.validation, t0, s.na, s.nb, s.nk, Zv, yv);
     const Eigen::VectorXd theta = dense::ColPivQr(Z).solve(y);
     const double loss = (y - Z * theta).squaredNorm() / y.size();
-    const std::string name = "ARX(" + std::to_string(s.na) + "," + std::to_string(s.nb) + "," +
-                             std::to_string(s.nk) + ")";
+    const std::string name =
+        "ARX(" + std::to_string(s.na) + "," + std::to_string(s.nb) + "," + std::to_string(s.nk) + ")";
     EXPECT_NEAR(s.loss, loss, 1e-10 * loss) << name;
     EXPECT_LT((s.theta - theta).norm(), 1e-8 * theta.norm()) << name;
     EXPECT_NEAR(*s.validation_loss, (yv - Zv * theta).squaredNorm() / yv.size(), 1e-9 * loss) << name;

@@ -16,10 +16,10 @@
 
 #include <fmt/format.h>
 
-#include "common/error.h"
-#include "tests/support/cli.h"
 #include "cli/output_file.h"
 #include "cli/output_paths.h"
+#include "common/error.h"
+#include "tests/support/cli.h"
 
 namespace ident::testing {
 namespace {

@@ -210,7 +210,8 @@ void ExpectStdoutError(const std::string& args, const std::string& redirection, 
   EXPECT_EQ(err.substr(err.size() - expected.size()), expected) << args << " " << redirection;
   std::istringstream before(err.substr(0, err.size() - expected.size()));
   for (std::string line; std::getline(before, line);)
-    EXPECT_TRUE(line.rfind("ident ", 0) == 0 && line.find(" % (") != std::string::npos) << "not a progress line: " << line;
+    EXPECT_TRUE(line.rfind("ident ", 0) == 0 && line.find(" % (") != std::string::npos)
+        << "not a progress line: " << line;
 }
 
 TEST(OutputFilesCli, FullStandardOutputIsAnError) {

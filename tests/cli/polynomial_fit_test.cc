@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/LU>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <Eigen/LU>
 #include <nlohmann/json.hpp>
 
 #include "ident/registry/estimator_registry.h"
@@ -224,13 +224,16 @@ TEST(PolynomialFit, KStepPredictionsRunTheNoiseModelWithZeroFutureInnovations) {
     EXPECT_NEAR(out.values(i, 4), yy[i] + my, 1e-10) << i;
   }
   EXPECT_EQ(checked, count - t0 - k + 1);
-  for (const std::string& structure : {std::string("--nc 1"), std::string("--nf 2"), std::string("--nc 1 --nd 1 --nf 2")}) {
+  for (const std::string& structure :
+       {std::string("--nc 1"), std::string("--nf 2"), std::string("--nc 1 --nd 1 --nf 2")}) {
     const std::string saved = dir + "/model.json";
     ASSERT_EQ(RunCli("fit dryer " + structure + " --save " + saved).exit_code, 0) << structure;
-    const io::DataTable far = io::ParseCsv(RunCli("predict " + saved + " dryer --rows 601:700 --horizon 1000 --simulate").out,
-                                           "predict", {.missing_as_nan = true});
-    const io::DataTable two = io::ParseCsv(RunCli("predict " + saved + " dryer --rows 601:700 --horizon 2 --simulate").out,
-                                           "predict", {.missing_as_nan = true});
+    const io::DataTable far =
+        io::ParseCsv(RunCli("predict " + saved + " dryer --rows 601:700 --horizon 1000 --simulate").out, "predict",
+                     {.missing_as_nan = true});
+    const io::DataTable two =
+        io::ParseCsv(RunCli("predict " + saved + " dryer --rows 601:700 --horizon 2 --simulate").out, "predict",
+                     {.missing_as_nan = true});
     ASSERT_EQ(far.num_rows(), count) << structure;
     for (int i = 0; i < count; ++i) {
       if (std::isnan(far.values(i, 5))) continue;
@@ -275,10 +278,13 @@ TEST(PolynomialFit, RefusesStructuresThatAreNoneOfArmaxOeBj) {
 TEST(PolynomialFit, OutputErrorBeatsArxOfTheSameOrderInSimulationOnTheExchanger) {
   double best_arx = -1e300;
   for (int na = 0; na <= 3; ++na) {
-    const nlohmann::json arx = JsonOf(fmt::format("fit exchanger --output y --input u --na {} --nb {} --nk 1 --split 0.5 --json", na, 4 - na));
-    if (arx["fit_percent"]["simulation"].is_number()) best_arx = std::max(best_arx, arx["fit_percent"]["simulation"].get<double>());
+    const nlohmann::json arx =
+        JsonOf(fmt::format("fit exchanger --output y --input u --na {} --nb {} --nk 1 --split 0.5 --json", na, 4 - na));
+    if (arx["fit_percent"]["simulation"].is_number())
+      best_arx = std::max(best_arx, arx["fit_percent"]["simulation"].get<double>());
   }
-  const nlohmann::json oe = JsonOf("fit exchanger --output y --input u --nb 2 --nf 2 --nk 1 --split 0.5 --passes 5 --recursion rpem --json");
+  const nlohmann::json oe =
+      JsonOf("fit exchanger --output y --input u --nb 2 --nf 2 --nk 1 --split 0.5 --passes 5 --recursion rpem --json");
   EXPECT_EQ(oe["structure"], "OE(2,2,1)");
   EXPECT_GE(oe["fit_percent"]["simulation"].get<double>(), best_arx + 10) << "best ARX " << best_arx;
 }
@@ -296,7 +302,8 @@ TEST(PolynomialOrders, BicFindsTheSimulatedStructure) {
   workflow::PolynomialOrderGrid armax;
   armax.arx = {1, 3, 2, 2, 1, 1};
   armax.nc_min = 0, armax.nc_max = 3;
-  const workflow::OrderSelection a = workflow::SelectPolynomialOrders(Simulate(true, 3).table, "armax", armax, request, "bic");
+  const workflow::OrderSelection a =
+      workflow::SelectPolynomialOrders(Simulate(true, 3).table, "armax", armax, request, "bic");
   ASSERT_EQ(a.structures.size(), 12u);
   EXPECT_EQ(a.structures[0].na, 2);
   EXPECT_EQ(a.structures[0].nc, 2);
@@ -305,7 +312,8 @@ TEST(PolynomialOrders, BicFindsTheSimulatedStructure) {
   oe.arx = {0, 0, 2, 2, 1, 1};
   oe.nf_min = 1, oe.nf_max = 3;
   oe.nc_max = 1;
-  const workflow::OrderSelection o = workflow::SelectPolynomialOrders(Simulate(false, 4).table, "oe", oe, request, "bic");
+  const workflow::OrderSelection o =
+      workflow::SelectPolynomialOrders(Simulate(false, 4).table, "oe", oe, request, "bic");
   ASSERT_EQ(o.structures.size(), 6u);
   EXPECT_EQ(o.structures[0].nf, 2);
   EXPECT_EQ(o.structures[0].nc, 0);
@@ -319,7 +327,8 @@ TEST(PolynomialOrders, LossIsTheMeanSquareOfThePredictedResiduals) {
       JsonOf("orders dryer --output y --input u --na 1:2 --nb 2 --nk 3 --nc 0:1 --passes 2 --split 0.5 --json");
   ASSERT_EQ(j["structures"].size(), 4u);
   const std::string model = TempDir() + "/orders_armax.json";
-  ASSERT_EQ(RunCli("fit dryer --output y --input u --na 2 --nb 2 --nk 3 --nc 1 --passes 2 --save " + model).exit_code, 0);
+  ASSERT_EQ(RunCli("fit dryer --output y --input u --na 2 --nb 2 --nk 3 --nc 1 --passes 2 --save " + model).exit_code,
+            0);
   const io::DataTable p =
       io::ParseCsv(RunCli("predict " + model + " dryer --rows 1:500").out, "predict", {.missing_as_nan = true});
   double sum = 0;

@@ -256,8 +256,8 @@ TEST(StreamedReads, MeanSquaresOfTheMeansPassEqualThoseOfTheirOwnPass) {
 // least) reads it once, into memory: no row count, no separate look at the header.
 TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
   const std::string path = testing::WriteFile("in_memory_reads.csv", SimulatedRecord(2'000));
-  std::vector<std::string> words = {"ident", "fit",  path, "--output", "y", "--input", "u",
-                                    "--na",  "2",    "--nb", "2",      "--nk", "1",     "--json"};
+  std::vector<std::string> words = {"ident", "fit", path,   "--output", "y",    "--input", "u",
+                                    "--na",  "2",   "--nb", "2",        "--nk", "1",       "--json"};
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
   const long before = io::CsvFilesOpened();
@@ -310,10 +310,11 @@ TEST(StreamedReads, TheTimeColumnIsCheckedAndItsGapsFilledAsInMemory) {
     if (fill) time = workflow::ScanCsvTime(path, csv, source->used_columns());
     workflow::FitOptions length_check;
     length_check.split = request.split;
-    const workflow::CsvLayout layout = workflow::CheckCsvLayout(path, csv, *source, length_check, -1,
-                                                                time ? &*time : nullptr);
+    const workflow::CsvLayout layout =
+        workflow::CheckCsvLayout(path, csv, *source, length_check, -1, time ? &*time : nullptr);
     workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), layout.estimation.count);
-    const workflow::FitResult streamed = workflow::FitCsvFile(path, csv, *source, plan, layout, time ? &*time : nullptr);
+    const workflow::FitResult streamed =
+        workflow::FitCsvFile(path, csv, *source, plan, layout, time ? &*time : nullptr);
 
     ASSERT_TRUE(streamed.time.has_value());
     EXPECT_EQ(streamed.time->column, "t");

@@ -51,14 +51,14 @@ TEST(UsableResult, LargestRootModulusOfKnownPolynomials) {
 // polynomial and its largest root; a stable one, and ARX, pass.
 TEST(UsableResult, UnstablePredictorNamesThePolynomialAndItsRoot) {
   const std::vector<std::string> columns = {"u", "y"};
-  auto armax = workflow::MakePolynomialSource(columns, "y", {"u"}, models::PolynomialStructure::Armax(1, {1}, 1, {1}),
-                                              "test");
+  auto armax =
+      workflow::MakePolynomialSource(columns, "y", {"u"}, models::PolynomialStructure::Armax(1, {1}, 1, {1}), "test");
   EXPECT_EQ(armax->parameter_names(), (std::vector<std::string>{"a1", "b1", "c1"}));
   EXPECT_EQ(armax->UnstablePredictor(Eigen::Vector3d(-0.5, 1.0, -0.5)), "");
   EXPECT_NE(armax->UnstablePredictor(Eigen::Vector3d(-0.5, 1.0, -1.5)).find("C(q) has a root of modulus 1.5,"),
             std::string::npos);
-  auto oe = workflow::MakePolynomialSource(columns, "y", {"u"}, models::PolynomialStructure::OutputError(1, 2, 1),
-                                           "test");
+  auto oe =
+      workflow::MakePolynomialSource(columns, "y", {"u"}, models::PolynomialStructure::OutputError(1, 2, 1), "test");
   EXPECT_NE(oe->UnstablePredictor(Eigen::Vector3d(1.0, -2.5, 1.0)).find("F(q) has a root of modulus 2,"),
             std::string::npos);
   EXPECT_EQ(oe->UnstablePredictor(Eigen::Vector3d(1.0, 0.0, 0.36)), "");

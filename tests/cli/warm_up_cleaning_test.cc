@@ -48,8 +48,7 @@ std::unique_ptr<RecordingEstimator> FitRecording(const io::DataTable& table, con
   settings.name = "cauchy";
   UseDataScaledPrior(settings,
                      workflow::EstimationMeanSquares(table, {0, static_cast<int>(table.num_rows() / 2)}, *source));
-  auto estimator =
-      std::make_unique<RecordingEstimator>(MakeRegressionEstimator(settings, source->num_parameters()));
+  auto estimator = std::make_unique<RecordingEstimator>(MakeRegressionEstimator(settings, source->num_parameters()));
   workflow::FitOptions options;
   options.split = 0.5;
   options.detrend = workflow::Detrend::kNone;

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <gtest/gtest.h>
+#include <boost/math/quadrature/gauss_kronrod.hpp>
 
 #include "common/error.h"
 
@@ -115,7 +115,8 @@ TiltedMoments FineReference(const LogConcaveNoise& f, double a, double v) {
   };
   const double z = integrate([&](double r) { return std::exp(log_h(r) - peak); });
   const double m1 = integrate([&](double r) { return (r - mode) * std::exp(log_h(r) - peak); }) / z;
-  const double m2 = integrate([&](double r) { return (r - mode - m1) * (r - mode - m1) * std::exp(log_h(r) - peak); }) / z;
+  const double m2 =
+      integrate([&](double r) { return (r - mode - m1) * (r - mode - m1) * std::exp(log_h(r) - peak); }) / z;
   return {peak + std::log(z) - 0.5 * std::log(2 * M_PI * v), mode + m1, m2, true};
 }
 

@@ -35,9 +35,9 @@ TEST(PolynomialStructure, NamesOrdersAndParameters) {
 }
 
 TEST(PolynomialStructure, RejectsCombinationsThatAreNoneOfTheThree) {
-  EXPECT_THROW(PolynomialStructure(2, {2}, {1}, 0, 0, 0), InvalidArgument);   // ARX
-  EXPECT_THROW(PolynomialStructure(2, {2}, {1}, 0, 0, 2), InvalidArgument);   // A and F
-  EXPECT_THROW(PolynomialStructure(2, {2}, {1}, 1, 1, 0), InvalidArgument);   // D without F
+  EXPECT_THROW(PolynomialStructure(2, {2}, {1}, 0, 0, 0), InvalidArgument);        // ARX
+  EXPECT_THROW(PolynomialStructure(2, {2}, {1}, 0, 0, 2), InvalidArgument);        // A and F
+  EXPECT_THROW(PolynomialStructure(2, {2}, {1}, 1, 1, 0), InvalidArgument);        // D without F
   EXPECT_THROW(PolynomialStructure(0, {2, 2}, {1, 1}, 0, 0, 1), InvalidArgument);  // F, two inputs
   EXPECT_THROW(PolynomialStructure(2, {2}, {1}, -1, 0, 0), InvalidArgument);
   EXPECT_THROW(PolynomialStructure(0, {0}, {1}, 0, 0, 1), InvalidArgument);  // OE without B
@@ -143,7 +143,8 @@ TEST(PseudoLinearRegressor, ArmaxPredictorAndSimulationMatchTheDifferenceEquatio
     u(0) = r.u[t];
     if (reg.Next(u, z)) {
       ys[t] = theta.dot(z);
-      const double direct = -theta(0) * ys[t - 1] - theta(1) * ys[t - 2] + theta(2) * r.u[t - 1] + theta(3) * r.u[t - 2];
+      const double direct =
+          -theta(0) * ys[t - 1] - theta(1) * ys[t - 2] + theta(2) * r.u[t - 1] + theta(3) * r.u[t - 2];
       EXPECT_NEAR(ys[t], direct, 1e-12) << "t = " << t;
     } else {
       ys[t] = r.y[t];
@@ -199,7 +200,7 @@ TEST(PseudoLinearRegressor, TrackEstimateKeepsTheLastStableOne) {
   PseudoLinearRegressor reg(PolynomialStructure::OutputError(1, 1, 1));
   Eigen::VectorXd stable(2), unstable(2);
   stable << 1.0, -0.5;
-  unstable << 1.0, -1.5;  // F = 1 − 1.5 q⁻¹: root 1.5
+  unstable << 1.0, -1.5;                     // F = 1 − 1.5 q⁻¹: root 1.5
   EXPECT_TRUE(reg.TrackEstimate(unstable));  // the first estimate is taken whatever it is
   EXPECT_TRUE(reg.TrackEstimate(stable));
   for (int k = 0; k < PseudoLinearRegressor::kWarmUp * 2; ++k) reg.TrackEstimate(stable);  // past the warm-up
@@ -218,7 +219,7 @@ TEST(PseudoLinearRegressor, TrackEstimateKeepsTheLastStableOne) {
     }
     reg.PushOutput(0.0);
   }
-  reg.SetEstimate(unstable);  // a fixed model is used as given
+  reg.SetEstimate(unstable);                // a fixed model is used as given
   EXPECT_FALSE(reg.TrackEstimate(stable));  // and held until ClearEstimate
   reg.ClearEstimate();
   EXPECT_TRUE(reg.TrackEstimate(stable));

@@ -8,8 +8,8 @@
 //     agrees with a grid twice as fine within the tolerance (the stated bound: about 0.8 · tolerance).
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <cstdio>
+#include <numbers>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -39,7 +39,10 @@ double KernelWeight(int k0, int k1, const Eigen::Matrix2d& Q, const std::array<d
   const double v = (Q(0, 0) - beta * Q(0, 1)) / (d[0] * d[0]);
   const double r = beta * k1 * d[1] / d[0], s = std::round(r), mu = r - s;
   const int j = k0 - static_cast<int>(s);
-  const double w = j == 0 ? 1 - v - mu * mu : j == 1 ? 0.5 * (v + mu * mu + mu) : j == -1 ? 0.5 * (v + mu * mu - mu) : 0;
+  const double w = j == 0    ? 1 - v - mu * mu
+                   : j == 1  ? 0.5 * (v + mu * mu + mu)
+                   : j == -1 ? 0.5 * (v + mu * mu - mu)
+                             : 0;
   return HeatKernel(k1, Q(1, 1) / (d[1] * d[1])) * w;
 }
 

@@ -52,7 +52,7 @@ using testing::SpecError;
 
 TEST(EstimatorInterface, OneRegistryNamesEveryEstimatorAndObserver) {
   EXPECT_EQ(EstimatorNames(), (std::vector<std::string>{"rls", "cauchy", "student", "huber", "cauchy-ml", "lc",
-                                                         "kalman", "lc_gaussian", "lc_truncated", "grid"}));
+                                                        "kalman", "lc_gaussian", "lc_truncated", "grid"}));
   EXPECT_EQ(EstimatorItemKind("student"), ItemKind::kRegression);
   EXPECT_EQ(EstimatorItemKind("grid"), ItemKind::kStateSpace);
   EXPECT_THROW(EstimatorItemKind("kalmann"), InvalidArgument);

@@ -15,8 +15,8 @@
 #include "ident/observers/grid_observer.h"
 #include "ident/observers/kalman_filter.h"
 #include "ident/observers/lc_gaussian_filter.h"
-#include "ident/registry/observer_registry.h"
 #include "ident/observers/truncated_gaussian_filter.h"
+#include "ident/registry/observer_registry.h"
 #include "tests/observers/linear_gaussian_data.h"
 #include "tests/registry/spec_error.h"
 

@@ -10,9 +10,9 @@
 #include <cmath>
 #include <random>
 
+#include <gtest/gtest.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <gtest/gtest.h>
 
 #include "ident/regression/rls.h"
 #include "tests/support/dense_rls.h"

@@ -323,9 +323,10 @@ TEST(Coverage, OfTheReportedStandardErrorsAfterOneAndTwoPasses) {
   for (const Case& c : {Case{1, 1, 0.92, 0.97}, Case{3, 3, 0.92, 0.97}, Case{1, 2, 0.90, 1}, Case{3, 2, 0.90, 1}}) {
     const double one = coverage(c, 100, 1, replications), two = coverage(c, 100, 2, replications);
     const double long_one = testing::kUnderSanitizer ? c.low : coverage(c, 1000, 1, replications);
-    std::printf("[ measured ] coverage, dof %g, noise %d: n = 100 %.3f (one pass), %.3f (two passes); n = 1000 %.3f "
-                "(one pass) (%d replications)\n",
-                c.dof, c.noise, one, two, long_one, replications);
+    std::printf(
+        "[ measured ] coverage, dof %g, noise %d: n = 100 %.3f (one pass), %.3f (two passes); n = 1000 %.3f "
+        "(one pass) (%d replications)\n",
+        c.dof, c.noise, one, two, long_one, replications);
     if (testing::kUnderSanitizer) continue;  // 120 intervals: the count is too small to hold the bounds
     for (const double coverage_found : {one, two, long_one}) {
       EXPECT_GE(coverage_found, c.low) << "dof " << c.dof << " noise " << c.noise;

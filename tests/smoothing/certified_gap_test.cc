@@ -38,7 +38,7 @@ long double GaussianOptimum(const MapSmootherProblem& p) {
   struct Block {
     L a, b, c;  // symmetric [[a, b], [b, c]]
   };
-  std::vector<Block> Lc(N);           // Cholesky factor's diagonal blocks, lower triangular [[l11, 0], [l21, l22]]
+  std::vector<Block> Lc(N);            // Cholesky factor's diagonal blocks, lower triangular [[l11, 0], [l21, l22]]
   std::vector<std::array<L, 4>> G(N);  // sub-diagonal blocks G_t = E_t Lc_{t-1}^-T, row-major
   std::vector<std::array<L, 2>> y(N), x(N);
   for (int t = 0; t < N; ++t) {

@@ -71,7 +71,7 @@ class PlainSegments {
   long DataStart(bool header) const;  // -1: the first line is not a plain header
   void Work(int worker);              // a worker thread
   Ending ParseSegment(long segment, Ring& ring, std::vector<char>& buffer);
-  Block* Acquire(Ring& ring);  // the ring's next block once it is empty; null when stopping
+  Block* Acquire(Ring& ring);    // the ring's next block once it is empty; null when stopping
   const double* NextBlockRow();  // NextRow() past the end of the block held (or before the first)
   void Publish(Ring& ring, Block& block, Ending ending);
 

@@ -59,16 +59,16 @@ inline Orthonormalised RequireFullRank(const Eigen::Ref<const Eigen::MatrixXd>& 
 // argmin_β Σ w_i (y_i − β'q_i)² by the normal equations on the orthonormal Q (well conditioned unless the
 // weights are); nullopt-like: returns false if Q'WQ is not positive definite.
 // `Qw`: workspace for W·Q (resized to Q's shape if it is not).
-inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y,
-                        const Eigen::VectorXd& w, Eigen::VectorXd& beta, Eigen::MatrixXd& Qw) {
+inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::VectorXd& w,
+                        Eigen::VectorXd& beta, Eigen::MatrixXd& Qw) {
   Qw = Q.array().colwise() * w.array();
   const Eigen::LLT<Eigen::MatrixXd> llt = dense::Llt(Qw.transpose() * Q);
   if (llt.info() != Eigen::Success) return false;
   beta = llt.solve(Qw.transpose() * y);
   return beta.allFinite();
 }
-inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y,
-                        const Eigen::VectorXd& w, Eigen::VectorXd& beta) {
+inline bool WeightedFit(const Eigen::MatrixXd& Q, const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::VectorXd& w,
+                        Eigen::VectorXd& beta) {
   Eigen::MatrixXd Qw;
   return WeightedFit(Q, y, w, beta, Qw);
 }

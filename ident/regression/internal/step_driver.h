@@ -105,11 +105,10 @@ class StepDriver {
 
   // Inlined into the estimator's Update(): an out-of-line call returns the report through memory, whose
   // reload after the call waits for the whole step (the narrow stores cannot be forwarded to a wide load).
-  // Inlined into the estimator's Update(): returned from a call, the report would be reloaded wider than it
-  // was stored, and such a load waits until the whole step has retired.
   template <bool WithXi, bool BetaFirst, class Derived, class Weight>
-  [[gnu::always_inline]] inline Outcome Attempt(ExtendedInformation<Dim>& stats, bool stabilised, double lambda, double d_min, double nu_a,
-                  const LdFactor<Dim>& Va, const Sample<Derived>& x, Weight& weight) noexcept {
+  [[gnu::always_inline]] inline Outcome Attempt(ExtendedInformation<Dim>& stats, bool stabilised, double lambda,
+                                                double d_min, double nu_a, const LdFactor<Dim>& Va,
+                                                const Sample<Derived>& x, Weight& weight) noexcept {
     const double nu_before = stats.nu();
     if (stabilised) {
       guard_.Save(stats);  // stabilised forgetting changes the factor itself

@@ -154,7 +154,7 @@ IDENT_SIMD_CLONES inline typename FastSolver<kN>::Residuals FastSolver<kN>::Bott
   Residuals out;
   const int m = Middle();
   if (m == T_) return out;
-  bool ok = true;                                                             // on this thread's stack, as `out`
+  bool ok = true;  // on this thread's stack, as `out`
   double vdn[kN] = {}, R4n[kN] = {}, r3n = 0, Qn[kPackedSize<kN>] = {}, wn[kN] = {};  // vd, R4, R3 of step t+1
   if (alpha > 0)
     for (int i = 0; i < kN; ++i) x_[T_ * kN + i] += alpha * steps_[T_].dx[i];

@@ -41,14 +41,14 @@ constexpr int Packed(int i, int k) { return i <= k ? i + k * (k + 1) / 2 : k + i
 // The iterate and work values of one time step (nz = 1: one PLQ coordinate per step).
 template <int kN>
 struct StepState {
-  double u, slo, shi, qlo, qhi;       // multiplier of g_t, slacks and multipliers of lo <= u <= hi
-  double du, dqlo, dqhi;              // Newton direction (ds_lo, ds_hi follow from du: SlackDirections)
-  double islo, ishi;                  // 1/s_lo, 1/s_hi (once per iteration: no divisions in the other passes)
-  double kd;                          // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
-  double rt3;                         // R3 - e of the current direction (R3 and R4 live only in the forward pass)
-  double v[kN];                       // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
-  double dx[kN];                      // state direction
-  double gf[kN];                      // P_t H' K^-1 (the measurement's rank-one term)
+  double u, slo, shi, qlo, qhi;  // multiplier of g_t, slacks and multipliers of lo <= u <= hi
+  double du, dqlo, dqhi;         // Newton direction (ds_lo, ds_hi follow from du: SlackDirections)
+  double islo, ishi;             // 1/s_lo, 1/s_hi (once per iteration: no divisions in the other passes)
+  double kd;                     // 1 / (m + q_lo/s_lo + q_hi/s_hi) = K^-1
+  double rt3;                    // R3 - e of the current direction (R3 and R4 live only in the forward pass)
+  double v[kN];                  // forward-substituted right-hand side, v_t = P_t (b_t - E_t v_{t-1})
+  double dx[kN];                 // state direction
+  double gf[kN];                 // P_t H' K^-1 (the measurement's rank-one term)
   // Top half (t < m): P_t = S_t^-1, v_t = P_t (b_t - E_t v_{t-1}), dx_t = v_t - P_t E_{t+1}' dx_{t+1}. Bottom half
   // (t > m): the same names for Q_t and w_t of the elimination from the end, w_t = Q_t (b_t - E_{t+1}' w_{t+1}),
   // dx_t = w_t - Q_t E_t dx_{t-1}. Middle (t = m): the inverse of the Schur complement of both, and v_m = dx_m.

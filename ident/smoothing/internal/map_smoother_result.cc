@@ -188,9 +188,10 @@ IDENT_SIMD_CLONES void EvaluateCertificate(const MapSmootherProblem& p, double z
   }
   res->relative_gap = res->gap / std::max(1.0, std::abs(res->primal));
   res->gap_error_bound = 16 * (n + nz + 2) * kEps * magnitudes + error_bound + 4 * kEps * std::abs(res->gap);
-  res->relative_gap_bound = certified && std::isfinite(res->gap) && std::isfinite(res->gap_error_bound)
-                                ? (std::max(res->gap, 0.0) + res->gap_error_bound) / std::max(1.0, std::abs(res->primal))
-                                : std::numeric_limits<double>::infinity();
+  res->relative_gap_bound =
+      certified && std::isfinite(res->gap) && std::isfinite(res->gap_error_bound)
+          ? (std::max(res->gap, 0.0) + res->gap_error_bound) / std::max(1.0, std::abs(res->primal))
+          : std::numeric_limits<double>::infinity();
 }
 
 // Reconstruction w_t in d f_t*(y_t), then x_0 = w_0, x_{t+1} = F_t x_t + w_{t+1}  [BCW sec. 3].
@@ -254,8 +255,7 @@ struct CertifiedDual {
 // Returns the recursion's error bound on the gap.
 template <int kN>
 double DualPoint(const MapSmootherProblem& p, MapSmootherResult* res, Eigen::MatrixXd* y_lo) {
-  for (int t = 0; t <= p.T(); ++t)
-    ProjectIntoConjugateDomain(p.gt(t), res->u.col(t).data(), p.measurement_dim(), res);
+  for (int t = 0; t <= p.T(); ++t) ProjectIntoConjugateDomain(p.gt(t), res->u.col(t).data(), p.measurement_dim(), res);
   return DualStatesDoubleDouble<kN>(p, res, y_lo);
 }
 
@@ -340,28 +340,29 @@ void SetStatusAndMessage(const MapSmootherOptions& options, MapSmootherResult* r
         res->primal, res->dual);
     return;
   }
-  const std::string certificate =
-      std::isfinite(res->relative_gap_bound)
-          ? fmt::format("certified relative duality gap <= {:.1e}", res->relative_gap_bound)
-          : std::string("no finite duality certificate: y(u) leaves dom f*");
+  const std::string certificate = std::isfinite(res->relative_gap_bound)
+                                      ? fmt::format("certified relative duality gap <= {:.1e}", res->relative_gap_bound)
+                                      : std::string("no finite duality certificate: y(u) leaves dom f*");
   if (res->status == MapSmootherStatus::kConverged && !(res->relative_gap_bound <= options.gap_tolerance)) {
     res->status = MapSmootherStatus::kStalled;
     res->message = std::isfinite(res->relative_gap_bound)
-                       ? fmt::format("stalled after {} iterations: the KKT conditions hold (residual {:.1e}), but the "
-                                     "{} exceeds gap_tolerance {:.1e}",
-                                     res->iterations, res->kkt_residual, certificate, options.gap_tolerance)
-                       : fmt::format("stalled after {} iterations: the KKT conditions hold (residual {:.1e}), but "
-                                     "there is {}",
-                                     res->iterations, res->kkt_residual, certificate);
+                       ? fmt::format(
+                             "stalled after {} iterations: the KKT conditions hold (residual {:.1e}), but the "
+                             "{} exceeds gap_tolerance {:.1e}",
+                             res->iterations, res->kkt_residual, certificate, options.gap_tolerance)
+                       : fmt::format(
+                             "stalled after {} iterations: the KKT conditions hold (residual {:.1e}), but "
+                             "there is {}",
+                             res->iterations, res->kkt_residual, certificate);
     return;
   }
   // The Newton matrix lost positive definiteness at an iterate that still carries a finite certificate:
   // the iteration reached its precision limit there — a stall at the certified accuracy, not a failure.
   if (res->status == MapSmootherStatus::kNumericalFailure && std::isfinite(res->relative_gap_bound)) {
     res->status = MapSmootherStatus::kStalled;
-    res->message = fmt::format(
-        "stalled after {} iterations: the Newton matrix lost positive definiteness at KKT residual {:.1e}",
-        res->iterations, res->kkt_residual);
+    res->message =
+        fmt::format("stalled after {} iterations: the Newton matrix lost positive definiteness at KKT residual {:.1e}",
+                    res->iterations, res->kkt_residual);
   }
   const std::string detail = res->message;  // what the iteration said about a stall or divergence
   switch (res->status) {

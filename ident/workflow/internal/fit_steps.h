@@ -261,11 +261,11 @@ class Estimation {
   std::function<void(int row)> on_row_;
   Eigen::VectorXd z_, z_measured_;
   Eigen::MatrixXd ZtZ_;
-  Eigen::VectorXd max_abs_;  // largest |z_i| over the updates (tells underflowing squares from a zero column)
-  bool judged_;              // the estimator gives outlier verdicts (cleaning applies)
-  bool in_startup_;          // the estimator is in its start-up (asked after each update only while true)
-  bool uses_estimate_;       // the source's regressor depends on θ (ARMAX/OE/BJ)
-  bool batch_;               // the estimator solves on all samples when read (kind() "batch")
+  Eigen::VectorXd max_abs_;   // largest |z_i| over the updates (tells underflowing squares from a zero column)
+  bool judged_;               // the estimator gives outlier verdicts (cleaning applies)
+  bool in_startup_;           // the estimator is in its start-up (asked after each update only while true)
+  bool uses_estimate_;        // the source's regressor depends on θ (ARMAX/OE/BJ)
+  bool batch_;                // the estimator solves on all samples when read (kind() "batch")
   long next_batch_read_ = 0;  // batch_ and uses_estimate_: the update at which its estimate is next tracked
   std::optional<RecursiveLeastSquares> shadow_;  // θ for the regressors during a robust start-up
   int updates_ = 0, rejected_ = 0, failed_ = 0;  // failed_: rejected as numerical failures
