@@ -186,12 +186,14 @@ void PrintReport(const workflow::FitResult& r, const std::string& data, const Fi
             e.left_out ? fmt::format(" (and {} whose regressor carries a gross output outlier left out)", e.left_out)
                        : "");
       else
-        fmt::print(
-            "    restart at update {}{}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
-            e.update, e.pass > 1 ? fmt::format(" of pass {}", e.pass) : "", e.replayed,
-            e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
-            100 * e.low_weight_before, 100 * e.low_weight_after,
-            e.resolved ? "" : " (not a lock-in: the noise is heavier-tailed than the model; next restart waits)");
+        fmt::print("    restart at update {}{}: replayed all {} samples kept{}; low weights {:.0f} % -> {:.0f} %{}\n",
+                   e.update, e.pass > 1 ? fmt::format(" of pass {}", e.pass) : "", e.replayed,
+                   e.dropped ? fmt::format(" ({} older ones beyond the history limit dropped)", e.dropped) : "",
+                   100 * e.low_weight_before, 100 * e.low_weight_after,
+                   e.resolved
+                       ? ""
+                       : " (not a lock-in: the noise is heavier-tailed than the model, or its scale grows along the "
+                         "record; next restart waits)");
   }
   // Fit % is undefined (0/0) when the validation output is constant; the JSON has null there.
   auto percent = [](double p) { return std::isfinite(p) ? fmt::format("{:.2f} %", p) : std::string("undefined"); };

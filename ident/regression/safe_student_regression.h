@@ -23,8 +23,9 @@
 //      samples; when more than half are below the threshold the estimator restarts as in 1 from the last
 //      max(W, M) samples and then replays every sample seen, so the estimate rests on all the data
 //      (ν at the end is the number of updates plus ν(0)). A restart that leaves the last window still
-//      mostly low-weighted was not a lock-in (the noise is heavier-tailed than the model); the next
-//      restart then waits twice as long. Each restart is recorded (restart_events()).
+//      mostly low-weighted was not a lock-in (the noise is heavier-tailed than the model, or its scale
+//      grows along the record, which the replay in time order does not follow); the next restart then
+//      waits twice as long. Each restart is recorded (restart_events()).
 //   With `base.exact` none of this happens: the spec's recursion with the fixed prior (the --exact option).
 //   An explicit `base.prior` switches off 1 (the prior is used as given); 2 and 3 stay on.
 //
