@@ -5,7 +5,8 @@
 Usage: format_check.py SOURCE_DIR CLANG_FORMAT
 
 Outside a git checkout (no list of tracked files) the check is skipped. Fix what it reports with
-`clang-format -i FILE`, or `git clang-format` for the lines of a change.
+`clang-format -i FILE` (the whole file: `git clang-format` formats only changed lines, and can align
+trailing comments differently from a whole-file pass).
 """
 import subprocess
 import sys
@@ -25,11 +26,9 @@ def main():
                              capture_output=True, text=True)
         if run.returncode != 0:
             # --Werror reports each unformatted place as "FILE:LINE:COL: error: code should be clang-formatted".
-            for line in run.stderr.splitlines():
-                name = line.split(":", 1)[0]
-                if "error:" in line and name in batch and name not in unformatted:
-                    unformatted.append(name)
-            if not unformatted:
+            found = {line.split(":", 1)[0] for line in run.stderr.splitlines() if "error:" in line} & set(batch)
+            unformatted += sorted(found)
+            if not found:  # clang-format itself failed (a file it cannot read, an unknown option)
                 print(run.stderr.strip() or f"{clang_format} failed (exit {run.returncode})")
                 return 1
     for name in unformatted:
