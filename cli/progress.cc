@@ -23,11 +23,12 @@ Progress::~Progress() {
 }
 
 void Progress::Report(long done, long total, const char* unit, int pass) {
-  if (pass != pass_ || unit_ != unit) {
+  if (pass != pass_ || (unit != unit_pointer_ && unit_ != unit)) {
     pass_ = pass;
     unit_ = unit;
     reported_ = 0;
   }
+  unit_pointer_ = unit;
   const int tenth = total > 0 ? static_cast<int>(10 * done / total) : 10;
   if (tenth <= reported_) return;
   reported_ = tenth;

@@ -29,8 +29,9 @@ class Progress {
   bool terminal_;
   int pass_ = 0;
   std::string unit_;
-  int reported_ = 0;        // tenths of the current stage reported
-  bool open_line_ = false;  // a terminal line without its newline yet
+  const char* unit_pointer_ = nullptr;  // the `unit` last passed: a literal repeats it, and is not compared
+  int reported_ = 0;                    // tenths of the current stage reported
+  bool open_line_ = false;              // a terminal line without its newline yet
 };
 
 // io::CsvOptions::on_read for a file being read whole: "ident predict: 40 % (120 of 300 MB read)". Empty

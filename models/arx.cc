@@ -57,8 +57,13 @@ ArxRegressor::ArxRegressor(const ArxStructure& structure, const OutputCleaningOp
     : structure_(structure), cleaner_(WithWarmUp(cleaning, structure.num_parameters())) {
   past_y_.setZero(structure_.na());
   past_cleaned_.assign(static_cast<std::size_t>(structure_.na()), 0);
-  for (int i = 0; i < structure_.num_inputs(); ++i)
-    past_u_.emplace_back(Eigen::VectorXd::Zero(structure_.input_history(i)));
+  int window = 0;
+  for (int i = 0; i < structure_.num_inputs(); ++i) {
+    if (structure_.input_history(i) > 0) u_heads_.emplace_back(i, window);
+    for (int k = 0; k < structure_.nb()[i]; ++k) z_from_u_.push_back(window + structure_.nk()[i] + k);
+    window += structure_.input_history(i);
+  }
+  past_u_.assign(static_cast<std::size_t>(window), 0.0);
   Reset();
 }
 
@@ -66,7 +71,7 @@ void ArxRegressor::Reset() {
   past_y_.setZero();
   std::fill(past_cleaned_.begin(), past_cleaned_.end(), 0);
   cleaned_in_window_ = 0;
-  for (auto& p : past_u_) p.setZero();
+  std::fill(past_u_.begin(), past_u_.end(), 0.0);
   samples_ = 0;
   outputs_ = 0;
   last_cleaned_ = last_screened_ = false;
@@ -79,30 +84,35 @@ bool ArxRegressor::Next(const Eigen::Ref<const Eigen::VectorXd>& u, Eigen::Ref<E
   IDENT_REQUIRE(z.size() == structure_.num_parameters(), "regressor has {} entries; the model has {} parameters",
                 z.size(), structure_.num_parameters());
   IDENT_REQUIRE(outputs_ == samples_, "ArxRegressor::Next called twice without PushOutput");
-  for (std::size_t i = 0; i < past_u_.size(); ++i) {
-    auto& p = past_u_[i];
-    const Eigen::Index m = p.size();
-    for (Eigen::Index k = m - 1; k > 0; --k) p(k) = p(k - 1);
-    if (m > 0) p(0) = u(static_cast<Eigen::Index>(i));
-  }
+  // Every window moves on by one: a window's oldest value moves into the newest place of the next, which
+  // that input's sample then takes.
+  for (std::size_t k = past_u_.size(); k-- > 1;) past_u_[k] = past_u_[k - 1];
+  for (const auto& [i, window] : u_heads_) past_u_[static_cast<std::size_t>(window)] = u(i);
   const long t = samples_++;
   if (t < structure_.first_regression_index()) return false;
-  Eigen::Index col = 0;
-  for (int k = 0; k < structure_.na(); ++k) z(col++) = -past_y_(k);
-  for (int i = 0; i < structure_.num_inputs(); ++i)
-    for (int k = 0; k < structure_.nb()[i]; ++k) z(col++) = past_u_[i](structure_.nk()[i] + k);
+  FillRegressor(z);
   return true;
+}
+
+void ArxRegressor::FillRegressor(Eigen::Ref<Eigen::VectorXd> z) const {
+  const int na = structure_.na();
+  for (int k = 0; k < na; ++k) z(k) = -past_y_(k);
+  for (std::size_t j = 0; j < z_from_u_.size(); ++j)
+    z(na + static_cast<Eigen::Index>(j)) = past_u_[static_cast<std::size_t>(z_from_u_[j])];
 }
 
 void ArxRegressor::PushOutput(double y) {
   IDENT_REQUIRE(outputs_ + 1 == samples_, "ArxRegressor::PushOutput called without Next");
   last_cleaned_ = false;
+  // Both windows shift by one in plain loops: they hold na entries, too few for a memmove call to pay.
   const Eigen::Index m = past_y_.size();
-  for (Eigen::Index k = m - 1; k > 0; --k) past_y_(k) = past_y_(k - 1);
   if (m > 0) {
+    cleaned_in_window_ -= past_cleaned_[static_cast<std::size_t>(m - 1)];
+    for (Eigen::Index k = m - 1; k > 0; --k) {
+      past_y_(k) = past_y_(k - 1);
+      past_cleaned_[static_cast<std::size_t>(k)] = past_cleaned_[static_cast<std::size_t>(k - 1)];
+    }
     past_y_(0) = y;
-    cleaned_in_window_ -= past_cleaned_.back();
-    std::copy_backward(past_cleaned_.begin(), past_cleaned_.end() - 1, past_cleaned_.end());
     past_cleaned_.front() = 0;
   }
   ++outputs_;
@@ -134,10 +144,8 @@ bool ArxRegressor::MeasuredRegressor(Eigen::Ref<Eigen::VectorXd> z_measured) con
                 "regressor has {} entries; the model has {} parameters", z_measured.size(),
                 structure_.num_parameters());
   // z(t) as Next() formed it, with −y(t−1) measured (the first entry, models/arx.h's ordering).
-  Eigen::Index col = 0;
-  for (int k = 0; k < structure_.na(); ++k) z_measured(col++) = k == 0 ? -last_measured_ : -past_y_(k);
-  for (int i = 0; i < structure_.num_inputs(); ++i)
-    for (int k = 0; k < structure_.nb()[i]; ++k) z_measured(col++) = past_u_[i](structure_.nk()[i] + k);
+  FillRegressor(z_measured);
+  z_measured(0) = -last_measured_;
   return true;
 }
 

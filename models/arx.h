@@ -15,6 +15,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -97,15 +98,22 @@ class ArxRegressor {
   const OutputCleaner& cleaner() const { return cleaner_; }
 
  private:
+  // z from the stored windows: −y(t−1) … −y(t−na), then each input's u_i(t−nk_i) … u_i(t−nk_i−nb_i+1).
+  void FillRegressor(Eigen::Ref<Eigen::VectorXd> z) const;
+
   ArxStructure structure_;
-  Eigen::VectorXd past_y_;               // past_y_(k) = y(t−1−k), k < na (as stored: maybe cleaned)
-  double last_measured_ = 0;             // the measured y(t−1)
-  bool last_cleaned_ = false;            // past_y_(0) is a cleaned value
-  bool last_screened_ = false;           // ... cleaned by the model-free warm-up screen
-  std::vector<char> past_cleaned_;       // past_cleaned_[k]: past_y_(k) is a cleaned value
-  int cleaned_in_window_ = 0;            // how many of past_cleaned_ are set
-  std::vector<Eigen::VectorXd> past_u_;  // past_u_[i](k) = u_i(t−k), k < nk_i + nb_i
-  long samples_ = 0;                     // samples pushed with Next()
+  Eigen::VectorXd past_y_;          // past_y_(k) = y(t−1−k), k < na (as stored: maybe cleaned)
+  double last_measured_ = 0;        // the measured y(t−1)
+  bool last_cleaned_ = false;       // past_y_(0) is a cleaned value
+  bool last_screened_ = false;      // ... cleaned by the model-free warm-up screen
+  std::vector<char> past_cleaned_;  // past_cleaned_[k]: past_y_(k) is a cleaned value
+  int cleaned_in_window_ = 0;       // how many of past_cleaned_ are set
+  // The inputs' windows one after another in one array, input i's from u_window_[i] on:
+  // past_u_[u_window_[i] + k] = u_i(t−k), k < nk_i + nb_i. Next() moves them all on in one shift.
+  std::vector<double> past_u_;
+  std::vector<std::pair<int, int>> u_heads_;  // (i, u_window_[i]) of the inputs with a window
+  std::vector<int> z_from_u_;                 // z(na + j) = past_u_[z_from_u_[j]]
+  long samples_ = 0;                          // samples pushed with Next()
   long outputs_ = 0;
   OutputCleaner cleaner_;
 };

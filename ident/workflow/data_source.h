@@ -11,6 +11,7 @@
 // followed by PushOutput(y).
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -24,6 +25,14 @@
 #include "models/pseudo_linear_regressor.h"
 
 namespace ident::workflow {
+
+// Whether every entry of z is finite: Eigen's allFinite() as a plain loop, for the per-row paths (Eigen
+// forms z − z twice and compares, out of line at dynamic size).
+inline bool AllFinite(const Eigen::Ref<const Eigen::VectorXd>& z) {
+  for (Eigen::Index i = 0; i < z.size(); ++i)
+    if (!std::isfinite(z(i))) return false;
+  return true;
+}
 
 class DataSource {
  public:

@@ -132,7 +132,7 @@ ResidualAnalysis AnalyseResiduals(const io::DataTable& data, Segment segment, Da
     const double y = row(source.output_column());
     bool inputs_finite = true;
     for (int column : input_columns) inputs_finite = inputs_finite && std::isfinite(row(column));
-    if (source.Regressor(row, z) && std::isfinite(y) && z.allFinite() && inputs_finite) {
+    if (source.Regressor(row, z) && std::isfinite(y) && AllFinite(z) && inputs_finite) {
       e.push_back(y - theta.dot(z));
       for (std::size_t i = 0; i < input_columns.size(); ++i) u[i].push_back(row(input_columns[i]));
     }

@@ -167,8 +167,10 @@ class Estimation {
       if (judged_) scale = estimator_.noise_std();
       if (report.updated()) {
         ++updates_;
-        ZtZ_.selfadjointView<Eigen::Lower>().rankUpdate(z_);
-        max_abs_ = max_abs_.cwiseMax(z_.cwiseAbs());
+        for (Eigen::Index j = 0; j < z_.size(); ++j) {  // Z'Z += zz' (lower) and max |z_i|: cheaper than Eigen's
+          for (Eigen::Index i = j; i < z_.size(); ++i) ZtZ_(i, j) += z_(j) * z_(i);
+          max_abs_(j) = std::max(max_abs_(j), std::abs(z_(j)));
+        }
         if (on_update_) on_update_(r, report, estimator_);
         if (trace_) {
           const Eigen::VectorXd theta = estimator_.parameters();
@@ -318,7 +320,7 @@ class Scoring {
 
   void Row(const Eigen::VectorXd& row) {
     const double y = row(one_step_source_->output_column());
-    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {
+    if (one_step_source_->Regressor(row, z_) && std::isfinite(y) && AllFinite(z_)) {
       const double yhat = theta_.dot(z_);
       one_step_.Add(y, yhat);
       one_step_size_ = std::max(one_step_size_, std::isfinite(yhat) ? std::abs(yhat) : HUGE_VAL);
@@ -477,7 +479,7 @@ class MeanSquares {
   void Restart() { source_.Restart(); }  // a further experiment starts at the next row
   void Add(const Eigen::VectorXd& row) {
     const double y = row(source_.output_column());
-    if (source_.Regressor(row, z_) && std::isfinite(y) && z_.allFinite()) {
+    if (source_.Regressor(row, z_) && std::isfinite(y) && AllFinite(z_)) {
       sum_(0) += y * y;
       sum_.tail(z_.size()) += z_.cwiseAbs2();
       ++count_;

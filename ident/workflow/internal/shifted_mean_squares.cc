@@ -56,7 +56,7 @@ void ShiftedMeanSquares::Centre() {
 void ShiftedMeanSquares::AddShifted(const Eigen::Ref<const Eigen::VectorXd>& shifted) {
   // As MeanSquares::Add: the samples with a finite output and regressor.
   const double y = shifted(source_.output_column());
-  if (source_.Regressor(shifted, z_) && std::isfinite(y) && z_.allFinite()) {
+  if (source_.Regressor(shifted, z_) && std::isfinite(y) && AllFinite(z_)) {
     sum_(0) += y;
     sum_squares_(0) += y * y;
     sum_.tail(z_.size()) += z_;
