@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Instructions that `ident fit` executes per row, counted by callgrind: a figure that does not move with the
-machine's load, for comparing two builds of the per-row path where wall times are too noisy to tell a few per cent.
+machine's load (runs differ by well under 0.1 %: the threads' waits for one another), for comparing two builds of
+the per-row path where wall times are too noisy to tell a few per cent.
 The record is `bench/read_speed.py`'s simulated ARX(2,2,1) record cut to --rows rows (1.5·10^6 by default: past
 the CLI's 10^6-row limit for reading a record whole, so the fit streams), fitted by
 `ident fit FILE --output y --input u --na 2 --nb 2 --nk 1 --estimator rls`. Printed: each binary's instructions
