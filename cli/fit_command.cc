@@ -1,8 +1,10 @@
 // ident fit DATA --output y (--input u [--na --nb --nk] | --regressors x1,x2 [--intercept])
 //           [--estimator NAME ...] [--split 0.5] [--detrend mean|none] [--missing] [--trace F] [--json]
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -42,6 +44,37 @@ bool MayHoldMoreRows(const std::string& path, long rows) {
   std::error_code error;
   const std::uintmax_t size = std::filesystem::file_size(path, error);
   return error || size > 2 * static_cast<std::uintmax_t>(rows);
+}
+
+// Whether a file probably holds more than `rows` rows: its size against the bytes per line of its first and last
+// 64 KiB (lines often grow along a record, as its time column does). A guess that only saves a read: the rows read
+// whole or counted decide (ReadIfInMemory, CountCsvDataRows).
+bool LikelyHoldsMoreRows(const std::string& path, long rows) {
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  std::ifstream in(path, std::ios::binary);
+  if (error || !in) return true;  // the row count says why
+  io::internal::CountCsvFileOpened();
+  constexpr std::uintmax_t kSample = 1 << 16;
+  std::string sample(kSample, '\0');
+  double bytes = 0, lines = 0;
+  for (const std::uintmax_t from : {std::uintmax_t{0}, size > 2 * kSample ? size - kSample : size}) {
+    in.seekg(static_cast<std::streamoff>(from));
+    in.read(sample.data(), static_cast<std::streamsize>(kSample));
+    bytes += static_cast<double>(in.gcount());
+    lines += static_cast<double>(std::count(sample.data(), sample.data() + in.gcount(), '\n'));
+    in.clear();
+  }
+  return lines < 2 || static_cast<double>(size) * lines > bytes * static_cast<double>(rows);
+}
+
+// The record read whole if it holds at most kInMemoryRows data rows, as CountCsvDataRows counts them (the first
+// line of a file without a header is a row of the table, not a data row); else std::nullopt, after reading
+// kInMemoryRows + 2 rows at most.
+std::optional<io::DataTable> ReadIfInMemory(const std::string& path, const io::CsvOptions& csv) {
+  std::optional<io::DataTable> table = io::ReadCsvUpTo(path, kInMemoryRows + 1, csv);
+  if (table && table->num_rows() - (table->generated_names ? 1 : 0) > kInMemoryRows) table.reset();
+  return table;
 }
 constexpr int kResidualLags = 20;
 
@@ -226,16 +259,19 @@ void RunFit(const FitCommandOptions& o) {
   }
   const std::string path = experiments ? once->source : paths.front();
   // Standard input, a pipe, a device or a .mat file is read once, into memory; a regular file is first checked by
-  // its header and length, and streamed when long. Records up to kInMemoryRows rows are read whole, for the
-  // time column's check, the residual analysis and plots; longer ones stream through the estimator in
-  // constant memory (without them).
+  // its header, then read whole if it probably fits, else counted, and streamed when long. Records up to
+  // kInMemoryRows rows are read whole, for the time column's check, the residual analysis and plots; longer
+  // ones stream through the estimator in constant memory (without them).
   if (!once && (!io::CanReadTwice(path) || io::IsMatFile(path) || !MayHoldMoreRows(path, kInMemoryRows)))
     once = io::ReadDataFile(path, csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
   const bool may_stream = !once && o.plot.empty() && o.save.empty() && o.validate.empty();
-  const long data_lines = may_stream ? workflow::CountCsvDataRows(path) : 0;
-  const bool streamed = may_stream && data_lines > kInMemoryRows;
+  // Read whole at once, not counted first (the read stops early if the record is longer after all).
+  if (may_stream && !LikelyHoldsMoreRows(path, kInMemoryRows)) once = ReadIfInMemory(path, csv);
+  const bool counted = may_stream && !once;
+  const long data_lines = counted ? workflow::CountCsvDataRows(path) : 0;
+  const bool streamed = counted && data_lines > kInMemoryRows;
   if (!streamed && !once) once = io::ReadDataFile(path, csv);
   std::optional<workflow::TimeCheck> time;
   if (!experiments) files = {{path, once ? once->num_rows() : 0}};  // as read, before gaps are filled

@@ -278,7 +278,8 @@ bool DataTable::StartsExperiment(int row) const {
 
 namespace {
 
-DataTable ReadAll(CsvReader& reader) {
+// The reader's rows as a table; std::nullopt once it has read more than `max_rows`.
+std::optional<DataTable> ReadRows(CsvReader& reader, long max_rows) {
   DataTable table;
   table.source = reader.path();
   table.names = reader.names();
@@ -287,9 +288,10 @@ DataTable ReadAll(CsvReader& reader) {
   std::vector<double> data;
   Eigen::VectorXd row(n);
   long last_line = -1;
-  for (int r = 0; reader.Next(row); ++r) {
+  for (long r = 0; reader.Next(row); ++r) {
+    if (r == max_rows) return std::nullopt;
     data.insert(data.end(), row.data(), row.data() + n);
-    if (reader.line() != last_line + 1) table.row_lines.emplace_back(r, reader.line());
+    if (reader.line() != last_line + 1) table.row_lines.emplace_back(static_cast<int>(r), reader.line());
     last_line = reader.line();
   }
   const Eigen::Index rows = static_cast<Eigen::Index>(data.size()) / n;
@@ -297,6 +299,8 @@ DataTable ReadAll(CsvReader& reader) {
       Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(data.data(), rows, n);
   return table;
 }
+
+DataTable ReadAll(CsvReader& reader) { return *ReadRows(reader, std::numeric_limits<long>::max()); }
 
 }  // namespace
 
@@ -315,6 +319,11 @@ bool CanReadTwice(const std::string& path) {
 DataTable ReadCsv(const std::string& path, const CsvOptions& options) {
   CsvReader reader(path, options);
   return ReadAll(reader);
+}
+
+std::optional<DataTable> ReadCsvUpTo(const std::string& path, long max_rows, const CsvOptions& options) {
+  CsvReader reader(path, options);
+  return ReadRows(reader, max_rows);
 }
 
 DataTable ParseCsv(std::string_view text, const std::string& source, const CsvOptions& options) {

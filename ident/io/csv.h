@@ -47,6 +47,7 @@
 #include <functional>
 #include <istream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -180,6 +181,9 @@ struct DataTable {
 
 // Reads the whole file. Throws DataError.
 DataTable ReadCsv(const std::string& path, const CsvOptions& options = {});
+// ReadCsv for a file of at most `max_rows` rows (DataTable::num_rows()); for a longer one, std::nullopt once row
+// max_rows + 1 is read (the rest of the file is not read). Throws DataError as ReadCsv for the rows it reads.
+std::optional<DataTable> ReadCsvUpTo(const std::string& path, long max_rows, const CsvOptions& options = {});
 // Parses CSV text held in memory; `source` names it in messages. Throws DataError.
 DataTable ParseCsv(std::string_view text, const std::string& source, const CsvOptions& options = {});
 

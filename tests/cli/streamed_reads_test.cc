@@ -3,6 +3,7 @@
 // file, and that its estimate equals the in-memory fit's (FitTable on the same file read whole).
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -267,6 +268,40 @@ TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
   EXPECT_EQ(code, 0);
   EXPECT_NE(out.find("\"theta\""), std::string::npos);
   EXPECT_EQ(io::CsvFilesOpened() - before, 1);
+}
+
+// Bytes this process has read so far: rchar of /proc/self/io (every read of every thread, from any file).
+long BytesRead() {
+  std::ifstream io("/proc/self/io");
+  std::string key;
+  long value = -1;
+  while (io >> key >> value)
+    if (key == "rchar:") return value;
+  return -1;
+}
+
+// `ident fit` on a regular file of fewer rows than are read whole, but too large to tell so from its size alone
+// (more than two bytes per row), reads it whole at once: about one file size, where counting its rows first and
+// then reading it take two.
+TEST(InMemoryReads, AFileThatFitsIsReadOnce) {
+  const std::string text = SimulatedRecord(60'000);
+  ASSERT_GT(text.size(), 3'000'000u);
+  const std::string path = testing::WriteFile("in_memory_read_once.csv", text);
+  std::vector<std::string> words = {"ident", "fit", path,   "--output", "y",    "--input", "u",
+                                    "--na",  "2",   "--nb", "2",        "--nk", "1",       "--json"};
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  const long before = BytesRead();
+  ASSERT_GE(before, 0) << "/proc/self/io has no rchar";
+  ::testing::internal::CaptureStdout();
+  const int code = cli::RunCommandLine(static_cast<int>(argv.size()), argv.data());
+  const long read = BytesRead() - before;  // before the captured output is read back
+  const std::string out = ::testing::internal::GetCapturedStdout();
+  EXPECT_EQ(code, 0);
+  EXPECT_NE(out.find("\"residual_analysis\": {"), std::string::npos) << "read whole: with the residual analysis";
+  const double size = static_cast<double>(text.size());
+  EXPECT_GE(static_cast<double>(read), size);
+  EXPECT_LT(static_cast<double>(read), 1.2 * size) << "read " << read << " bytes of a " << text.size() << "-byte file";
 }
 
 // The record of SimulatedRecord without the rows in [first, last) of each pair: gaps in its time column.
