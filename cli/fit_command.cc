@@ -116,9 +116,9 @@ workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow:
   m.data_rows = fit.prepared.num_rows();
   // Standard input is gone; several files have no one checksum (each file's is in data_files).
   auto checksum = [](const std::string& file) { return io::CanReadTwice(file) ? workflow::FileChecksum(file) : ""; };
-  m.data_checksum = files.size() == 1 ? checksum(files.front().path) : "";
   for (const ExperimentFile& f : files)
     m.data_files.push_back({.path = f.path, .checksum = checksum(f.path), .rows = f.rows});
+  m.data_checksum = files.size() == 1 ? m.data_files.front().checksum : "";
   m.split = request.split;
   m.validation = fit.validation;
   m.validation_scores = fit.result.validation;

@@ -253,23 +253,6 @@ TEST(StreamedReads, MeanSquaresOfTheMeansPassEqualThoseOfTheirOwnPass) {
   }
 }
 
-// `ident fit` on a regular file too small to hold more rows than are read whole (two bytes per row at
-// least) reads it once, into memory: no row count, no separate look at the header.
-TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
-  const std::string path = testing::WriteFile("in_memory_reads.csv", SimulatedRecord(2'000));
-  std::vector<std::string> words = {"ident", "fit", path,   "--output", "y",    "--input", "u",
-                                    "--na",  "2",   "--nb", "2",        "--nk", "1",       "--json"};
-  std::vector<char*> argv;
-  for (std::string& w : words) argv.push_back(w.data());
-  const long before = io::CsvFilesOpened();
-  ::testing::internal::CaptureStdout();
-  const int code = cli::RunCommandLine(static_cast<int>(argv.size()), argv.data());
-  const std::string out = ::testing::internal::GetCapturedStdout();
-  EXPECT_EQ(code, 0);
-  EXPECT_NE(out.find("\"theta\""), std::string::npos);
-  EXPECT_EQ(io::CsvFilesOpened() - before, 1);
-}
-
 // Bytes this process has read so far: rchar of /proc/self/io (every read of every thread, from any file).
 long BytesRead() {
   std::ifstream io("/proc/self/io");
@@ -280,28 +263,57 @@ long BytesRead() {
   return -1;
 }
 
+// `ident fit FILE` with ARX(2,2,1) and `extra` options, run in-process: exit code, stdout, and the files opened
+// (io::CsvFilesOpened) and bytes read (BytesRead) while it ran.
+struct InProcessFit {
+  int code = -1;
+  std::string out;
+  long opened = 0, bytes_read = 0;
+};
+InProcessFit FitInProcess(const std::string& path, std::vector<std::string> extra) {
+  std::vector<std::string> words = {"ident", "fit", path,   "--output", "y",    "--input", "u",
+                                    "--na",  "2",   "--nb", "2",        "--nk", "1"};
+  words.insert(words.end(), extra.begin(), extra.end());
+  std::vector<char*> argv;
+  for (std::string& w : words) argv.push_back(w.data());
+  InProcessFit fit;
+  const long opened = io::CsvFilesOpened(), read = BytesRead();
+  ::testing::internal::CaptureStdout();
+  fit.code = cli::RunCommandLine(static_cast<int>(argv.size()), argv.data());
+  fit.bytes_read = BytesRead() - read;  // before the captured output is read back
+  fit.opened = io::CsvFilesOpened() - opened;
+  fit.out = ::testing::internal::GetCapturedStdout();
+  return fit;
+}
+
+// `ident fit` on a regular file too small to hold more rows than are read whole (two bytes per row at
+// least) reads it once, into memory: no row count, no separate look at the header.
+TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
+  const std::string path = testing::WriteFile("in_memory_reads.csv", SimulatedRecord(2'000));
+  const InProcessFit fit = FitInProcess(path, {"--json"});
+  EXPECT_EQ(fit.code, 0);
+  EXPECT_NE(fit.out.find("\"theta\""), std::string::npos);
+  EXPECT_EQ(fit.opened, 1);
+}
+
 // `ident fit` on a regular file of fewer rows than are read whole, but too large to tell so from its size alone
 // (more than two bytes per row), reads it whole at once: about one file size, where counting its rows first and
-// then reading it take two.
+// then reading it take two. With --save it reads the file once more, for the saved model's checksum.
 TEST(InMemoryReads, AFileThatFitsIsReadOnce) {
+  ASSERT_GE(BytesRead(), 0) << "/proc/self/io has no rchar";
   const std::string text = SimulatedRecord(60'000);
   ASSERT_GT(text.size(), 3'000'000u);
   const std::string path = testing::WriteFile("in_memory_read_once.csv", text);
-  std::vector<std::string> words = {"ident", "fit", path,   "--output", "y",    "--input", "u",
-                                    "--na",  "2",   "--nb", "2",        "--nk", "1",       "--json"};
-  std::vector<char*> argv;
-  for (std::string& w : words) argv.push_back(w.data());
-  const long before = BytesRead();
-  ASSERT_GE(before, 0) << "/proc/self/io has no rchar";
-  ::testing::internal::CaptureStdout();
-  const int code = cli::RunCommandLine(static_cast<int>(argv.size()), argv.data());
-  const long read = BytesRead() - before;  // before the captured output is read back
-  const std::string out = ::testing::internal::GetCapturedStdout();
-  EXPECT_EQ(code, 0);
-  EXPECT_NE(out.find("\"residual_analysis\": {"), std::string::npos) << "read whole: with the residual analysis";
   const double size = static_cast<double>(text.size());
-  EXPECT_GE(static_cast<double>(read), size);
-  EXPECT_LT(static_cast<double>(read), 1.2 * size) << "read " << read << " bytes of a " << text.size() << "-byte file";
+  const InProcessFit fit = FitInProcess(path, {"--json"});
+  EXPECT_EQ(fit.code, 0);
+  EXPECT_NE(fit.out.find("\"residual_analysis\": {"), std::string::npos) << "read whole: with the residual analysis";
+  EXPECT_GE(static_cast<double>(fit.bytes_read), size);
+  EXPECT_LT(static_cast<double>(fit.bytes_read), 1.2 * size) << fit.bytes_read << " bytes read";
+  const InProcessFit saved = FitInProcess(path, {"--save", testing::TempDir() + "/read_once_model.json"});
+  EXPECT_EQ(saved.code, 0);
+  EXPECT_GE(static_cast<double>(saved.bytes_read), 2 * size);
+  EXPECT_LT(static_cast<double>(saved.bytes_read), 2.2 * size) << saved.bytes_read << " bytes read with --save";
 }
 
 // The record of SimulatedRecord without the rows in [first, last) of each pair: gaps in its time column.
