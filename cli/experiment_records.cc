@@ -43,7 +43,7 @@ ExperimentRecords ReadExperimentRecords(const std::vector<std::string>& paths, c
   std::vector<io::DataTable> tables;
   for (const std::string& p : paths) {
     tables.push_back(io::ReadDataFile(p, csv));
-    r.files.push_back({p, tables.back().num_rows()});
+    r.files.push_back({p, tables.back().num_rows(), ""});
   }
   if (r.several) {
     r.table = workflow::ConcatenateExperiments(std::move(tables), column, &r.experiments);

@@ -28,6 +28,7 @@ void PrintExperiments(const std::vector<workflow::Experiment>& experiments);
 struct ExperimentFile {
   std::string path;
   long rows = 0;
+  std::string checksum;  // workflow::Checksum of its bytes as read; empty: not taken while reading
 };
 
 struct ExperimentRecords {

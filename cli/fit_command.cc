@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -115,9 +116,12 @@ workflow::SavedModel ModelToSave(const workflow::RecordFit& fit, const workflow:
   m.data_path = path;
   m.data_rows = fit.prepared.num_rows();
   // Standard input is gone; several files have no one checksum (each file's is in data_files).
-  auto checksum = [](const std::string& file) { return io::CanReadTwice(file) ? workflow::FileChecksum(file) : ""; };
+  auto checksum = [](const ExperimentFile& f) {
+    if (!f.checksum.empty()) return f.checksum;
+    return io::CanReadTwice(f.path) ? workflow::FileChecksum(f.path) : "";
+  };
   for (const ExperimentFile& f : files)
-    m.data_files.push_back({.path = f.path, .checksum = checksum(f.path), .rows = f.rows});
+    m.data_files.push_back({.path = f.path, .checksum = checksum(f), .rows = f.rows});
   m.data_checksum = files.size() == 1 ? m.data_files.front().checksum : "";
   m.split = request.split;
   m.validation = fit.validation;
@@ -262,8 +266,14 @@ void RunFit(const FitCommandOptions& o) {
   // its header, then read whole if it probably fits, else counted, and streamed when long. Records up to
   // kInMemoryRows rows are read whole, for the time column's check, the residual analysis and plots; longer
   // ones stream through the estimator in constant memory (without them).
+  // --save records the file's checksum from its bytes as they are read whole: one read, and the checksum of
+  // exactly the bytes fitted.
+  io::CsvOptions whole_csv = csv;
+  workflow::Checksum checksum;
+  const bool checksum_as_read = !o.save.empty() && !experiments && io::CanReadTwice(path) && !io::IsMatFile(path);
+  if (checksum_as_read) whole_csv.on_bytes = [&checksum](std::string_view bytes) { checksum.Add(bytes); };
   if (!once && (!io::CanReadTwice(path) || io::IsMatFile(path) || !MayHoldMoreRows(path, kInMemoryRows)))
-    once = io::ReadDataFile(path, csv);
+    once = io::ReadDataFile(path, whole_csv);
   std::unique_ptr<workflow::DataSource> source =
       o.structure.MakeSource(once ? once->names : io::CsvReader(path, csv).names(), path);
   const bool may_stream = !once && o.plot.empty() && o.save.empty() && o.validate.empty();
@@ -272,10 +282,11 @@ void RunFit(const FitCommandOptions& o) {
   const bool counted = may_stream && !once;
   const long data_lines = counted ? workflow::CountCsvDataRows(path) : 0;
   const bool streamed = counted && data_lines > kInMemoryRows;
-  if (!streamed && !once) once = io::ReadDataFile(path, csv);
+  if (!streamed && !once) once = io::ReadDataFile(path, whole_csv);
   std::optional<workflow::TimeCheck> time;
-  if (!experiments) files = {{path, once ? once->num_rows() : 0}};  // as read, before gaps are filled
-  if (once && !experiments)                                         // a time column restarts in each experiment
+  if (!experiments)  // as read, before gaps are filled
+    files = {{path, once ? once->num_rows() : 0, checksum_as_read ? checksum.Hex() : ""}};
+  if (once && !experiments)  // a time column restarts in each experiment
     time = workflow::CheckRecordTime(*once, source->used_columns(), o.missing);
   // Streamed: the gaps to fill are found in a pass of their own; otherwise the estimation pass checks the time.
   if (streamed && o.missing) time = workflow::ScanCsvTime(path, csv, source->used_columns());

@@ -75,6 +75,7 @@ bool CsvReader::Fill() {
   next_cr_ = 0;
   bytes_taken_ += static_cast<long>(got);
   if (options_.on_read) options_.on_read(bytes_taken_);
+  if (options_.on_bytes) options_.on_bytes(std::string_view(chunk_.data(), chunk_end_));
   return true;
 }
 

@@ -87,6 +87,9 @@ struct CsvOptions {
   // Called after each block the reader takes from its input, with the bytes taken so far (a long read's
   // progress); empty: not called.
   std::function<void(long)> on_read = nullptr;
+  // Called with each block of bytes the reader takes from its input, in order (e.g. for a checksum of exactly
+  // the bytes read); empty: not called.
+  std::function<void(std::string_view)> on_bytes = nullptr;
 };
 
 // Streams a CSV file row by row (constant memory).

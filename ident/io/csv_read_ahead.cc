@@ -43,7 +43,8 @@ CsvReadAhead::CsvReadAhead(const std::string& path, const CsvOptions& options, i
 }
 
 bool CsvReadAhead::ReadsInSegments(const std::string& path, const CsvReader& reader, long* file_size) const {
-  if (options_.on_read || reader.delimiter() == Delimiter::kWhitespace || !CanReadTwice(path)) return false;
+  if (options_.on_read || options_.on_bytes || reader.delimiter() == Delimiter::kWhitespace || !CanReadTwice(path))
+    return false;
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec || size < static_cast<std::uintmax_t>(kSegmentedFileBytes)) return false;

@@ -248,19 +248,27 @@ SavedModel SavedModel::Read(const std::string& path) {
   return FromJson(j, path);
 }
 
+void Checksum::Add(std::string_view bytes) {
+  std::uint64_t h = h_;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  h_ = h;
+}
+
+std::string Checksum::Hex() const { return fmt::format("{:016x}", h_); }
+
 std::string FileChecksum(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw DataError(fmt::format("cannot open '{}'", path));
-  std::uint64_t h = 14695981039346656037ull;
+  Checksum checksum;
   char buffer[1 << 16];
   while (in) {
     in.read(buffer, sizeof buffer);
-    for (std::streamsize i = 0; i < in.gcount(); ++i) {
-      h ^= static_cast<unsigned char>(buffer[i]);
-      h *= 1099511628211ull;
-    }
+    checksum.Add(std::string_view(buffer, static_cast<std::size_t>(in.gcount())));
   }
-  return fmt::format("{:016x}", h);
+  return checksum.Hex();
 }
 
 }  // namespace ident::workflow

@@ -15,8 +15,10 @@
 // Numbers carry 17 significant digits, so θ and the means read back bit for bit.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -56,7 +58,18 @@ struct SavedModel {
   static SavedModel Read(const std::string& path);
 };
 
-// FNV-1a, 64 bits, of a file's bytes, as 16 hex digits. Throws DataError if it cannot be read.
+// FNV-1a, 64 bits, of bytes given in order, as 16 hex digits (FileChecksum, or a file's bytes as they are read:
+// io::CsvOptions::on_bytes).
+class Checksum {
+ public:
+  void Add(std::string_view bytes);
+  std::string Hex() const;
+
+ private:
+  std::uint64_t h_ = 14695981039346656037ull;
+};
+
+// Checksum of a file's bytes. Throws DataError if it cannot be read.
 std::string FileChecksum(const std::string& path);
 
 }  // namespace ident::workflow
