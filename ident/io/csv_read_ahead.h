@@ -10,8 +10,8 @@
 // them: a DataError at some row is thrown by the Next() that would have returned that row, after every
 // row before it. Parsing (most of what reading a long record costs) overlaps with the caller's work on the
 // rows before; memory stays constant (a few blocks of at most kBlockRows rows, and one segment per thread).
-// Destroying the reader early stops the threads. CsvOptions::on_read, if set, is called on the reading
-// thread (such a reader takes the CsvReader path).
+// Destroying the reader early stops the threads. CsvOptions::on_read and on_bytes, if set, are called on the
+// reading thread (such a reader takes the CsvReader path).
 //
 // Example:
 //   ident::io::CsvReadAhead reader("long.csv");
@@ -85,7 +85,7 @@ class CsvReadAhead {
 
   void Read(std::unique_ptr<CsvReader> reader);  // the reading thread
   // Whether the file is one to read in segments (*file_size its size): a large regular file, read without
-  // CsvOptions::on_read, whose delimiter is one character. PlainSegments checks its first line.
+  // CsvOptions::on_read and on_bytes, whose delimiter is one character. PlainSegments checks its first line.
   bool ReadsInSegments(const std::string& path, const CsvReader& reader, long* file_size) const;
   // NextRow() where the segments give no row: after their last, from the reader that goes on from there, or
   // from the reading thread's blocks.

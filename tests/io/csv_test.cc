@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
+#include <string>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
@@ -342,6 +345,45 @@ TEST(CsvReader, OnReadReportsTheBytesTakenUpToTheFileSize) {
   EXPECT_EQ(seen.back(), static_cast<long>(text.size()));
   const DataTable without = ReadCsv(path);
   EXPECT_EQ(with.values, without.values);
+}
+
+// CsvOptions::on_bytes sees the input's bytes in order, all of them: their concatenation is the file.
+TEST(CsvReader, OnBytesSeesTheWholeFileInOrder) {
+  std::string text = "# a comment\nt,y\n";
+  for (int k = 0; k < 40'000; ++k) text += fmt::format("{},{}\n", k, 0.25 * k);
+  text += "\n\n";
+  const std::string path = WriteFile("on_bytes.csv", text);
+  std::string seen;
+  int blocks = 0;
+  CsvOptions options;
+  options.on_bytes = [&](std::string_view bytes) { seen += bytes, ++blocks; };
+  const DataTable with = ReadCsv(path, options);
+  EXPECT_GE(blocks, 2);  // a file of several blocks
+  EXPECT_EQ(seen, text);
+  EXPECT_EQ(with.values, ReadCsv(path).values);
+}
+
+// ReadCsvUpTo gives ReadCsv's table for a file of at most max_rows rows, and std::nullopt for a longer one,
+// whose rest it leaves unread (here: most of a 1.3 MB file after row 11).
+TEST(CsvReader, ReadCsvUpToStopsAfterTheRowPastTheLimit) {
+  std::string text = "t,y\n";
+  for (int k = 0; k < 100'000; ++k) text += fmt::format("{},{}\n", k, 0.25 * k);
+  const std::string path = WriteFile("up_to.csv", text);
+  const std::optional<DataTable> all = ReadCsvUpTo(path, 100'000);
+  ASSERT_TRUE(all.has_value());
+  EXPECT_EQ(all->values, ReadCsv(path).values);
+  EXPECT_EQ(all->names, (std::vector<std::string>{"t", "y"}));
+  EXPECT_FALSE(ReadCsvUpTo(path, 99'999).has_value());
+  long taken = 0;
+  CsvOptions options;
+  options.on_read = [&taken](long bytes) { taken = bytes; };
+  EXPECT_FALSE(ReadCsvUpTo(path, 10, options).has_value());
+  EXPECT_LT(taken, static_cast<long>(text.size()) / 2) << "read on past the limit";
+  // Without a header the first line is a row.
+  const std::string headerless = WriteFile("up_to_headerless.csv", "1,2\n3,4\n");
+  ASSERT_TRUE(ReadCsvUpTo(headerless, 2).has_value());
+  EXPECT_EQ(ReadCsvUpTo(headerless, 2)->num_rows(), 2);
+  EXPECT_FALSE(ReadCsvUpTo(headerless, 1).has_value());
 }
 
 }  // namespace
