@@ -301,7 +301,7 @@ TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
 // (more than two bytes per row), reads it whole at once: about one file size, where counting its rows first and
 // then reading it take two; with --save too, whose checksum is taken from the bytes as they are read.
 TEST(InMemoryReads, AFileThatFitsIsReadOnce) {
-  ASSERT_GE(BytesRead(), 0) << "/proc/self/io has no rchar";
+  if (BytesRead() < 0) GTEST_SKIP() << "no /proc/self/io (a kernel without I/O accounting): bytes read unknown";
   const std::string text = SimulatedRecord(60'000);
   ASSERT_GT(text.size(), 3'000'000u);
   const std::string path = testing::WriteFile("in_memory_read_once.csv", text);
