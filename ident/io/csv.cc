@@ -318,8 +318,7 @@ bool CanReadTwice(const std::string& path) {
 }
 
 DataTable ReadCsv(const std::string& path, const CsvOptions& options) {
-  CsvReader reader(path, options);
-  return ReadAll(reader);
+  return *ReadCsvUpTo(path, std::numeric_limits<long>::max(), options);
 }
 
 std::optional<DataTable> ReadCsvUpTo(const std::string& path, long max_rows, const CsvOptions& options) {
