@@ -279,9 +279,25 @@ void RunFit(const FitCommandOptions& o) {
   const bool may_stream = !once && o.plot.empty() && o.save.empty() && o.validate.empty();
   // Read whole at once, not counted first (the read stops early if the record is longer after all).
   if (may_stream && !LikelyHoldsMoreRows(path, kInMemoryRows)) once = ReadIfInMemory(path, csv);
+  workflow::FitRequest request;
+  request.model = o.structure;
+  request.estimator = o.estimator;
+  request.split = o.split;
+  request.passes = o.passes;
+  request.detrend = o.detrend;
+  request.residual_lags = kResidualLags;
   const bool counted = may_stream && !once;
-  const long data_lines = counted ? workflow::CountCsvDataRows(path) : 0;
+  // Counted and, if long, the estimation part's means taken, in one read (workflow::ScanCsvFirstPass); with time
+  // gaps to fill, or where that pass does not apply, counted by a pass of its own.
+  std::optional<workflow::CsvFirstPass> first;
+  if (counted && !o.missing) {
+    const workflow::FitPlan planned = workflow::PlanFitOptions(request, source->num_parameters());
+    first = workflow::ScanCsvFirstPass(path, csv, *source, planned.options,
+                                       planned.scaled_prior && source->affine_in_rows());
+  }
+  const long data_lines = first ? first->data_lines : counted ? workflow::CountCsvDataRows(path) : 0;
   const bool streamed = counted && data_lines > kInMemoryRows;
+  if (!streamed) first.reset();
   if (!streamed && !once) once = io::ReadDataFile(path, whole_csv);
   std::optional<workflow::TimeCheck> time;
   if (!experiments)  // as read, before gaps are filled
@@ -290,18 +306,14 @@ void RunFit(const FitCommandOptions& o) {
     time = workflow::CheckRecordTime(*once, source->used_columns(), o.missing);
   // Streamed: the gaps to fill are found in a pass of their own; otherwise the estimation pass checks the time.
   if (streamed && o.missing) time = workflow::ScanCsvTime(path, csv, source->used_columns());
-  workflow::FitRequest request;
-  request.model = o.structure;
-  request.estimator = o.estimator;
-  request.split = o.split;
-  request.passes = o.passes;
-  request.detrend = o.detrend;
-  request.residual_lags = kResidualLags;
   // The record's length first: building an estimator costs O(rho^3) for large orders.
   workflow::FitOptions length_check;
   length_check.split = o.split;
   std::optional<workflow::CsvLayout> layout;
-  if (!once) layout = workflow::CheckCsvLayout(path, csv, *source, length_check, data_lines, time ? &*time : nullptr);
+  if (first)
+    layout = first->layout;
+  else if (!once)
+    layout = workflow::CheckCsvLayout(path, csv, *source, length_check, data_lines, time ? &*time : nullptr);
   const long estimation_rows =
       once ? workflow::CheckRecordLength(once->num_rows(), *source, length_check, path) : layout->estimation.count;
   workflow::FitPlan plan = workflow::PlanFit(request, source->num_parameters(), estimation_rows);
@@ -332,7 +344,9 @@ void RunFit(const FitCommandOptions& o) {
       if (*f) (*f)->Commit();
   };
   if (streamed) {
-    const workflow::FitResult result = workflow::FitCsvFile(path, csv, *source, plan, *layout, time ? &*time : nullptr);
+    const workflow::FitResult result =
+        first ? workflow::FitCsvFile(path, csv, *source, plan, *first)
+              : workflow::FitCsvFile(path, csv, *source, plan, *layout, time ? &*time : nullptr);
     commit_outputs();
     if (o.json) {
       std::cout << workflow::FitJson(result, path, o.split, o.detrend, nullptr, nullptr).dump(2) << "\n";

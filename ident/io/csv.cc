@@ -61,9 +61,10 @@ bool CsvReader::Fill() {
   if (!*in_) return false;
   // One sgetn, which may return fewer bytes than asked for: a buffer that hands over what a pipe holds
   // (ident/io/arriving_input.h) makes each line readable as soon as it has arrived. No bytes: the end.
-  std::streamsize got = 0;
+  std::streamsize got = 0, want = static_cast<std::streamsize>(chunk_.size());
+  if (options_.prefix_bytes >= 0) want = std::min<std::streamsize>(want, options_.prefix_bytes - bytes_taken_);
   try {
-    got = in_->rdbuf()->sgetn(chunk_.data(), static_cast<std::streamsize>(chunk_.size()));
+    if (want > 0) got = in_->rdbuf()->sgetn(chunk_.data(), want);
   } catch (const std::exception& e) {
     throw DataError(fmt::format("cannot read '{}': {}", path_, e.what()));
   }

@@ -90,6 +90,9 @@ struct CsvOptions {
   // Called with each block of bytes the reader takes from its input, in order (e.g. for a checksum of exactly
   // the bytes read); empty: not called.
   std::function<void(std::string_view)> on_bytes = nullptr;
+  // ≥ 0: read only the input's first prefix_bytes bytes, as if the input ended there (a regular file read in
+  // parts: the prefix should end where a line ends); negative: read to the end.
+  long prefix_bytes = -1;
 };
 
 // Streams a CSV file row by row (constant memory).

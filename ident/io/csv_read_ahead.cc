@@ -48,7 +48,8 @@ bool CsvReadAhead::ReadsInSegments(const std::string& path, const CsvReader& rea
   std::error_code ec;
   const auto size = std::filesystem::file_size(path, ec);
   if (ec || size < static_cast<std::uintmax_t>(kSegmentedFileBytes)) return false;
-  *file_size = static_cast<long>(size);
+  *file_size =
+      options_.prefix_bytes >= 0 ? std::min(static_cast<long>(size), options_.prefix_bytes) : static_cast<long>(size);
   return true;
 }
 

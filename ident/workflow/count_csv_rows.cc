@@ -128,13 +128,12 @@ RangeCount CountRange(int fd, long begin, const long end, const std::string& pat
   return count;
 }
 
-// Where a file of `size` bytes is cut for two counting threads: just after the first LF at or past its middle
-// (a line starts there, so the two halves count apart exactly what the whole counts); 0 for none within a
-// line's length limit of the middle.
-long CountingCut(int fd, long size) {
-  const long middle = size / 2;
+// Where a line starts at or past byte `at` of a file of `size` bytes: just after the first LF at or past `at`
+// (the lines before it and from it count apart exactly what the whole counts); 0 for none within a line's length
+// limit of `at`.
+long LineStartFrom(int fd, long at, long size) {
   std::vector<char> window(1 << 16);
-  for (long at = middle; at < size && at < middle + static_cast<long>(io::kMaxCsvLineBytes);) {
+  for (const long from = at; at < size && at < from + static_cast<long>(io::kMaxCsvLineBytes);) {
     const ssize_t got =
         ::pread(fd, window.data(), static_cast<std::size_t>(std::min<long>(std::ssize(window), size - at)), at);
     if (got < 0 && errno == EINTR) continue;
@@ -146,6 +145,21 @@ long CountingCut(int fd, long size) {
   return 0;
 }
 
+// The file opened for reading (counted as an open of a CSV file), closed when it goes; its size if regular, else -1.
+struct OpenFile {
+  explicit OpenFile(const std::string& path) : fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC)) {
+    if (fd < 0) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
+    io::internal::CountCsvFileOpened();
+    struct stat info {};
+    size = ::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) ? static_cast<long>(info.st_size) : -1;
+  }
+  ~OpenFile() { ::close(fd); }
+  OpenFile(const OpenFile&) = delete;
+  OpenFile& operator=(const OpenFile&) = delete;
+  int fd;
+  long size;
+};
+
 }  // namespace
 
 long CountCsvDataRows(const std::string& path) {
@@ -153,17 +167,11 @@ long CountCsvDataRows(const std::string& path) {
 }
 
 long internal::CountCsvDataRows(const std::string& path, long two_thread_bytes) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw DataError(fmt::format("cannot open '{}': {}", path, std::strerror(errno)));
-  io::internal::CountCsvFileOpened();
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
-  struct stat info {};
-  const long size = ::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) ? static_cast<long>(info.st_size) : -1;
+  const OpenFile file(path);
+  const int fd = file.fd;
+  const long size = file.size;
   // A regular file of two_thread_bytes or more is counted in two halves at once; anything else in one go.
-  const long cut = size >= two_thread_bytes ? CountingCut(fd, size) : 0;
+  const long cut = size >= two_thread_bytes ? LineStartFrom(fd, size / 2, size) : 0;
   RangeCount first, second;
   if (cut > 0) {
     std::exception_ptr error;
@@ -187,6 +195,17 @@ long internal::CountCsvDataRows(const std::string& path, long two_thread_bytes) 
   }
   const long lines = first.lines + second.lines + (second.state == LineState::kContent);
   return lines > 0 ? lines - 1 : 0;  // minus the header
+}
+
+long internal::CsvLineStartFrom(const std::string& path, long at) {
+  const OpenFile file(path);
+  return file.size >= 0 ? LineStartFrom(file.fd, at, file.size) : 0;
+}
+
+long internal::CountCsvLinesFrom(const std::string& path, long begin) {
+  const OpenFile file(path);
+  const RangeCount count = CountRange(file.fd, begin, file.size, path);
+  return count.lines + (count.state == LineState::kContent);
 }
 
 }  // namespace ident::workflow

@@ -13,6 +13,7 @@
 //   pass 1  count the data rows (non-blank lines after the header; no number parsing; CheckCsvLayout
 //           takes a count the caller has made)
 //   pass 2  detrend "mean": the estimation-part means of the used columns (reads ⌊split·N⌋ rows)
+//   (ScanCsvFirstPass makes passes 1 and 2 in one read of the file: see there)
 //   (pass 2b, fit_record.h's FitCsvFile for RLS's data-scaled prior: the mean squares of y and the
 //           regressors over the estimation part, detrended)
 //   pass 3  estimate on rows 1..⌊split·N⌋, then score on the rest in the same pass (split < 1);
@@ -185,6 +186,34 @@ struct CsvLayout {
 // record with each gap's missing rows inserted, and their TimeGap::filled set.
 CsvLayout CheckCsvLayout(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
                          const FitOptions& options, long data_lines = -1, TimeCheck* filled = nullptr);
+
+// The layout of a CSV file and its detrending offsets (Detrend::kMean) from one read of the file: the first
+// pass of a streamed fit, which reads each byte once where CheckCsvLayout and the means pass read the
+// estimation part twice. The file is read in two parts:
+//   tail  the lines from a byte x on are counted (CountCsvDataRows's count, no number parsing); x is a line
+//         start a margin (0.2 % of the rows, at least 4 096) before where the estimation part probably ends,
+//         as the bytes per line of 16 samples of 16 KiB spread over the file place it;
+//   head  the rows before x are parsed in order and summed for the offsets (DetrendSums) while they are
+//         certainly in the estimation part, r < ⌊split·(tail + r + 1)⌋; later rows of the head are held
+//         (x past the estimation part) until the count is complete.
+// Then the estimation part's rows past the head, if any, are read from x on (the margin: a few rows read twice).
+// The sums take the estimation rows in file order, so the offsets are the means pass's bit for bit. If the
+// held rows would exceed 2^18 values, or the rows past the head cannot be read there, the means pass is made
+// after all (means_pass). With `mean_squares` (a source affine in its rows, as FitCsvFile's data-scaled prior
+// takes it) the mean squares of the estimation part come with the offsets.
+// No value (the caller counts and reads as before) for: Detrend::kNone, a split outside (0, 1], a file that is
+// not regular, a first 16 KiB with a comment, a sample with fewer than two line ends, a margin that reaches back
+// into the header, no LF within a line's length past the point guessed. Throws DataError for a bad row in the head
+// (file:line), InvalidArgument as CheckCsvLayout does.
+struct CsvFirstPass {
+  CsvLayout layout;
+  Eigen::VectorXd offset;                       // by column; zero for the columns the model does not use
+  std::optional<Eigen::VectorXd> mean_squares;  // with `mean_squares`: CsvEstimationMeanSquares's figures
+  long data_lines = 0;                          // the data lines, as CountCsvDataRows counts them
+  bool means_pass = false;                      // true: the means took a pass of their own after all
+};
+std::optional<CsvFirstPass> ScanCsvFirstPass(const std::string& path, const io::CsvOptions& csv, DataSource& source,
+                                             const FitOptions& options, bool mean_squares);
 
 // The time column of a CSV file (time_column.h), read in one pass in constant memory: each step is judged
 // against the median of the last ArrivingTimeCheck::kSteps regular steps, as rows that arrive one at a

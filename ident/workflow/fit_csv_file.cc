@@ -14,13 +14,18 @@
 #include "common/error.h"
 #include "ident/io/csv_read_ahead.h"
 #include "ident/workflow/fit_record.h"
+#include "ident/workflow/internal/csv_passes.h"
 #include "ident/workflow/internal/fit_steps.h"
 #include "ident/workflow/internal/shifted_mean_squares.h"
 
 namespace ident::workflow {
 
+using internal::DataErrorsFirst;
+using internal::DetrendOffsets;
 using internal::Estimation;
+using internal::LayOutRows;
 using internal::MeanSquares;
+using internal::RecordRows;
 using internal::RequireUsable;
 using internal::RunningMean;
 using internal::RunPasses;
@@ -30,135 +35,25 @@ using internal::Summarise;
 
 namespace {
 
-// The rows of a CSV file as a streamed fit reads them. With `filled` (time gaps to fill, --missing) each
-// gap's missing rows come before the row that ends it, as FillTimeGaps inserts them into a table: NaN in
-// every column but the time column, whose values step on from the gap's start by its step. The file is
-// parsed ahead on `threads` threads (io::CsvReadAhead) while the caller works on the rows before.
-class RecordRows {
- public:
-  RecordRows(const std::string& path, const io::CsvOptions& csv, const TimeCheck* filled, int threads = 1)
-      : reader_(path, csv, threads), filled_(filled != nullptr && !filled->gaps.empty() ? filled : nullptr) {
-    if (filled_ == nullptr) return;
-    const auto& names = reader_.names();
-    time_column_ = static_cast<int>(std::find(names.begin(), names.end(), filled_->column) - names.begin());
-    IDENT_REQUIRE(time_column_ < reader_.num_columns(), "{}: no time column '{}'", path, filled_->column);
-    held_.resize(reader_.num_columns());
-  }
-  int num_columns() const { return reader_.num_columns(); }
-  const std::vector<std::string>& names() const { return reader_.names(); }
-  long line() const { return reader_.line(); }  // of the last row read from the file
-
-  bool Next(Eigen::Ref<Eigen::VectorXd> row) {
-    if (filled_ == nullptr) {
-      if (row.size() != reader_.num_columns()) [[unlikely]]
-        return reader_.Next(row);  // throws: the row has the wrong size (the file changed between passes?)
-      const double* const next = reader_.NextRow();
-      if (next == nullptr) return false;
-      row = Eigen::Map<const Eigen::VectorXd>(next, row.size());
-      return true;
-    }
-    if (pending_ > 0) {  // the next missing row of gap gap_
-      const TimeGap& g = filled_->gaps[gap_];
-      row.setConstant(std::numeric_limits<double>::quiet_NaN());
-      row(time_column_) = g.t_before + static_cast<double>(g.missing - pending_ + 1) * g.step;
-      --pending_;
-      return true;
-    }
-    if (holding_) {  // the row that ends the gap
-      row = held_;
-      holding_ = false;
-      ++gap_;
-      return true;
-    }
-    if (!reader_.Next(row)) return false;
-    ++file_rows_;
-    if (gap_ < filled_->gaps.size() && filled_->gaps[gap_].row == file_rows_) {
-      held_ = row;
-      holding_ = true;
-      pending_ = filled_->gaps[gap_].missing;
-      return Next(row);
-    }
-    return true;
-  }
-
- private:
-  io::CsvReadAhead reader_;
-  const TimeCheck* filled_;
-  int time_column_ = -1;
-  std::size_t gap_ = 0;  // the next gap to fill
-  long file_rows_ = 0, pending_ = 0;
-  bool holding_ = false;
-  Eigen::VectorXd held_;
-};
-
 // The layout of a CSV file from its header and its data lines (`data_lines`: CountCsvDataRows(path), counted
 // here if negative).
 CsvLayout LayOut(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
                  const FitOptions& options, long data_lines = -1, TimeCheck* filled = nullptr) {
   io::CsvReader header(path, csv);
-  CsvLayout layout;
-  layout.columns = header.num_columns();
   if (data_lines < 0) data_lines = CountCsvDataRows(path);
-  layout.rows = data_lines + (header.generated_names() ? 1 : 0);  // no header: its line is a row
+  long rows = data_lines + (header.generated_names() ? 1 : 0);  // no header: its line is a row
   if (filled != nullptr) {
     for (TimeGap& g : filled->gaps) {
-      IDENT_REQUIRE(g.missing <= 2'000'000'000L - layout.rows, "{}: the time gaps miss more than 2e9 rows", path);
-      layout.rows += g.missing;
+      IDENT_REQUIRE(g.missing <= 2'000'000'000L - rows, "{}: the time gaps miss more than 2e9 rows", path);
+      rows += g.missing;
       g.filled = g.missing;
     }
   }
-  if (layout.rows == 0) {
-    Eigen::VectorXd row(layout.columns);
+  if (rows == 0) {
+    Eigen::VectorXd row(header.num_columns());
     header.Next(row);  // throws "no data rows after the header"
   }
-  IDENT_REQUIRE(layout.rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", path, layout.rows);
-  std::tie(layout.estimation, layout.validation) = Split(static_cast<int>(layout.rows), source, options, path);
-  return layout;
-}
-
-// Detrending offsets of a CSV file: the estimation-part means of the used columns (NaN = missing skipped),
-// zero with Detrend::kNone. With FitOptions::robust_offset on a dynamic structure the output's estimation
-// values are kept for SpikeRobustMean (memory O(N), as the robust estimators' own sample history). With
-// `squares` (Detrend::kMean only) the same rows go to it too.
-Eigen::VectorXd DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
-                               const FitOptions& options, const CsvLayout& layout, const TimeCheck* filled,
-                               internal::ShiftedMeanSquares* squares = nullptr) {
-  Eigen::VectorXd offset = Eigen::VectorXd::Zero(layout.columns);
-  if (options.detrend == Detrend::kMean) {  // with Detrend::kNone the file is not opened
-    const Segment estimation = layout.estimation;
-    // Little work per row: the parsing is the pass's cost, on two threads.
-    RecordRows reader(path, csv, filled, 2);
-    Eigen::VectorXd row(reader.num_columns());
-    std::vector<RunningMean> means(static_cast<std::size_t>(reader.num_columns()));
-    const std::vector<int> used = source.used_columns();
-    const int robust = internal::RobustOffsetColumn(options, source);
-    std::vector<double> output;
-    for (int r = 0; r < estimation.count && reader.Next(row); ++r) {
-      for (int c : used) means[c].Add(row(c));
-      if (robust >= 0) output.push_back(row(robust));
-      if (squares != nullptr) squares->Add(row);
-    }
-    for (int c : used) offset(c) = means[c].Get(path, reader.names()[c]);
-    if (robust >= 0)
-      offset(robust) = internal::RobustOffset(Eigen::Map<const Eigen::VectorXd>(output.data(), std::ssize(output)),
-                                              path, reader.names()[robust]);
-  }
-  return offset;
-}
-
-// Runs f(); if it throws InvalidArgument, a bad row later in the file is the real problem (e.g. a ragged
-// row makes the record look too short): report the data error first, as reading the whole table up
-// front would.
-template <class F>
-auto DataErrorsFirst(const std::string& path, const io::CsvOptions& csv, F&& f) {
-  try {
-    return f();
-  } catch (const InvalidArgument&) {
-    io::CsvReadAhead reader(path, csv);
-    Eigen::VectorXd row(reader.num_columns());
-    while (reader.Next(row)) {}
-    throw;
-  }
+  return LayOutRows(path, source, options, rows, header.num_columns());
 }
 
 // The passes before the last of pass 3 (options.passes > 1), each over the estimation part; *passes and
@@ -293,6 +188,28 @@ Eigen::VectorXd StreamMeanSquares(const std::string& path, const io::CsvOptions&
 
 }  // namespace
 
+CsvLayout internal::LayOutRows(const std::string& path, const DataSource& source, const FitOptions& options, long rows,
+                               int columns) {
+  CsvLayout layout;
+  layout.columns = columns;
+  layout.rows = rows;
+  IDENT_REQUIRE(layout.rows <= 2'000'000'000L, "{}: {} rows; at most 2e9 are supported", path, layout.rows);
+  std::tie(layout.estimation, layout.validation) = Split(static_cast<int>(layout.rows), source, options, path);
+  return layout;
+}
+
+Eigen::VectorXd internal::DetrendOffsets(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
+                                         const FitOptions& options, const CsvLayout& layout, const TimeCheck* filled,
+                                         internal::ShiftedMeanSquares* squares) {
+  if (options.detrend != Detrend::kMean) return Eigen::VectorXd::Zero(layout.columns);  // the file is not opened
+  // Little work per row: the parsing is the pass's cost, on two threads.
+  RecordRows reader(path, csv, filled, 2);
+  Eigen::VectorXd row(reader.num_columns());
+  DetrendSums sums(source, options, reader.num_columns(), squares);
+  for (int r = 0; r < layout.estimation.count && reader.Next(row); ++r) sums.Add(row);
+  return sums.Offsets(path, reader.names(), layout.columns);  // as the passes after read the rows
+}
+
 Eigen::VectorXd CsvEstimationMeanSquares(const std::string& path, const io::CsvOptions& csv, DataSource& source,
                                          const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] {
@@ -359,6 +276,17 @@ int CheckRecordLength(long rows, const DataSource& source, const FitOptions& opt
 int CheckCsvRecordLength(const std::string& path, const io::CsvOptions& csv, const DataSource& source,
                          const FitOptions& options) {
   return DataErrorsFirst(path, csv, [&] { return LayOut(path, csv, source, options).estimation.count; });
+}
+
+FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
+                     const CsvFirstPass& first) {
+  return DataErrorsFirst(path, csv, [&] {
+    if (plan.scaled_prior)
+      plan.UseScaledPrior(first.mean_squares
+                              ? *first.mean_squares
+                              : StreamMeanSquares(path, csv, source, first.layout, first.offset, nullptr));
+    return StreamCsvFile(path, csv, source, *plan.estimator, plan.options, first.layout, first.offset, nullptr);
+  });
 }
 
 }  // namespace ident::workflow

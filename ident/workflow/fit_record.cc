@@ -110,10 +110,10 @@ long EstimationRows(long rows, double split) {
   return !valid_split ? 0 : split == 1 ? rows : static_cast<long>(std::floor(split * static_cast<double>(rows)));
 }
 
-FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_rows) {
-  FitPlan plan;
-  plan.settings = request.estimator.Resolve(num_parameters, "", estimation_rows);
-  plan.estimator = MakeRegressionEstimator(plan.settings, num_parameters);  // checks the options
+namespace {
+
+// PlanFit's options, from its resolved settings.
+void SetPlanOptions(FitPlan& plan, const FitRequest& request) {
   const std::string detrend = request.ResolvedDetrend();
   IDENT_REQUIRE(detrend == "mean" || detrend == "none", "--detrend '{}': need mean or none", detrend);
   plan.options.split = request.split;
@@ -127,6 +127,22 @@ FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_r
   plan.scaled_prior = default_prior && traits.data_scaled_prior;
   // The regressor-information check guards the flat prior; a Kárný–Hangos start is scale-invariant.
   if (default_prior && (!plan.scaled_prior || traits.lock_in)) plan.options.min_regressor_information = 0;
+}
+
+}  // namespace
+
+FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_rows) {
+  FitPlan plan;
+  plan.settings = request.estimator.Resolve(num_parameters, "", estimation_rows);
+  plan.estimator = MakeRegressionEstimator(plan.settings, num_parameters);  // checks the options
+  SetPlanOptions(plan, request);
+  return plan;
+}
+
+FitPlan PlanFitOptions(const FitRequest& request, int num_parameters) {
+  FitPlan plan;
+  plan.settings = request.estimator.Resolve(num_parameters, "", 0);
+  SetPlanOptions(plan, request);
   return plan;
 }
 

@@ -55,6 +55,9 @@ struct FitPlan {
 
 // Throws InvalidArgument / DataError naming the option.
 FitPlan PlanFit(const FitRequest& request, int num_parameters, long estimation_rows);
+// PlanFit's options and settings without the estimator (null) and without the checks that need the record's
+// length: what a streamed fit's first pass (ScanCsvFirstPass) needs to know before the record is counted.
+FitPlan PlanFitOptions(const FitRequest& request, int num_parameters);
 
 struct RecordFit {
   FitResult result;
@@ -76,6 +79,11 @@ RecordFit FitTable(io::DataTable table, DataSource& source, FitPlan& plan, int r
 // the time gaps CheckCsvLayout filled (the same object), whose missing rows every pass reads.
 FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
                      const CsvLayout& layout, const TimeCheck* filled = nullptr);
+
+// The same with the layout and detrending offsets of ScanCsvFirstPass (fit.h), made with plan.options (as
+// PlanFitOptions gives them): no pass of its own for the means.
+FitResult FitCsvFile(const std::string& path, const io::CsvOptions& csv, DataSource& source, FitPlan& plan,
+                     const CsvFirstPass& first);
 
 // `name` is the record's name in messages (a path, "DataFrame", …).
 RecordFit FitRecord(io::DataTable table, const std::string& name, const FitRequest& request);

@@ -254,18 +254,10 @@ TEST(StreamedReads, MeanSquaresOfTheMeansPassEqualThoseOfTheirOwnPass) {
   }
 }
 
-// Bytes this process has read so far: rchar of /proc/self/io (every read of every thread, from any file).
-long BytesRead() {
-  std::ifstream io("/proc/self/io");
-  std::string key;
-  long value = -1;
-  while (io >> key >> value)
-    if (key == "rchar:") return value;
-  return -1;
-}
+using testing::ProcessBytesRead;
 
 // `ident fit FILE` with ARX(2,2,1) and `extra` options, run in-process: exit code, stdout, and the files opened
-// (io::CsvFilesOpened) and bytes read (BytesRead) while it ran.
+// (io::CsvFilesOpened) and bytes read (ProcessBytesRead) while it ran.
 struct InProcessFit {
   int code = -1;
   std::string out;
@@ -278,10 +270,10 @@ InProcessFit FitInProcess(const std::string& path, std::vector<std::string> extr
   std::vector<char*> argv;
   for (std::string& w : words) argv.push_back(w.data());
   InProcessFit fit;
-  const long opened = io::CsvFilesOpened(), read = BytesRead();
+  const long opened = io::CsvFilesOpened(), read = ProcessBytesRead();
   ::testing::internal::CaptureStdout();
   fit.code = cli::RunCommandLine(static_cast<int>(argv.size()), argv.data());
-  fit.bytes_read = BytesRead() - read;  // before the captured output is read back
+  fit.bytes_read = ProcessBytesRead() - read;  // before the captured output is read back
   fit.opened = io::CsvFilesOpened() - opened;
   fit.out = ::testing::internal::GetCapturedStdout();
   return fit;
@@ -301,7 +293,7 @@ TEST(InMemoryReads, ASmallFileIsOpenedOnce) {
 // (more than two bytes per row), reads it whole at once: about one file size, where counting its rows first and
 // then reading it take two; with --save too, whose checksum is taken from the bytes as they are read.
 TEST(InMemoryReads, AFileThatFitsIsReadOnce) {
-  if (BytesRead() < 0) GTEST_SKIP() << "no /proc/self/io (a kernel without I/O accounting): bytes read unknown";
+  if (ProcessBytesRead() < 0) GTEST_SKIP() << "no /proc/self/io (a kernel without I/O accounting): bytes read unknown";
   const std::string text = SimulatedRecord(60'000);
   ASSERT_GT(text.size(), 3'000'000u);
   const std::string path = testing::WriteFile("in_memory_read_once.csv", text);

@@ -36,6 +36,15 @@ std::string ReadFile(const std::string& path) {
   return ss.str();
 }
 
+long ProcessBytesRead() {
+  std::ifstream io("/proc/self/io");
+  std::string key;
+  long value = -1;
+  while (io >> key >> value)
+    if (key == "rchar:") return value;
+  return -1;
+}
+
 CliResult RunCli(const std::string& args) {
 #ifndef IDENT_CLI_PATH
   throw std::runtime_error("IDENT_CLI_PATH is not defined for this test executable");

@@ -18,6 +18,10 @@ std::string TempDir();
 std::string WriteFile(const std::string& name, const std::string& text);
 std::string ReadFile(const std::string& path);
 
+// Bytes this process has read so far: rchar of /proc/self/io (every read of every thread, from any file); -1
+// on a kernel without I/O accounting.
+long ProcessBytesRead();
+
 // Runs `args` and expects exit code `code`, `needle` in stderr, empty stdout and, for exit 1, exactly
 // one stderr line starting "ident: error: " (gtest EXPECTs, so the calling test fails on a mismatch).
 void ExpectCliError(const std::string& args, const std::string& needle, int code = 1);

@@ -60,12 +60,19 @@ PlainSegments::PlainSegments(const std::string& path, bool header, long file_siz
 
 long PlainSegments::DataStart(bool header) const {
   if (!header) return 0;
-  std::string head(static_cast<std::size_t>(std::min<long>(file_size_, kMaxCsvLineBytes)), '\0');
-  if (!ReadAt(fd_, 0, head.size(), head.data())) return -1;
+  // The header's line end: in the first 64 KiB as a rule, else within the line length limit.
+  std::string head;
+  std::size_t lf = std::string::npos;
+  for (long want = std::min<long>(file_size_, 1 << 16); lf == std::string::npos;
+       want = std::min<long>(file_size_, kMaxCsvLineBytes)) {
+    if (want <= std::ssize(head)) return -1;  // no LF within the limit
+    head.assign(static_cast<std::size_t>(want), '\0');
+    if (!ReadAt(fd_, 0, head.size(), head.data())) return -1;
+    lf = head.find('\n');
+  }
   std::size_t first = head.starts_with("\xEF\xBB\xBF") ? 3 : 0;  // a byte-order mark, which CsvReader skips
   if (first >= head.size() || std::string_view(" \t\r\n#").find(head[first]) != std::string_view::npos) return -1;
-  const std::size_t lf = head.find('\n');
-  if (lf == std::string::npos || head.find('\r') < lf) return -1;
+  if (head.find('\r') < lf) return -1;
   return static_cast<long>(lf) + 1;
 }
 
